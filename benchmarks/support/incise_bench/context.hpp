@@ -1,0 +1,42 @@
+#pragma once
+/// \file context.hpp
+/// Benchmark context shared by every incise benchmark binary.
+///
+/// - add_context(): records CPU model, the BLAS shared object actually mapped into the process
+///   (read from /proc/self/maps — it is what CHOLMOD calls at run time), and the measured
+///   vector-add baseline, as Google Benchmark context entries (they appear in the JSON output).
+/// - vector_add_mflops(): the thesis' machine baseline (§4.5, Table 4.5): repeated
+///   a ← a + b on 1024-double vectors, in MFLOP/s (one flop per element add).
+/// - fma_peak_mflops(): the nominal double-precision FMA peak of one core, from the measured
+///   clock of a dependent-FMA-free loop is *not* attempted; it is computed as
+///   clock_GHz × flops/cycle, with flops/cycle from the ISA (AVX2+FMA: 16, AVX: 8, SSE2: 4) and
+///   the clock from /proc/cpuinfo "cpu MHz". Stated as nominal, not measured.
+
+#include <string>
+
+namespace incise::bench {
+
+/// Measured vector-add baseline in MFLOP/s (cached after the first call in a process).
+double vector_add_mflops();
+
+/// Nominal FMA peak of one core in MFLOP/s (see file comment); 0 when unknown.
+double fma_peak_mflops();
+
+/// Path of the BLAS library mapped into this process, or "none loaded".
+std::string loaded_blas();
+
+/// Adds cpu, blas, baseline and peak entries to the Google Benchmark context.
+void add_context();
+
+}  // namespace incise::bench
+
+/// main() for an incise benchmark binary: Google Benchmark's main plus add_context().
+#define INCISE_BENCHMARK_MAIN()                                         \
+  int main(int argc, char** argv) {                                     \
+    ::benchmark::Initialize(&argc, argv);                               \
+    if (::benchmark::ReportUnrecognizedArguments(argc, argv)) return 1; \
+    ::incise::bench::add_context();                                     \
+    ::benchmark::RunSpecifiedBenchmarks();                              \
+    ::benchmark::Shutdown();                                            \
+    return 0;                                                           \
+  }

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# The main job: install what is missing, build Release, and run incise on the embedded default.
+# For now (foundation): `incise mesh check` on the real liver mesh, writing a VTU next to it.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs=$(nproc 2>/dev/null || echo 2)
+ci/install-deps.sh
+cmake --preset release >/dev/null
+cmake --build --preset release -j"$jobs" --target incise
+mkdir -p out
+./build/release/lib/cli/incise mesh check reference_data/meshes/liver_coarse.mesh \
+  --vtu out/liver_coarse.vtu
+echo "demo: wrote out/liver_coarse.vtu (open it in ParaView)"

@@ -1,0 +1,36 @@
+# Helper functions shared by every folder.
+
+# incise_add_library(NAME SOURCES ... DEPS ...)
+#   A module library incise_<NAME> with public headers under lib/include.
+function(incise_add_library name)
+  cmake_parse_arguments(A "" "" "SOURCES;DEPS" ${ARGN})
+  add_library(incise_${name} ${A_SOURCES})
+  add_library(incise::${name} ALIAS incise_${name})
+  target_include_directories(incise_${name} PUBLIC ${PROJECT_SOURCE_DIR}/lib/include)
+  target_link_libraries(incise_${name} PUBLIC ${A_DEPS} PRIVATE incise_options)
+endfunction()
+
+# incise_add_gtest(NAME SOURCES ... LIBS ... LABELS ... [TIMEOUT s])
+#   A GoogleTest executable; every TEST becomes one ctest case carrying LABELS.
+#   Label vocabulary: unit, property, verification, slow, plus the module name.
+function(incise_add_gtest name)
+  cmake_parse_arguments(A "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  if(NOT A_TIMEOUT)
+    set(A_TIMEOUT 600)
+  endif()
+  add_executable(${name} ${A_SOURCES})
+  target_link_libraries(${name} PRIVATE ${A_LIBS} incise_test_support GTest::gtest GTest::gtest_main
+                                        incise_options)
+  gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
+                       WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
+                       PROPERTIES LABELS "${A_LABELS}" TIMEOUT ${A_TIMEOUT}
+                                  ENVIRONMENT "INCISE_SOURCE_DIR=${PROJECT_SOURCE_DIR}")
+endfunction()
+
+# incise_add_benchmark(NAME SOURCES ... LIBS ...)
+function(incise_add_benchmark name)
+  cmake_parse_arguments(A "" "" "SOURCES;LIBS" ${ARGN})
+  add_executable(${name} ${A_SOURCES})
+  target_link_libraries(${name} PRIVATE ${A_LIBS} incise_bench_support benchmark::benchmark
+                                        incise_options)
+endfunction()

@@ -1,0 +1,77 @@
+#pragma once
+/// \file problem.hpp
+/// The narrow interface through which every solver sees a mechanical problem (DESIGN §1:
+/// "energy, gradient, Hessian-vector product, projection"). The 3D elastic body (fem), the 2D
+/// needle model and synthetic test problems all implement it, so that one nonlinear CG, one
+/// truncated Newton and one dynamic relaxation serve them all.
+///
+/// Sign convention: the unknown u is the nodal displacement vector (length size()); Π(u) is the
+/// potential energy (2.40); gradient(u) = ∇Π(u) = f_int(u) − f_ext, i.e. the negated residual
+/// r = f_ext − f_int of §3.1. Constrained (fixed) degrees of freedom are handled by project(),
+/// which zeroes them (§3.1: "zeroing the constrained residual").
+
+#include <incise/core/types.hpp>
+
+#include <cstdint>
+
+namespace incise {
+
+/// Outcome of evaluating a problem at a given u.
+enum class EvalStatus {
+  kOk,        ///< value is finite and meaningful
+  kInverted,  ///< some element has det F ≤ 0 where the material is undefined; Π = +∞
+  kNonFinite  ///< a NaN or infinity appeared (e.g. overflow at huge stretch)
+};
+
+/// Human-readable name of an EvalStatus ("ok", "inverted", "non-finite").
+inline const char* to_string(EvalStatus s) {
+  switch (s) {
+    case EvalStatus::kOk: return "ok";
+    case EvalStatus::kInverted: return "inverted";
+    case EvalStatus::kNonFinite: return "non-finite";
+  }
+  return "?";
+}
+
+/// A smooth minimization problem Π: R^n → R ∪ {+∞} with linear (fixed-DOF) constraints.
+class Problem {
+ public:
+  virtual ~Problem() = default;
+
+  /// Number of unknowns n.
+  virtual Eigen::Index size() const = 0;
+
+  /// Π(u) in joules. Sets `energy` to +∞ and returns kInverted when u leaves the domain.
+  virtual EvalStatus energy(const VecX& u, double& energy) = 0;
+
+  /// g = ∇Π(u) (newtons), *not* projected: components at fixed DOFs hold the reaction forces
+  /// needed by the stopping rule (6.9). Optionally also returns Π(u).
+  virtual EvalStatus gradient(const VecX& u, VecX& g, double* energy = nullptr) = 0;
+
+  /// out = K(u)·d, the tangent (Hessian of Π) applied to d, matrix-free (§3.1), not projected.
+  virtual EvalStatus hessian_product(const VecX& u, const VecX& d, VecX& out) = 0;
+
+  /// Diagonal of K(u), for Jacobi preconditioning. Default: not available (returns false).
+  virtual bool hessian_diagonal(const VecX& u, VecX& diag) { return false; }
+
+  /// Zero the components of v at constrained DOFs (v ← P v).
+  virtual void project(VecX& v) const = 0;
+
+  /// True when DOF i is constrained (fixed).
+  virtual bool is_fixed(Eigen::Index i) const = 0;
+
+  /// ‖f_ext‖₂ over free DOFs, the scale of the stopping rules ‖r‖ ≤ ε‖f_ext‖ (§3.1, (6.9)).
+  virtual double external_force_norm() const = 0;
+
+  /// Lumped mass per DOF (kg) for dynamic relaxation (§2.5); empty when the problem has none.
+  virtual const VecX& lumped_mass() const {
+    static const VecX kEmpty;
+    return kEmpty;
+  }
+
+  /// Cumulative floating-point operations spent in evaluations so far (counted, not estimated:
+  /// element kernels are counted once with a counting scalar and multiplied by element counts).
+  virtual std::uint64_t flops() const { return 0; }
+};
+
+}  // namespace incise
