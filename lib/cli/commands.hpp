@@ -1,0 +1,21 @@
+#pragma once
+/// \file commands.hpp
+/// Subcommands of the `incise` program. Each takes the arguments after its name and returns
+/// the process exit code; each prints to the streams it is given (the library never prints).
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace incise::cli {
+
+using Args = std::vector<std::string>;
+
+/// A subcommand: its name, a one-line summary for `incise --help`, and its entry point.
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(const Args& args, std::ostream& out, std::ostream& err);
+};
+
+}  // namespace incise::cli

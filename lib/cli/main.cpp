@@ -1,0 +1,55 @@
+// incise — command-line entry point. Dispatches to subcommands (see commands.hpp).
+
+#include <incise/core/error.hpp>
+
+#include <exception>
+#include <iostream>
+
+#include "commands.hpp"
+
+namespace incise::cli {
+namespace {
+
+int version(const Args&, std::ostream& out, std::ostream&) {
+  out << "incise 0.1.0\n";
+  return 0;
+}
+
+// Registered subcommands. Add one line per subcommand family (declared in commands.hpp).
+const Command kCommands[] = {
+    {"version", "print the version", &version},
+};
+
+void usage(std::ostream& os) {
+  os << "usage: incise <command> [args...]\n\ncommands:\n";
+  for (const auto& c : kCommands) os << "  " << c.name << "\t" << c.summary << "\n";
+}
+
+}  // namespace
+}  // namespace incise::cli
+
+int main(int argc, char** argv) {
+  using namespace incise::cli;
+  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") {
+    usage(argc < 2 ? std::cerr : std::cout);
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string name = argv[1];
+  const Args args(argv + 2, argv + argc);
+  for (const auto& c : kCommands) {
+    if (name == c.name) {
+      try {
+        return c.run(args, std::cout, std::cerr);
+      } catch (const incise::Error& e) {
+        std::cerr << "incise " << name << ": " << e.what() << "\n";
+        return 1;
+      } catch (const std::exception& e) {
+        std::cerr << "incise " << name << ": internal error: " << e.what() << "\n";
+        return 70;
+      }
+    }
+  }
+  std::cerr << "incise: unknown command '" << name << "'\n";
+  usage(std::cerr);
+  return 2;
+}
