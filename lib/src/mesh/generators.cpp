@@ -1,8 +1,10 @@
 #include <incise/core/error.hpp>
 #include <incise/mesh/generators.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <vector>
 
 namespace incise::mesh {
 
@@ -73,6 +75,143 @@ MeshData make_box(int nx, int ny, int nz, double lx, double ly, double lz, CubeS
           ++c;
         }
       }
+  return m;
+}
+
+MeshData make_beam(int h, double spacing) {
+  INCISE_CHECK_PARAM(h >= 2, "make_beam: h (nodes along the axis) must be >= 2");
+  INCISE_CHECK_PARAM(spacing > 0 && std::isfinite(spacing),
+                     "make_beam: spacing must be positive and finite");
+  return make_box(4, 4, h - 1, 4 * spacing, 4 * spacing, (h - 1) * spacing, CubeSplit::kFive);
+}
+
+MeshData make_brick(int n) {
+  INCISE_CHECK_PARAM(n >= 1, "make_brick: resolution n must be >= 1");
+  return make_box(n, n, 2 * n, 1.0, 1.0, 2.0, CubeSplit::kFive);
+}
+
+MeshData make_cylinder(double length, double radius, int rings, int layers) {
+  INCISE_CHECK_PARAM(rings >= 1 && layers >= 1, "make_cylinder: rings and layers must be >= 1");
+  INCISE_CHECK_PARAM(length > 0 && radius > 0 && std::isfinite(length) && std::isfinite(radius),
+                     "make_cylinder: length and radius must be positive and finite");
+  constexpr double kTwoPi = 6.28318530717958647692;
+  // Cross-section: ring k (k = 0..rings) holds max(1, 6k) nodes; node (k, j) at angle 2πj/(6k).
+  std::vector<Index> ring_start(rings + 2, 0);
+  for (int k = 0; k <= rings; ++k) ring_start[k + 1] = ring_start[k] + (k == 0 ? 1 : 6 * k);
+  const Index per_layer = ring_start[rings + 1];
+  std::vector<Vec2> disk(per_layer);
+  disk[0] = Vec2::Zero();
+  for (int k = 1; k <= rings; ++k)
+    for (int j = 0; j < 6 * k; ++j) {
+      const double t = kTwoPi * j / (6.0 * k), r = radius * k / rings;
+      disk[ring_start[k] + j] = Vec2(r * std::cos(t), r * std::sin(t));
+    }
+  // Triangulate between consecutive rings by merging the two angle sequences.
+  std::vector<std::array<Index, 3>> tris;
+  for (int k = 1; k <= rings; ++k) {
+    const int n_in = k == 1 ? 1 : 6 * (k - 1), n_out = 6 * k;
+    int i = 0, j = 0;
+    auto in = [&](int q) { return ring_start[k - 1] + (q % n_in); };
+    auto out = [&](int q) { return ring_start[k] + (q % n_out); };
+    while (i < n_in || j < n_out) {
+      // Advance the ring whose next node comes first in angle: (i+1)/n_in < (j+1)/n_out.
+      if (k > 1 && i < n_in && (j == n_out || (i + 1) * n_out < (j + 1) * n_in)) {
+        tris.push_back({in(i), out(j), in(i + 1)});
+        ++i;
+      } else {
+        tris.push_back({in(i), out(j), out(j + 1)});
+        ++j;
+        if (k == 1 && j == n_out) i = n_in;
+      }
+    }
+  }
+  MeshData m;
+  m.dimension = 3;
+  m.points.resize(3, static_cast<Eigen::Index>(per_layer) * (layers + 1));
+  for (int l = 0; l <= layers; ++l)
+    for (Index v = 0; v < per_layer; ++v)
+      m.points.col(static_cast<Eigen::Index>(l) * per_layer + v) =
+          Vec3(length * l / layers, disk[v].x(), disk[v].y());
+  m.cells.resize(4, static_cast<Eigen::Index>(tris.size()) * layers * 3);
+  Eigen::Index c = 0;
+  auto emit = [&](std::array<Index, 4> t) {
+    if (signed_volume(m.points, t[0], t[1], t[2], t[3]) < 0) std::swap(t[2], t[3]);
+    for (int r = 0; r < 4; ++r) m.cells(r, c) = t[r];
+    ++c;
+  };
+  for (int l = 0; l < layers; ++l)
+    for (const auto& tri : tris) {
+      // Prism: bottom q[0..2], top q[3..5] with q[r+3] above q[r].
+      std::array<Index, 6> q;
+      for (int r = 0; r < 3; ++r) {
+        q[r] = static_cast<Index>(l * per_layer + tri[r]);
+        q[r + 3] = static_cast<Index>((l + 1) * per_layer + tri[r]);
+      }
+      // Dompierre et al.: rotate/reflect so that the smallest index is at bottom position 0.
+      const int imin = static_cast<int>(std::min_element(q.begin(), q.end()) - q.begin());
+      std::array<Index, 6> p;
+      const int base = imin % 3;
+      const bool top = imin >= 3;
+      for (int r = 0; r < 3; ++r) {
+        p[r] = q[(top ? 3 : 0) + (base + r) % 3];
+        p[r + 3] = q[(top ? 0 : 3) + (base + r) % 3];
+      }
+      // Vertex p0 with the opposite triangle (p3,p4,p5), then the pyramid p0 + quad (p1,p2,p5,p4)
+      // split along the diagonal through the quad's smallest vertex.
+      emit({p[0], p[3], p[4], p[5]});
+      const Index quad_min = std::min({p[1], p[2], p[4], p[5]});
+      if (quad_min == p[1] || quad_min == p[5]) {
+        emit({p[0], p[1], p[2], p[5]});
+        emit({p[0], p[1], p[5], p[4]});
+      } else {
+        emit({p[0], p[1], p[2], p[4]});
+        emit({p[0], p[2], p[5], p[4]});
+      }
+    }
+  return m;
+}
+
+MeshData make_thesis_cylinder_small() {
+  return make_cylinder(0.1, 0.03, 3, 8);
+}
+
+MeshData make_thesis_cylinder_large() {
+  return make_cylinder(0.1, 0.03, 5, 21);
+}
+
+MeshData make_rectangle(int nx, int ny, double lx, double ly, GridDiagonal diagonal) {
+  INCISE_CHECK_PARAM(nx >= 1 && ny >= 1, "make_rectangle: cell counts must be >= 1");
+  INCISE_CHECK_PARAM(lx > 0 && ly > 0 && std::isfinite(lx) && std::isfinite(ly),
+                     "make_rectangle: lengths must be positive and finite");
+  MeshData m;
+  m.dimension = 2;
+  const Index px = nx + 1;
+  m.points.resize(3, static_cast<Eigen::Index>(px) * (ny + 1));
+  auto node = [&](int i, int j) { return static_cast<Index>(i + px * j); };
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) m.points.col(node(i, j)) = Vec3(lx * i / nx, ly * j / ny, 0.0);
+  m.cells.resize(3, static_cast<Eigen::Index>(nx) * ny * 2);
+  Eigen::Index c = 0;
+  auto emit = [&](Index a, Index b, Index d) {
+    m.cells(0, c) = a;
+    m.cells(1, c) = b;
+    m.cells(2, c) = d;
+    ++c;
+  };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const Index v00 = node(i, j), v10 = node(i + 1, j), v01 = node(i, j + 1),
+                  v11 = node(i + 1, j + 1);
+      const bool forward = diagonal == GridDiagonal::kForward ||
+                           (diagonal == GridDiagonal::kAlternating && (i + j) % 2 == 0);
+      if (forward) {
+        emit(v00, v10, v11);
+        emit(v00, v11, v01);
+      } else {
+        emit(v00, v10, v01);
+        emit(v10, v11, v01);
+      }
+    }
   return m;
 }
 

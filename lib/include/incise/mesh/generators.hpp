@@ -20,4 +20,49 @@ enum class CubeSplit {
 MeshData make_box(int nx, int ny, int nz, double lx, double ly, double lz,
                   CubeSplit split = CubeSplit::kSix);
 
+/// Elongated beam of Yeung, Crouch & Pothen 2016, §4 item (1): nodes on a regular 5×5×h grid
+/// (h = 4…1024 in the paper; the largest, h = 1024, has 25,600 nodes and 81,840 elements), i.e.
+/// make_box(4, 4, h−1, 4s, 4s, (h−1)s, CubeSplit::kFive) with grid spacing s (m). The paper's
+/// element count 81,840 = 4·4·1023·5 shows the 5-tetrahedron split; the paper gives no physical
+/// size, so the spacing is a parameter (default 1). The beam axis is z. Requires h ≥ 2.
+MeshData make_beam(int h, double spacing = 1.0);
+
+/// Brick 1×1×2 (x, y, z) of Yeung, Crouch & Pothen 2016, §4 item (2): make_box(n, n, 2n, 1, 1, 2,
+/// CubeSplit::kFive). The paper's largest brick (18,081 nodes, 80,000 elements) is n = 20 and
+/// its 9,537-node brick is n = 16; the 5-split also reproduces their Fig. 8 (surface node degrees
+/// 13 and 5). Requires n ≥ 1.
+MeshData make_brick(int n);
+
+/// Cylinder of length `length` along x and radius `radius` (m), built as a structured O-grid:
+/// the cross-section disk is `rings` concentric rings (ring k has 6k nodes at radius k·r/rings,
+/// triangulated ring to ring by angle order, 6·rings² triangles), extruded in `layers` equal
+/// layers; each triangular prism is split into 3 tetrahedra by the smallest-global-index rule of
+/// Dompierre et al. (1999), which makes neighbouring prisms conform. Cells: 18·rings²·layers;
+/// nodes: (1 + 3·rings·(rings+1))·(layers+1). All cells positively oriented. The volume is that
+/// of the inscribed polygonal prism (slightly less than πr²L). Requires rings ≥ 1, layers ≥ 1.
+MeshData make_cylinder(double length, double radius, int rings, int layers);
+
+/// Coarse cylinder like the thesis' §4.2 small mesh (Table 4.2: length 0.1 m, radius 0.03 m,
+/// 1230 elements, 308 nodes, Delaunay): make_cylinder(0.1, 0.03, 3, 8) with 1296 tetrahedra and
+/// 333 nodes (structured, not Delaunay; quality in docs/mesh_formats.md and its test).
+MeshData make_thesis_cylinder_small();
+
+/// Fine cylinder like the thesis' §4.2 large mesh (Table 4.2: 9300 elements, 1911 nodes):
+/// make_cylinder(0.1, 0.03, 5, 21) with 9450 tetrahedra and 2002 nodes.
+MeshData make_thesis_cylinder_large();
+
+/// Diagonal of each square of a planar triangle grid.
+enum class GridDiagonal {
+  kForward,     ///< "/" : from (i,j) to (i+1,j+1)
+  kBackward,    ///< "\": from (i+1,j) to (i,j+1)
+  kAlternating  ///< "/" when i+j is even, "\" otherwise (union-jack-like pattern)
+};
+
+/// Planar triangle mesh (dimension 2) of the rectangle [0,lx]×[0,ly] in the z = 0 plane: nx×ny
+/// squares each split into 2 triangles along `diagonal`. Node (i,j) has index i + (nx+1)·j;
+/// triangles are counter-clockwise (positive signed xy area). Throws ParameterError for n < 1
+/// or l ≤ 0.
+MeshData make_rectangle(int nx, int ny, double lx, double ly,
+                        GridDiagonal diagonal = GridDiagonal::kForward);
+
 }  // namespace incise::mesh
