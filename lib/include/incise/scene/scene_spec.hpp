@@ -1,0 +1,150 @@
+#pragma once
+/// \file scene_spec.hpp
+/// The typed form of a scene file (docs/scenes.md). A scene names a mesh, a material, fixed
+/// regions, loads, a solver with its tolerance and budgets, optional tools and outputs. The
+/// parser (scene_parser.hpp) produces a SceneSpec only when the whole file is valid; the builder
+/// (scene_builder.hpp) then constructs only the parts the spec names.
+///
+/// Units are SI throughout: metres, pascals, newtons, kilograms, seconds.
+
+#include <incise/core/types.hpp>
+#include <incise/mesh/generators.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace incise::scene {
+
+/// A set of mesh nodes (or, for surface loads, of boundary faces whose vertices all lie in it).
+struct Region {
+  /// How membership is decided.
+  enum class Kind {
+    kPlane,   ///< |x[axis] − value| ≤ tolerance
+    kBox,     ///< lo ≤ x ≤ hi componentwise
+    kSphere,  ///< ‖x − center‖ ≤ radius
+    kTag      ///< point tag == tag, or vertex of a cell with cell tag == tag
+  };
+  Kind kind = Kind::kPlane;
+  int axis = 0;                ///< plane: 0,1,2 for x,y,z
+  double value = 0.0;          ///< plane: coordinate (m)
+  double tolerance = 0.0;      ///< plane: half-thickness (m); 0 → 1e-9 × bounding-box size
+  Vec3 lo = Vec3::Zero();      ///< box: lower corner (m)
+  Vec3 hi = Vec3::Zero();      ///< box: upper corner (m)
+  Vec3 center = Vec3::Zero();  ///< sphere: centre (m)
+  double radius = 0.0;         ///< sphere: radius (m), > 0
+  int tag = 0;                 ///< tag: label from the mesh file
+  std::string path;            ///< JSON path of this region in the scene, for messages
+};
+
+/// Where the mesh comes from.
+struct MeshSpec {
+  /// Source of the mesh.
+  enum class Source {
+    kFile,     ///< a mesh file (Medit .mesh, Gmsh .msh, TetGen .node/.ele, OFF)
+    kBox,      ///< mesh::make_box
+    kCylinder  ///< mesh::make_cylinder (structured O-grid along x)
+  };
+  Source source = Source::kBox;
+  std::string file;               ///< kFile: path, resolved relative to the scene file's folder
+  int nx = 1, ny = 1, nz = 1;     ///< kBox: cubes per axis
+  double lx = 1, ly = 1, lz = 1;  ///< kBox: box sizes (m)
+  mesh::CubeSplit split = mesh::CubeSplit::kSix;  ///< kBox: cube split
+  double radius = 0, length = 0;  ///< kCylinder: radius and length (m); axis along x
+  int rings = 1, layers = 1;      ///< kCylinder: rings across the disk, layers along x
+};
+
+/// Material model name and parameters (thesis Table 4.1 names; SI units).
+struct MaterialSpec {
+  std::string model;    ///< registry name, e.g. "linear", "st-venant-kirchhoff", "neo-hookean"
+  double E = 0.0;       ///< Young's modulus (Pa), > 0
+  double nu = 0.0;      ///< Poisson ratio, in (−1, 0.5)
+  double gamma = 0.0;   ///< Veronda–Westmann nonlinearity γ (§4.3.4), ≥ 0; 0 when unused
+  double rho = 1000.0;  ///< density (kg/m³), > 0
+};
+
+/// An external load.
+struct LoadSpec {
+  /// Kind of load.
+  enum class Kind {
+    kGravity,  ///< body force ρ·g on every element (consistent nodal load ρ g V/4 per vertex)
+    kPoint,    ///< force on the node nearest to `at`
+    kNodal,    ///< total force split equally over the nodes of `region`
+    kSurface   ///< traction (Pa) on boundary faces whose vertices are all in `region`
+  };
+  Kind kind = Kind::kGravity;
+  Vec3 vector = Vec3::Zero();  ///< g (m/s²), force (N), total force (N) or traction (Pa)
+  Vec3 at = Vec3::Zero();      ///< kPoint: location (m)
+  Region region;               ///< kNodal, kSurface
+  std::string path;            ///< JSON path, for messages
+};
+
+/// Solution method and its stopping rule / budgets.
+struct SolverSpec {
+  /// Which solver.
+  enum class Method {
+    kCG,           ///< linear CG on the tangent at u = 0 (thesis §3.1; linear elasticity)
+    kNonlinearCG,  ///< nonlinear CG with line search (§2.4.2)
+    kNewton,       ///< truncated Newton–Raphson (§2.4.3)
+    kDynamicSS22,  ///< explicit dynamic relaxation with the SS22 scheme (§2.5)
+    kAugmented     ///< CHOLMOD factorization + augmented system (Yeung et al. 2016)
+  };
+  Method method = Method::kCG;
+  double tolerance = 1e-8;  ///< stop when ‖r‖₂ ≤ tolerance·‖f_ext‖₂ (§3.1), in (0, 1)
+  int max_iterations = 10000;           ///< iteration (or time-step) budget, ≥ 1
+  double time_budget = 0.0;             ///< wall-clock budget (s); 0 = unlimited
+  std::string preconditioner = "none";  ///< "none" or "jacobi" (CG, Newton inner CG)
+  double time_step = 0.0;               ///< dynamic: Δt (s); 0 → estimated from the mesh
+  double damping = 0.0;                 ///< dynamic: mass-proportional damping (1/s), ≥ 0
+  bool spectral_tuning = false;         ///< dynamic: estimate damping from an FFT of the trace
+};
+
+/// A cutting tool. The scalpel is swept along a path; consecutive blade positions span the
+/// sweep triangles of thesis §3.2.
+struct ToolSpec {
+  /// Kind of tool.
+  enum class Kind { kScalpel };
+  Kind kind = Kind::kScalpel;
+  std::vector<Vec3> path;     ///< blade tip positions (m), ≥ 2
+  Vec3 blade = Vec3::Zero();  ///< vector from tip to the blade's back end (m), non-zero
+  std::string path_json;      ///< JSON path, for messages
+};
+
+/// A quantity recorded during and after the run.
+struct ProbeSpec {
+  std::string name;               ///< unique, [A-Za-z0-9_.-]+
+  std::string quantity;           ///< "displacement" (m)
+  bool use_region = false;        ///< false: node nearest to `at`; true: average over region
+  Vec3 at = Vec3::Zero();         ///< location (m)
+  Region region;                  ///< averaging region
+  std::optional<Vec3> reference;  ///< optional expected value (m), reported with the error
+};
+
+/// Files the run writes.
+struct OutputSpec {
+  std::string vtu;    ///< VTU file stem ("" = none); written every `vtu_every` iterations
+  int vtu_every = 0;  ///< 0: final state only
+  std::string csv;    ///< CSV trace of iteration, residual, probes ("" = none)
+  std::vector<ProbeSpec> probes;
+};
+
+/// A whole scene.
+struct SceneSpec {
+  std::string file;         ///< the scene file the spec came from ("<memory>" if parsed from text)
+  std::string name;         ///< short title
+  std::string description;  ///< free text
+  MeshSpec mesh;
+  MaterialSpec material;
+  std::vector<Region> fixed;
+  std::vector<LoadSpec> loads;
+  SolverSpec solver;
+  std::vector<ToolSpec> tools;
+  OutputSpec outputs;
+};
+
+/// Names used in scene files for enums ("cg", "nonlinear-cg", ...).
+const char* to_string(SolverSpec::Method m);
+const char* to_string(Region::Kind k);
+const char* to_string(LoadSpec::Kind k);
+
+}  // namespace incise::scene

@@ -1,0 +1,102 @@
+#pragma once
+// Strict, path-aware access to a JSON object (private to the scene module).
+//
+// JsonObject wraps one object at a JSON pointer path. Every accessor marks its key as known;
+// finish() rejects any key that was never asked for, listing the known keys and suggesting the
+// closest one. Every failure throws incise::ParseError("<file>", 0, "<path>: <message>").
+
+#include <incise/core/error.hpp>
+#include <incise/core/types.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace incise::scene::detail {
+
+using Json = nlohmann::json;
+
+/// Admissible interval of a number; open or closed at either end, infinite when unbounded.
+struct Range {
+  double lo;
+  double hi;
+  bool lo_open;
+  bool hi_open;
+  bool contains(double v) const;
+  std::string describe() const;  ///< "a number in (-1, 0.5)", "a number > 0", ...
+};
+
+Range positive();      ///< (0, ∞)
+Range non_negative();  ///< [0, ∞)
+Range any_finite();    ///< (−∞, ∞)
+
+/// Short rendering of a JSON value for messages (strings quoted, long values cut).
+std::string show(const Json& j);
+
+/// JSON pointer path of key/index below `parent` ("" is the root).
+std::string child_path(const std::string& parent, const std::string& key);
+std::string child_path(const std::string& parent, std::size_t index);
+
+/// Throws ParseError(file, 0, path + ": " + message).
+[[noreturn]] void fail(const std::string& file, const std::string& path, const std::string& msg);
+
+/// Throws "<path>: expected <expected>, got <shown value>".
+[[noreturn]] void fail_expected(const std::string& file, const std::string& path,
+                                const std::string& expected, const Json& got);
+
+class JsonObject {
+ public:
+  /// Throws unless `j` is an object. `what` describes the expected object in messages.
+  JsonObject(const Json& j, std::string path, std::string file, const std::string& what);
+
+  const std::string& path() const { return path_; }
+  const std::string& file() const { return file_; }
+  bool has(const std::string& key) const;
+  /// Marks key as known and returns it, or nullptr when absent.
+  const Json* get(const std::string& key);
+  /// Like get() but throws "missing required key" with the expected form.
+  const Json& require(const std::string& key, const std::string& expected);
+
+  double number(const std::string& key, const Range& r);
+  double number(const std::string& key, const Range& r, double fallback);
+  int integer(const std::string& key, int lo, int hi);
+  int integer(const std::string& key, int lo, int hi, int fallback);
+  bool boolean(const std::string& key, bool fallback);
+  std::string string(const std::string& key);
+  std::string string(const std::string& key, const std::string& fallback);
+  /// A string from a fixed list of choices.
+  std::string choice(const std::string& key, const std::vector<std::string>& choices);
+  std::string choice(const std::string& key, const std::vector<std::string>& choices,
+                     const std::string& fallback);
+  Vec3 vec3(const std::string& key);
+  Vec3 vec3(const std::string& key, const Vec3& fallback);
+  /// A nested object (required).
+  JsonObject object(const std::string& key, const std::string& what);
+  /// An array (required unless `optional`); returns nullptr when optional and absent.
+  const Json* array(const std::string& key, const std::string& what, bool optional);
+
+  /// Rejects a key present but not allowed in this context, with the reason.
+  void forbid(const std::string& key, const std::string& reason);
+
+  /// Throws for the first key that no accessor asked for.
+  void finish() const;
+
+ private:
+  const Json& j_;
+  std::string path_;
+  std::string file_;
+  std::set<std::string> known_;
+  std::set<std::string> forbidden_;  ///< known but not allowed in this context
+};
+
+/// Value-level checks for elements of arrays.
+double as_number(const Json& j, const std::string& file, const std::string& path, const Range& r);
+Vec3 as_vec3(const Json& j, const std::string& file, const std::string& path);
+
+/// Parses JSON text strictly: syntax errors report line and column, duplicate keys are errors.
+Json parse_strict(const std::string& text, const std::string& file);
+
+}  // namespace incise::scene::detail

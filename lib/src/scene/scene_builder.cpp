@@ -1,0 +1,315 @@
+#include <incise/scene/scene_builder.hpp>
+
+#include <incise/core/error.hpp>
+#include <incise/core/timer.hpp>
+#include <incise/mesh/generators.hpp>
+
+#include <algorithm>
+#include <map>
+#include <sstream>
+
+namespace incise::scene {
+
+void BuiltScene::record(std::string what, double seconds, std::size_t bytes, std::int64_t flops) {
+  steps.push_back(BuildStep{std::move(what), seconds, bytes, flops});
+}
+
+namespace {
+
+std::string vec_str(const Vec3& v) {
+  std::ostringstream os;
+  os << "[" << v[0] << ", " << v[1] << ", " << v[2] << "]";
+  return os.str();
+}
+
+std::string bbox_str(const mesh::MeshData& m) {
+  if (m.num_points() == 0) return "(empty mesh)";
+  return "mesh bounding box " + vec_str(m.points.rowwise().minCoeff()) + " to " +
+         vec_str(m.points.rowwise().maxCoeff());
+}
+
+[[noreturn]] void region_error(const SceneSpec& spec, const std::string& path,
+                               const std::string& what, const mesh::MeshData& m) {
+  throw ParseError(spec.file, 0, path + ": " + what + " (" + bbox_str(m) + ")");
+}
+
+std::size_t matrix_bytes(const mesh::MeshData& m) {
+  return static_cast<std::size_t>(m.points.size()) * sizeof(double) +
+         static_cast<std::size_t>(m.cells.size() + m.facets.size()) * sizeof(Index) +
+         (m.cell_tags.size() + m.point_tags.size() + m.facet_tags.size()) * sizeof(int);
+}
+
+mesh::MeshData make_mesh(const MeshSpec& ms, std::string& what) {
+  std::ostringstream os;
+  switch (ms.source) {
+    case MeshSpec::Source::kBox: {
+      os << "mesh: box " << ms.nx << "x" << ms.ny << "x" << ms.nz << " of " << ms.lx << "x" << ms.ly
+         << "x" << ms.lz << " m";
+      what = os.str();
+      return mesh::make_box(ms.nx, ms.ny, ms.nz, ms.lx, ms.ly, ms.lz, ms.split);
+    }
+    case MeshSpec::Source::kCylinder: {
+      os << "mesh: cylinder r=" << ms.radius << " m, L=" << ms.length << " m, " << ms.rings
+         << " rings, " << ms.layers << " layers";
+      what = os.str();
+      return mesh::make_cylinder(ms.length, ms.radius, ms.rings, ms.layers);
+    }
+    case MeshSpec::Source::kFile: break;
+  }
+  throw UsageError("scene mesh source not handled");
+}
+
+double tet_volume(const mesh::MeshData& m, Index c) {
+  const Vec3 a = m.points.col(m.cells(0, c));
+  return (m.points.col(m.cells(1, c)) - a)
+             .cross(m.points.col(m.cells(2, c)) - a)
+             .dot(m.points.col(m.cells(3, c)) - a) /
+         6.0;
+}
+
+}  // namespace
+
+std::vector<Index> select_nodes(const mesh::MeshData& m, const Region& r) {
+  std::vector<Index> out;
+  const Index n = m.num_points();
+  if (r.kind == Region::Kind::kTag) {
+    std::vector<char> in(static_cast<std::size_t>(n), 0);
+    for (std::size_t i = 0; i < m.point_tags.size() && i < in.size(); ++i)
+      if (m.point_tags[i] == r.tag) in[i] = 1;
+    for (std::size_t c = 0; c < m.cell_tags.size(); ++c)
+      if (m.cell_tags[c] == r.tag)
+        for (Index k = 0; k < m.cells.rows(); ++k) in[m.cells(k, static_cast<Index>(c))] = 1;
+    for (std::size_t f = 0; f < m.facet_tags.size(); ++f)
+      if (m.facet_tags[f] == r.tag)
+        for (Index k = 0; k < m.facets.rows(); ++k) in[m.facets(k, static_cast<Index>(f))] = 1;
+    for (Index i = 0; i < n; ++i)
+      if (in[i]) out.push_back(i);
+    return out;
+  }
+  double tol = r.tolerance;
+  if (r.kind == Region::Kind::kPlane && tol == 0.0 && n > 0)
+    tol = 1e-9 * (m.points.rowwise().maxCoeff() - m.points.rowwise().minCoeff()).norm();
+  for (Index i = 0; i < n; ++i) {
+    const Vec3 x = m.points.col(i);
+    bool in = false;
+    switch (r.kind) {
+      case Region::Kind::kPlane: in = std::abs(x[r.axis] - r.value) <= tol; break;
+      case Region::Kind::kBox:
+        in = (x.array() >= r.lo.array()).all() && (x.array() <= r.hi.array()).all();
+        break;
+      case Region::Kind::kSphere: in = (x - r.center).norm() <= r.radius; break;
+      case Region::Kind::kTag: break;
+    }
+    if (in) out.push_back(i);
+  }
+  return out;
+}
+
+mesh::CellMatrix boundary_faces(const mesh::MeshData& m) {
+  INCISE_CHECK(m.dimension == 3, "boundary_faces needs a tetrahedral mesh");
+  // Face k of tet (v0..v3) is opposite vertex k; these vertex orders are outward for a
+  // positively oriented tetrahedron.
+  static const int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  std::map<std::array<Index, 3>, std::pair<int, std::array<Index, 3>>> count;
+  for (Index c = 0; c < m.num_cells(); ++c) {
+    for (const auto& f : kFace) {
+      std::array<Index, 3> v{m.cells(f[0], c), m.cells(f[1], c), m.cells(f[2], c)};
+      std::array<Index, 3> key = v;
+      std::sort(key.begin(), key.end());
+      auto& e = count[key];
+      ++e.first;
+      e.second = v;
+    }
+  }
+  std::vector<std::array<Index, 3>> faces;
+  for (const auto& kv : count)
+    if (kv.second.first == 1) faces.push_back(kv.second.second);
+  mesh::CellMatrix out(3, static_cast<Eigen::Index>(faces.size()));
+  for (std::size_t i = 0; i < faces.size(); ++i)
+    for (int k = 0; k < 3; ++k) out(k, static_cast<Eigen::Index>(i)) = faces[i][k];
+  return out;
+}
+
+std::vector<std::array<Vec3, 3>> sweep_triangles(const ToolSpec& tool) {
+  std::vector<std::array<Vec3, 3>> tris;
+  for (std::size_t i = 0; i + 1 < tool.path.size(); ++i) {
+    const Vec3& a = tool.path[i];
+    const Vec3& b = tool.path[i + 1];
+    tris.push_back({a, b, b + tool.blade});
+    tris.push_back({a, b + tool.blade, a + tool.blade});
+  }
+  return tris;
+}
+
+Vec3 probe_value(const ResolvedProbe& probe, const VecX& u) {
+  Vec3 s = Vec3::Zero();
+  for (Index i : probe.nodes) s += u.segment<3>(3 * static_cast<Eigen::Index>(i));
+  return s / static_cast<double>(probe.nodes.size());
+}
+
+BuiltScene build_scene(const SceneSpec& spec) {
+  BuiltScene b;
+  b.spec = spec;
+  Timer t;
+
+  // Mesh.
+  std::string what;
+  b.mesh = make_mesh(spec.mesh, what);
+  if (b.mesh.dimension != 3)
+    throw ParseError(spec.file, 0,
+                     "/mesh: expected a tetrahedral (3D) mesh, got dimension " +
+                         std::to_string(b.mesh.dimension));
+  what += " -> " + std::to_string(b.mesh.num_cells()) + " tets, " +
+          std::to_string(b.mesh.num_points()) + " nodes";
+  b.record(what, t.seconds(), matrix_bytes(b.mesh));
+  const Index n = b.mesh.num_points();
+  const Eigen::Index ndof = 3 * static_cast<Eigen::Index>(n);
+
+  // Fixed nodes.
+  t.restart();
+  for (const Region& r : spec.fixed) {
+    const auto sel = select_nodes(b.mesh, r);
+    if (sel.empty()) region_error(spec, r.path, "region selects no node of the mesh", b.mesh);
+    b.fixed_nodes.insert(b.fixed_nodes.end(), sel.begin(), sel.end());
+  }
+  std::sort(b.fixed_nodes.begin(), b.fixed_nodes.end());
+  b.fixed_nodes.erase(std::unique(b.fixed_nodes.begin(), b.fixed_nodes.end()), b.fixed_nodes.end());
+  if (!spec.fixed.empty())
+    b.record("fixed nodes: " + std::to_string(b.fixed_nodes.size()) + " of " + std::to_string(n) +
+                 " from " + std::to_string(spec.fixed.size()) + " region(s)",
+             t.seconds(), b.fixed_nodes.size() * sizeof(Index));
+
+  // Loads.
+  t.restart();
+  b.external_force = VecX::Zero(ndof);
+  std::vector<double> nodal_volume;  // built only when gravity or lumped mass needs it
+  auto need_volumes = [&]() {
+    if (!nodal_volume.empty()) return;
+    nodal_volume.assign(static_cast<std::size_t>(n), 0.0);
+    for (Index c = 0; c < b.mesh.num_cells(); ++c) {
+      const double v = tet_volume(b.mesh, c);
+      for (int k = 0; k < 4; ++k) nodal_volume[b.mesh.cells(k, c)] += v / 4.0;
+    }
+  };
+  mesh::CellMatrix bfaces;
+  for (const LoadSpec& l : spec.loads) {
+    switch (l.kind) {
+      case LoadSpec::Kind::kGravity:
+        // Consistent load of linear tetrahedra: ∫ρ g N_i dV = ρ g V/4 per vertex.
+        need_volumes();
+        for (Index i = 0; i < n; ++i)
+          b.external_force.segment<3>(3 * i) += spec.material.rho * nodal_volume[i] * l.vector;
+        break;
+      case LoadSpec::Kind::kPoint: {
+        Index best = 0;
+        double bd = std::numeric_limits<double>::infinity();
+        for (Index i = 0; i < n; ++i) {
+          const double d = (b.mesh.points.col(i) - l.at).squaredNorm();
+          if (d < bd) bd = d, best = i;
+        }
+        b.external_force.segment<3>(3 * best) += l.vector;
+        break;
+      }
+      case LoadSpec::Kind::kNodal: {
+        const auto sel = select_nodes(b.mesh, l.region);
+        if (sel.empty())
+          region_error(spec, l.region.path, "region selects no node of the mesh", b.mesh);
+        for (Index i : sel)
+          b.external_force.segment<3>(3 * i) += l.vector / static_cast<double>(sel.size());
+        break;
+      }
+      case LoadSpec::Kind::kSurface: {
+        if (bfaces.size() == 0) bfaces = boundary_faces(b.mesh);
+        const auto sel = select_nodes(b.mesh, l.region);
+        std::vector<char> in(static_cast<std::size_t>(n), 0);
+        for (Index i : sel) in[i] = 1;
+        int used = 0;
+        for (Eigen::Index f = 0; f < bfaces.cols(); ++f) {
+          if (!(in[bfaces(0, f)] && in[bfaces(1, f)] && in[bfaces(2, f)])) continue;
+          const Vec3 a = b.mesh.points.col(bfaces(0, f));
+          const double area = 0.5 * (b.mesh.points.col(bfaces(1, f)) - a)
+                                        .cross(b.mesh.points.col(bfaces(2, f)) - a)
+                                        .norm();
+          // Consistent load of a constant traction on a linear triangle: t·A/3 per vertex.
+          for (int k = 0; k < 3; ++k)
+            b.external_force.segment<3>(3 * bfaces(k, f)) += l.vector * area / 3.0;
+          ++used;
+        }
+        if (used == 0)
+          region_error(spec, l.region.path,
+                       "region contains no boundary triangle (all 3 vertices inside) for the "
+                       "surface load",
+                       b.mesh);
+        break;
+      }
+    }
+  }
+  b.record("external load vector f_ext: " + std::to_string(spec.loads.size()) +
+               " load(s), |f_ext| = " + std::to_string(b.external_force.norm()) + " N",
+           t.seconds(), static_cast<std::size_t>(ndof) * sizeof(double));
+
+  // Lumped mass: dynamic relaxation only (§2.5).
+  if (spec.solver.method == SolverSpec::Method::kDynamicSS22) {
+    t.restart();
+    need_volumes();
+    b.lumped_mass.resize(ndof);
+    for (Index i = 0; i < n; ++i)
+      b.lumped_mass.segment<3>(3 * i).setConstant(spec.material.rho * nodal_volume[i]);
+    b.record("lumped mass (row-sum, rho V/4 per vertex)", t.seconds(),
+             static_cast<std::size_t>(ndof) * sizeof(double));
+  } else {
+    b.not_built.push_back("lumped mass: the static solver \"" +
+                          std::string(to_string(spec.solver.method)) + "\" needs none");
+  }
+  if (spec.solver.method != SolverSpec::Method::kAugmented)
+    b.not_built.push_back("sparse stiffness factorization: only the \"augmented\" solver uses one");
+  if (!spec.solver.spectral_tuning)
+    b.not_built.push_back("FFTW plan: spectral damping tuning not requested");
+
+  // Tools.
+  if (!spec.tools.empty()) {
+    t.restart();
+    for (const ToolSpec& tool : spec.tools) {
+      const auto tris = sweep_triangles(tool);
+      b.sweep_triangles.insert(b.sweep_triangles.end(), tris.begin(), tris.end());
+    }
+    b.record("scalpel sweep triangles: " + std::to_string(b.sweep_triangles.size()), t.seconds(),
+             b.sweep_triangles.size() * sizeof(std::array<Vec3, 3>));
+  } else {
+    b.not_built.push_back("sweep triangles: no tool named");
+  }
+
+  // Probes.
+  if (!spec.outputs.probes.empty()) {
+    t.restart();
+    const Vec3 lo = b.mesh.points.rowwise().minCoeff(), hi = b.mesh.points.rowwise().maxCoeff();
+    for (std::size_t k = 0; k < spec.outputs.probes.size(); ++k) {
+      const ProbeSpec& p = spec.outputs.probes[k];
+      const std::string path = "/outputs/probes/" + std::to_string(k);
+      ResolvedProbe rp{p, {}};
+      if (p.use_region) {
+        rp.nodes = select_nodes(b.mesh, p.region);
+        if (rp.nodes.empty())
+          region_error(spec, path + "/region", "region selects no node of the mesh", b.mesh);
+      } else {
+        // 1e-9 relative slack: a probe exactly on the boundary is inside.
+        const double slack = 1e-9 * (hi - lo).norm();
+        if ((p.at.array() < lo.array() - slack).any() || (p.at.array() > hi.array() + slack).any())
+          region_error(spec, path + "/at",
+                       "probe location " + vec_str(p.at) + " is outside the mesh", b.mesh);
+        Index best = 0;
+        double bd = std::numeric_limits<double>::infinity();
+        for (Index i = 0; i < n; ++i) {
+          const double d = (b.mesh.points.col(i) - p.at).squaredNorm();
+          if (d < bd) bd = d, best = i;
+        }
+        rp.nodes.push_back(best);
+      }
+      b.probes.push_back(std::move(rp));
+    }
+    b.record("probes: " + std::to_string(b.probes.size()), t.seconds(), 0);
+  }
+  return b;
+}
+
+}  // namespace incise::scene

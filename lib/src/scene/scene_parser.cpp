@@ -1,0 +1,367 @@
+#include <incise/scene/scene_parser.hpp>
+
+#include <incise/core/error.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "json_reader.hpp"
+
+namespace incise::scene {
+
+const char* to_string(SolverSpec::Method m) {
+  switch (m) {
+    case SolverSpec::Method::kCG: return "cg";
+    case SolverSpec::Method::kNonlinearCG: return "nonlinear-cg";
+    case SolverSpec::Method::kNewton: return "newton";
+    case SolverSpec::Method::kDynamicSS22: return "dynamic-ss22";
+    case SolverSpec::Method::kAugmented: return "augmented";
+  }
+  return "?";
+}
+
+const char* to_string(Region::Kind k) {
+  switch (k) {
+    case Region::Kind::kPlane: return "plane";
+    case Region::Kind::kBox: return "box";
+    case Region::Kind::kSphere: return "sphere";
+    case Region::Kind::kTag: return "tag";
+  }
+  return "?";
+}
+
+const char* to_string(LoadSpec::Kind k) {
+  switch (k) {
+    case LoadSpec::Kind::kGravity: return "gravity";
+    case LoadSpec::Kind::kPoint: return "point";
+    case LoadSpec::Kind::kNodal: return "nodal";
+    case LoadSpec::Kind::kSurface: return "surface";
+  }
+  return "?";
+}
+
+namespace {
+
+using detail::fail;
+using detail::Json;
+using detail::JsonObject;
+using detail::Range;
+
+constexpr int kMaxCells = 1000;  // per-axis bound for generated meshes (1000³ cubes is 6e9 tets)
+constexpr int kMaxIterations = 100000000;
+
+/// Material model names the scene format accepts (thesis ch. 4: linear (§3.1), St. Venant–
+/// Kirchhoff (§4.3.1), neo-Hookean (§4.3.2), Veronda–Westmann (§4.3.4)).
+const std::vector<std::string> kMaterials = {"linear", "st-venant-kirchhoff", "neo-hookean",
+                                             "veronda-westmann"};
+
+const std::vector<std::string> kMeshExtensions = {".mesh", ".msh", ".node", ".off"};
+
+Region parse_region(const Json& j, const std::string& path, const std::string& file) {
+  JsonObject o(j, path, file,
+               "a region object {\"type\": \"plane\"|\"box\"|\"sphere\"|\"tag\", ...}");
+  Region r;
+  r.path = path;
+  const std::string type = o.choice("type", {"plane", "box", "sphere", "tag"});
+  if (type == "plane") {
+    r.kind = Region::Kind::kPlane;
+    const std::string axis = o.choice("axis", {"x", "y", "z"});
+    r.axis = axis[0] - 'x';
+    r.value = o.number("value", detail::any_finite());
+    r.tolerance = o.number("tolerance", detail::non_negative(), 0.0);
+  } else if (type == "box") {
+    r.kind = Region::Kind::kBox;
+    r.lo = o.vec3("min");
+    r.hi = o.vec3("max");
+    for (int a = 0; a < 3; ++a) {
+      if (!(r.lo[a] <= r.hi[a]))
+        fail(file, detail::child_path(path, "max"),
+             "expected max >= min in every coordinate (coordinate " + std::to_string(a) +
+                 " has max " + std::to_string(r.hi[a]) + " < min " + std::to_string(r.lo[a]) + ")");
+    }
+  } else if (type == "sphere") {
+    r.kind = Region::Kind::kSphere;
+    r.center = o.vec3("center");
+    r.radius = o.number("radius", detail::positive());
+  } else {
+    r.kind = Region::Kind::kTag;
+    r.tag = o.integer("tag", std::numeric_limits<int>::min(), std::numeric_limits<int>::max());
+  }
+  o.finish();
+  return r;
+}
+
+MeshSpec parse_mesh(JsonObject o, const std::string& file, const std::string& base_dir) {
+  MeshSpec m;
+  const std::string type = o.choice("type", {"file", "box", "cylinder"});
+  auto split = [&o]() {
+    return o.choice("split", {"six", "five"}, "six") == "six" ? mesh::CubeSplit::kSix
+                                                              : mesh::CubeSplit::kFive;
+  };
+  if (type == "file") {
+    m.source = MeshSpec::Source::kFile;
+    const std::string rel = o.string("path");
+    const std::string p = detail::child_path(o.path(), "path");
+    std::filesystem::path fp(rel);
+    if (fp.is_relative() && !base_dir.empty()) fp = std::filesystem::path(base_dir) / fp;
+    std::string ext = fp.extension().string();
+    if (std::find(kMeshExtensions.begin(), kMeshExtensions.end(), ext) == kMeshExtensions.end())
+      fail(file, p,
+           "expected a mesh file ending in .mesh (Medit), .msh (Gmsh), .node (TetGen) or .off, "
+           "got \"" +
+               rel + "\"");
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(fp, ec))
+      fail(file, p, "mesh file not found: " + fp.lexically_normal().string());
+    m.file = fp.lexically_normal().string();
+  } else if (type == "box") {
+    m.source = MeshSpec::Source::kBox;
+    m.nx = o.integer("nx", 1, kMaxCells);
+    m.ny = o.integer("ny", 1, kMaxCells);
+    m.nz = o.integer("nz", 1, kMaxCells);
+    m.lx = o.number("lx", detail::positive());
+    m.ly = o.number("ly", detail::positive());
+    m.lz = o.number("lz", detail::positive());
+    m.split = split();
+  } else {
+    m.source = MeshSpec::Source::kCylinder;
+    m.radius = o.number("radius", detail::positive());
+    m.length = o.number("length", detail::positive());
+    m.rings = o.integer("rings", 1, kMaxCells);
+    m.layers = o.integer("layers", 1, kMaxCells);
+  }
+  o.finish();
+  return m;
+}
+
+MaterialSpec parse_material(JsonObject o, bool needs_rho, const std::string& rho_reason) {
+  MaterialSpec m;
+  m.model = o.choice("model", kMaterials);
+  m.E = o.number("E", detail::positive());
+  m.nu = o.number("nu", Range{-1.0, 0.5, true, true});
+  if (m.model == "veronda-westmann") {
+    m.gamma = o.number("gamma", detail::positive());
+  } else {
+    o.forbid("gamma", "only the \"veronda-westmann\" model has the nonlinearity gamma (§4.3.4)");
+  }
+  if (needs_rho) {
+    if (!o.has("rho"))
+      fail(
+          o.file(), o.path(),
+          "missing required key \"rho\" (expected a number > 0, density in kg/m^3): " + rho_reason);
+  }
+  m.rho = o.number("rho", detail::positive(), 1000.0);
+  o.finish();
+  return m;
+}
+
+LoadSpec parse_load(const Json& j, const std::string& path, const std::string& file) {
+  JsonObject o(j, path, file,
+               "a load object {\"type\": \"gravity\"|\"point\"|\"nodal\"|\"surface\", ...}");
+  LoadSpec l;
+  l.path = path;
+  const std::string type = o.choice("type", {"gravity", "point", "nodal", "surface"});
+  if (type == "gravity") {
+    l.kind = LoadSpec::Kind::kGravity;
+    l.vector = o.vec3("g");
+  } else if (type == "point") {
+    l.kind = LoadSpec::Kind::kPoint;
+    l.at = o.vec3("at");
+    l.vector = o.vec3("force");
+  } else if (type == "nodal") {
+    l.kind = LoadSpec::Kind::kNodal;
+    l.region = parse_region(o.require("region", "a region object"),
+                            detail::child_path(path, "region"), file);
+    l.vector = o.vec3("total_force");
+  } else {
+    l.kind = LoadSpec::Kind::kSurface;
+    l.region = parse_region(o.require("region", "a region object"),
+                            detail::child_path(path, "region"), file);
+    l.vector = o.vec3("traction");
+  }
+  o.finish();
+  return l;
+}
+
+SolverSpec parse_solver(JsonObject o) {
+  SolverSpec s;
+  const std::string method =
+      o.choice("method", {"cg", "nonlinear-cg", "newton", "dynamic-ss22", "augmented"});
+  s.method = method == "cg"             ? SolverSpec::Method::kCG
+             : method == "nonlinear-cg" ? SolverSpec::Method::kNonlinearCG
+             : method == "newton"       ? SolverSpec::Method::kNewton
+             : method == "dynamic-ss22" ? SolverSpec::Method::kDynamicSS22
+                                        : SolverSpec::Method::kAugmented;
+  s.tolerance = o.number("tolerance", Range{0.0, 1.0, true, true}, 1e-8);
+  s.max_iterations = o.integer("max_iterations", 1, kMaxIterations, 10000);
+  s.time_budget = o.number("time_budget", detail::non_negative(), 0.0);
+  const bool dynamic = s.method == SolverSpec::Method::kDynamicSS22;
+  if (s.method == SolverSpec::Method::kCG || s.method == SolverSpec::Method::kNewton) {
+    s.preconditioner = o.choice("preconditioner", {"none", "jacobi"}, "none");
+  } else {
+    o.forbid("preconditioner", "only \"cg\" and \"newton\" take a preconditioner");
+  }
+  if (dynamic) {
+    s.time_step = o.number("time_step", detail::non_negative(), 0.0);
+    s.damping = o.number("damping", detail::non_negative(), 0.0);
+    s.spectral_tuning = o.boolean("spectral_tuning", false);
+  } else {
+    const std::string why = "only the \"dynamic-ss22\" method integrates in time";
+    o.forbid("time_step", why);
+    o.forbid("damping", why);
+    o.forbid("spectral_tuning", why);
+  }
+  o.finish();
+  return s;
+}
+
+ToolSpec parse_tool(const Json& j, const std::string& path, const std::string& file) {
+  JsonObject o(j, path, file, "a tool object {\"type\": \"scalpel\", ...}");
+  ToolSpec t;
+  t.path_json = path;
+  o.choice("type", {"scalpel"});
+  t.kind = ToolSpec::Kind::kScalpel;
+  const Json* p = o.array("path", "an array of at least 2 points [[x, y, z], ...]", false);
+  if (p->size() < 2)
+    detail::fail_expected(file, detail::child_path(path, "path"),
+                          "an array of at least 2 points [[x, y, z], ...]", *p);
+  for (std::size_t i = 0; i < p->size(); ++i)
+    t.path.push_back(detail::as_vec3((*p)[i], file, detail::child_path(path + "/path", i)));
+  t.blade = o.vec3("blade");
+  if (t.blade.norm() == 0.0)
+    fail(file, detail::child_path(path, "blade"),
+         "expected a non-zero vector from the blade tip to its back end, got [0, 0, 0]");
+  for (std::size_t i = 0; i + 1 < t.path.size(); ++i) {
+    const Vec3 seg = t.path[i + 1] - t.path[i];
+    // Relative threshold: a sweep quad thinner than 1e-12 of its sides has no usable area.
+    if (seg.cross(t.blade).norm() <= 1e-12 * seg.norm() * t.blade.norm() || seg.norm() == 0.0)
+      fail(file, detail::child_path(path + "/path", i + 1),
+           "the path segment from point " + std::to_string(i) +
+               " is empty or parallel to the blade, so its sweep triangles have no area");
+  }
+  o.finish();
+  return t;
+}
+
+OutputSpec parse_outputs(JsonObject o) {
+  OutputSpec out;
+  out.vtu = o.string("vtu", "");
+  if (!out.vtu.empty()) {
+    out.vtu_every = o.integer("vtu_every", 0, kMaxIterations, 0);
+  } else {
+    o.forbid("vtu_every", "set \"vtu\" (the output file stem) first");
+  }
+  out.csv = o.string("csv", "");
+  const std::string file = o.file();
+  if (const Json* probes = o.array("probes", "an array of probe objects", true)) {
+    std::set<std::string> names;
+    const std::regex name_re("[A-Za-z0-9_.-]+");
+    for (std::size_t i = 0; i < probes->size(); ++i) {
+      const std::string pp = detail::child_path(o.path() + "/probes", i);
+      JsonObject po((*probes)[i], pp, file,
+                    "a probe object {\"name\": ..., \"at\": [x, y, z] or \"region\": {...}}");
+      ProbeSpec pr;
+      pr.name = po.string("name");
+      if (!std::regex_match(pr.name, name_re))
+        detail::fail_expected(file, pp + "/name", "a name of letters, digits, '_', '.', '-'",
+                              Json(pr.name));
+      if (!names.insert(pr.name).second)
+        fail(file, pp + "/name", "duplicate probe name \"" + pr.name + "\"");
+      pr.quantity = po.choice("quantity", {"displacement"}, "displacement");
+      const bool has_at = po.has("at"), has_region = po.has("region");
+      if (has_at == has_region)
+        fail(file, pp,
+             "expected exactly one of \"at\" (nearest node) or \"region\" (average over nodes)");
+      if (has_at) {
+        pr.at = po.vec3("at");
+        po.forbid("region", "");
+      } else {
+        pr.use_region = true;
+        pr.region = parse_region(*po.get("region"), pp + "/region", file);
+        po.forbid("at", "");
+      }
+      if (po.has("reference")) pr.reference = po.vec3("reference");
+      po.get("reference");
+      po.finish();
+      out.probes.push_back(std::move(pr));
+    }
+  }
+  o.finish();
+  return out;
+}
+
+}  // namespace
+
+SceneSpec parse_scene(const std::string& text, const std::string& file,
+                      const std::string& base_dir) {
+  const Json root_json = detail::parse_strict(text, file);
+  JsonObject root(root_json, "", file, "a scene object {\"mesh\": ..., \"material\": ..., ...}");
+  SceneSpec s;
+  s.file = file;
+  root.integer("version", 1, 1, 1);
+  s.name = root.string("name", "");
+  s.description = root.string("description", "");
+  s.mesh = parse_mesh(root.object("mesh", "a mesh object {\"type\": \"file\"|\"box\"|...}"), file,
+                      base_dir);
+  s.solver = parse_solver(root.object("solver", "a solver object {\"method\": ...}"));
+  const bool dynamic = s.solver.method == SolverSpec::Method::kDynamicSS22;
+
+  const Json* loads = root.array("loads", "an array of load objects", false);
+  if (loads->empty())
+    fail(file, "/loads",
+         "expected at least one load (the stopping rule ||r|| <= tol ||f_ext|| needs f_ext != 0)");
+  std::string rho_reason;
+  for (std::size_t i = 0; i < loads->size(); ++i) {
+    s.loads.push_back(parse_load((*loads)[i], detail::child_path("/loads", i), file));
+    if (s.loads.back().kind == LoadSpec::Kind::kGravity && rho_reason.empty())
+      rho_reason = "the gravity load at " + s.loads.back().path + " needs a density";
+  }
+  if (dynamic && rho_reason.empty())
+    rho_reason = "the \"dynamic-ss22\" solver needs a density for the lumped mass";
+  s.material = parse_material(root.object("material", "a material object {\"model\": ...}"),
+                              !rho_reason.empty(), rho_reason);
+  if (s.solver.method == SolverSpec::Method::kCG && s.material.model != "linear")
+    fail(file, "/solver/method",
+         "\"cg\" solves linear elasticity only (thesis §3.1); material \"" + s.material.model +
+             "\" needs \"nonlinear-cg\", \"newton\" or \"dynamic-ss22\"");
+  if (s.solver.method == SolverSpec::Method::kAugmented && s.material.model != "linear")
+    fail(file, "/solver/method",
+         "\"augmented\" factorizes the constant linear stiffness; material \"" + s.material.model +
+             "\" is nonlinear");
+
+  const Json* fixed = root.array("fixed", "an array of region objects", false);
+  for (std::size_t i = 0; i < fixed->size(); ++i)
+    s.fixed.push_back(parse_region((*fixed)[i], detail::child_path("/fixed", i), file));
+  if (s.fixed.empty() && !dynamic)
+    fail(file, "/fixed",
+         "expected at least one fixed region: a static problem without constraints has a "
+         "singular stiffness (rigid motions)");
+
+  if (const Json* tools = root.array("tools", "an array of tool objects", true)) {
+    for (std::size_t i = 0; i < tools->size(); ++i)
+      s.tools.push_back(parse_tool((*tools)[i], detail::child_path("/tools", i), file));
+  }
+  if (root.has("outputs")) {
+    s.outputs = parse_outputs(root.object("outputs", "an outputs object"));
+  } else {
+    root.get("outputs");
+  }
+  root.finish();
+  return s;
+}
+
+SceneSpec load_scene(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ParseError(path, 0, "cannot open scene file");
+  std::ostringstream os;
+  os << in.rdbuf();
+  if (in.bad()) throw ParseError(path, 0, "error while reading scene file");
+  const std::string base = std::filesystem::path(path).parent_path().string();
+  return parse_scene(os.str(), path, base);
+}
+
+}  // namespace incise::scene

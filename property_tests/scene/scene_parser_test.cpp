@@ -1,0 +1,299 @@
+// Scene files (docs/scenes.md): a valid scene parses into the expected spec; each kind of bad
+// scene is rejected with a ParseError naming the JSON path and the expected form.
+
+#include <incise/core/error.hpp>
+#include <incise/scene/scene_parser.hpp>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+
+#include "incise_test/seed.hpp"
+
+namespace {
+
+using incise::ParseError;
+using incise::scene::parse_scene;
+using Json = nlohmann::json;
+
+// The thesis cantilever (§3.3, Table 3.1): l = 1.2 m, h = 0.2 m, d = 0.3 m, E = 1e6 Pa, ν = 0,
+// total tip load 3 N.
+Json valid_scene() {
+  return Json::parse(R"({
+    "version": 1,
+    "name": "cantilever",
+    "mesh": {"type": "box", "nx": 4, "ny": 1, "nz": 1, "lx": 1.2, "ly": 0.2, "lz": 0.3},
+    "material": {"model": "linear", "E": 1e6, "nu": 0.0},
+    "fixed": [{"type": "plane", "axis": "x", "value": 0.0}],
+    "loads": [{"type": "nodal", "region": {"type": "plane", "axis": "x", "value": 1.2},
+               "total_force": [0, -3, 0]}],
+    "solver": {"method": "cg", "tolerance": 1e-8, "max_iterations": 5000},
+    "outputs": {"probes": [{"name": "tip", "region": {"type": "plane", "axis": "x", "value": 1.2}}]}
+  })");
+}
+
+std::string error_of_text(const std::string& text) {
+  try {
+    (void)parse_scene(text, "scene.json", "");
+  } catch (const ParseError& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+std::string error_of(const Json& j) {
+  return error_of_text(j.dump(2));
+}
+
+TEST(SceneParser, ValidCantileverParses) {
+  const auto s = parse_scene(valid_scene().dump(), "scene.json", "");
+  EXPECT_EQ(s.name, "cantilever");
+  EXPECT_EQ(s.mesh.source, incise::scene::MeshSpec::Source::kBox);
+  EXPECT_EQ(s.mesh.nx, 4);
+  EXPECT_DOUBLE_EQ(s.mesh.lx, 1.2);
+  EXPECT_EQ(s.material.model, "linear");
+  EXPECT_DOUBLE_EQ(s.material.E, 1e6);
+  ASSERT_EQ(s.fixed.size(), 1u);
+  EXPECT_EQ(s.fixed[0].axis, 0);
+  ASSERT_EQ(s.loads.size(), 1u);
+  EXPECT_EQ(s.loads[0].kind, incise::scene::LoadSpec::Kind::kNodal);
+  EXPECT_DOUBLE_EQ(s.loads[0].vector[1], -3.0);
+  EXPECT_EQ(s.solver.method, incise::scene::SolverSpec::Method::kCG);
+  EXPECT_DOUBLE_EQ(s.solver.tolerance, 1e-8);
+  ASSERT_EQ(s.outputs.probes.size(), 1u);
+  EXPECT_TRUE(s.outputs.probes[0].use_region);
+}
+
+// One bad-scene kind per test: the message must name the path and the expected form.
+
+TEST(SceneParserBad, JsonSyntaxErrorGivesLine) {
+  const std::string e = error_of_text("{\n  \"version\": 1,\n  \"mesh\": {]\n}");
+  EXPECT_NE(e.find("scene.json:3: invalid JSON at column"), std::string::npos) << e;
+}
+
+TEST(SceneParserBad, DuplicateKey) {
+  const std::string e =
+      error_of_text(R"({"version": 1, "material": {"model": "linear", "E": 1, "E": 2}})");
+  EXPECT_NE(e.find("/material/E: duplicate key \"E\""), std::string::npos) << e;
+}
+
+TEST(SceneParserBad, DuplicateKeyInsideArrayElement) {
+  const std::string e =
+      error_of_text(R"({"fixed": [{"type": "box"}, {"type": "tag", "tag": 1, "tag": 2}]})");
+  EXPECT_NE(e.find("/fixed/1/tag: duplicate key"), std::string::npos) << e;
+}
+
+TEST(SceneParserBad, RootNotAnObject) {
+  const std::string e = error_of_text("[1, 2, 3]");
+  EXPECT_NE(e.find("scene.json: /: expected a scene object"), std::string::npos) << e;
+}
+
+TEST(SceneParserBad, UnknownTopLevelKeyWithSuggestion) {
+  Json j = valid_scene();
+  j["solvr"] = j["solver"];
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/solvr: unknown key \"solvr\""), std::string::npos) << e;
+  EXPECT_NE(e.find("did you mean \"solver\"?"), std::string::npos) << e;
+}
+
+TEST(SceneParserBad, UnknownNestedKeyListsAllowedKeys) {
+  Json j = valid_scene();
+  j["material"]["poisson"] = 0.3;
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/material/poisson: unknown key"), std::string::npos) << e;
+  EXPECT_NE(e.find("allowed here: E, model, nu, rho"), std::string::npos) << e;
+}
+
+TEST(SceneParserBad, WrongTypeStringForNumber) {
+  Json j = valid_scene();
+  j["material"]["nu"] = "0.3";
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/material/nu: expected a number in (-1, 0.5), got string \"0.3\""),
+            std::string::npos)
+      << e;
+}
+
+TEST(SceneParserBad, PoissonRatioOutOfRange) {
+  Json j = valid_scene();
+  j["material"]["nu"] = 0.7;
+  EXPECT_EQ(error_of(j), "scene.json: /material/nu: expected a number in (-1, 0.5), got 0.7");
+}
+
+TEST(SceneParserBad, NonPositiveYoungModulus) {
+  Json j = valid_scene();
+  j["material"]["E"] = 0;
+  EXPECT_NE(error_of(j).find("/material/E: expected a number > 0, got 0"), std::string::npos);
+}
+
+TEST(SceneParserBad, MissingRequiredKey) {
+  Json j = valid_scene();
+  j["material"].erase("E");
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/material: missing required key \"E\" (expected a number > 0)"),
+            std::string::npos)
+      << e;
+}
+
+TEST(SceneParserBad, MissingMeshFile) {
+  Json j = valid_scene();
+  j["mesh"] = {{"type", "file"}, {"path", "no/such/liver.mesh"}};
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/mesh/path: mesh file not found: no/such/liver.mesh"), std::string::npos) << e;
+}
+
+TEST(SceneParserBad, UnknownMeshExtension) {
+  Json j = valid_scene();
+  j["mesh"] = {{"type", "file"}, {"path", "liver.stl"}};
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/mesh/path: expected a mesh file ending in .mesh"), std::string::npos) << e;
+}
+
+TEST(SceneParserBad, IntegerExpected) {
+  Json j = valid_scene();
+  j["mesh"]["nx"] = 2.5;
+  EXPECT_NE(error_of(j).find("/mesh/nx: expected an integer in [1, 1000], got 2.5"),
+            std::string::npos);
+}
+
+TEST(SceneParserBad, UnknownEnumValue) {
+  Json j = valid_scene();
+  j["solver"]["method"] = "gauss-seidel";
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/solver/method: expected one of \"cg\", \"nonlinear-cg\", \"newton\", "
+                   "\"dynamic-ss22\", \"augmented\", got string \"gauss-seidel\""),
+            std::string::npos)
+      << e;
+}
+
+TEST(SceneParserBad, VectorWithWrongLength) {
+  Json j = valid_scene();
+  j["loads"][0]["total_force"] = {0, -3};
+  EXPECT_NE(error_of(j).find("/loads/0/total_force: expected an array of 3 finite numbers"),
+            std::string::npos);
+}
+
+TEST(SceneParserBad, VectorWithNonNumberEntry) {
+  Json j = valid_scene();
+  j["loads"][0]["total_force"] = {0, "down", 0};
+  EXPECT_NE(error_of(j).find("/loads/0/total_force/1: expected a finite number, got string"),
+            std::string::npos);
+}
+
+TEST(SceneParserBad, BoxRegionInverted) {
+  Json j = valid_scene();
+  j["fixed"][0] = {{"type", "box"}, {"min", {0, 0, 0}}, {"max", {1, -1, 1}}};
+  EXPECT_NE(error_of(j).find("/fixed/0/max: expected max >= min in every coordinate"),
+            std::string::npos);
+}
+
+TEST(SceneParserBad, NoLoads) {
+  Json j = valid_scene();
+  j["loads"] = Json::array();
+  EXPECT_NE(error_of(j).find("/loads: expected at least one load"), std::string::npos);
+}
+
+TEST(SceneParserBad, StaticWithoutFixedRegion) {
+  Json j = valid_scene();
+  j["fixed"] = Json::array();
+  EXPECT_NE(error_of(j).find("/fixed: expected at least one fixed region"), std::string::npos);
+}
+
+TEST(SceneParserBad, GravityWithoutDensity) {
+  Json j = valid_scene();
+  j["loads"].push_back({{"type", "gravity"}, {"g", {0, 0, -9.8}}});
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/material: missing required key \"rho\""), std::string::npos) << e;
+  EXPECT_NE(e.find("gravity load at /loads/1"), std::string::npos) << e;
+}
+
+TEST(SceneParserBad, LinearCgWithNonlinearMaterial) {
+  Json j = valid_scene();
+  j["material"]["model"] = "neo-hookean";
+  EXPECT_NE(error_of(j).find("/solver/method: \"cg\" solves linear elasticity only"),
+            std::string::npos);
+}
+
+TEST(SceneParserBad, DynamicKeyOnStaticSolver) {
+  Json j = valid_scene();
+  j["solver"]["time_step"] = 1e-4;
+  EXPECT_NE(error_of(j).find("/solver/time_step: not allowed here: only the \"dynamic-ss22\""),
+            std::string::npos);
+}
+
+TEST(SceneParserBad, GammaOnNonVerondaMaterial) {
+  Json j = valid_scene();
+  j["material"]["gamma"] = 8;
+  EXPECT_NE(error_of(j).find("/material/gamma: not allowed here"), std::string::npos);
+}
+
+TEST(SceneParserBad, DuplicateProbeName) {
+  Json j = valid_scene();
+  j["outputs"]["probes"].push_back({{"name", "tip"}, {"at", {1.2, 0.1, 0.15}}});
+  EXPECT_NE(error_of(j).find("/outputs/probes/1/name: duplicate probe name \"tip\""),
+            std::string::npos);
+}
+
+TEST(SceneParserBad, ProbeWithBothLocationAndRegion) {
+  Json j = valid_scene();
+  j["outputs"]["probes"][0]["at"] = {1.2, 0.1, 0.15};
+  EXPECT_NE(error_of(j).find("/outputs/probes/0: expected exactly one of \"at\""),
+            std::string::npos);
+}
+
+TEST(SceneParserBad, ScalpelPathTooShort) {
+  Json j = valid_scene();
+  j["tools"] = {{{"type", "scalpel"}, {"path", {{0, 0, 0}}}, {"blade", {0, 0, 1}}}};
+  EXPECT_NE(error_of(j).find("/tools/0/path: expected an array of at least 2 points"),
+            std::string::npos);
+}
+
+TEST(SceneParserBad, ScalpelSegmentParallelToBlade) {
+  Json j = valid_scene();
+  j["tools"] = {{{"type", "scalpel"}, {"path", {{0, 0, 0}, {0, 0, 1}}}, {"blade", {0, 0, 1}}}};
+  EXPECT_NE(error_of(j).find("/tools/0/path/1: the path segment from point 0"), std::string::npos);
+}
+
+TEST(SceneParserBad, UnsupportedVersion) {
+  Json j = valid_scene();
+  j["version"] = 2;
+  EXPECT_NE(error_of(j).find("/version: expected an integer in [1, 1], got 2"), std::string::npos);
+}
+
+TEST(SceneParserBad, ToleranceNotBelowOne) {
+  Json j = valid_scene();
+  j["solver"]["tolerance"] = 1.0;
+  EXPECT_NE(error_of(j).find("/solver/tolerance: expected a number in (0, 1), got 1"),
+            std::string::npos);
+}
+
+TEST(SceneParserBad, VtuEveryWithoutVtu) {
+  Json j = valid_scene();
+  j["outputs"]["vtu_every"] = 10;
+  EXPECT_NE(error_of(j).find("/outputs/vtu_every: not allowed here"), std::string::npos);
+}
+
+TEST(SceneParserBad, UnreadableSceneFile) {
+  try {
+    (void)incise::scene::load_scene("/nonexistent/dir/scene.json");
+    FAIL() << "expected ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(std::string(e.what()), "/nonexistent/dir/scene.json: cannot open scene file");
+  }
+}
+
+// Every scene shipped in reference_data/scenes/ must parse.
+TEST(SceneParser, ShippedScenesParse) {
+  const std::string dir = incise::test::source_path("reference_data/scenes");
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (entry.path().extension() != ".json") continue;
+    SCOPED_TRACE(entry.path().string());
+    EXPECT_NO_THROW((void)incise::scene::load_scene(entry.path().string()));
+    ++count;
+  }
+  EXPECT_GE(count, 1);
+}
+
+}  // namespace
