@@ -1,0 +1,159 @@
+#pragma once
+/// \file elastic_problem.hpp
+/// The static elastic body as an incise::Problem (thesis §2.3–2.4, §3.1): potential energy
+/// Π(u) (2.40), its gradient f_int(u) − f_ext, the tangent K(u) matrix-free and assembled into a
+/// fixed sparse pattern, lumped mass (§2.5), fixed nodes and loads.
+///
+/// Unknowns: nodal displacements u (metres), node-major: DOF 3·node + component.
+/// Sign convention (core/problem.hpp): gradient(u) = ∇Π = Σ_τ q_τ(u) − f_ext, where
+/// q_τ = −f_el is the element's internal force (tet_kernels.hpp).
+///
+/// Fixed DOFs: gradient() and hessian_product() are *not* projected (reaction forces stay
+/// visible); project() zeroes fixed components. The assembled tangent offers two treatments
+/// (FixedDofTreatment): kKeep (the raw K), or kIdentity — rows and columns of fixed DOFs zeroed
+/// and a 1 placed on their diagonal, so the matrix stays n×n with an unchanging pattern and is
+/// symmetric positive definite whenever the free block is. With kIdentity, solving K x = P r for
+/// a projected right-hand side gives x with zero fixed components.
+
+#include <incise/core/problem.hpp>
+#include <incise/core/types.hpp>
+#include <incise/fem/tet_kernels.hpp>
+#include <incise/material/material.hpp>
+#include <incise/mesh/mesh_data.hpp>
+
+#include <Eigen/SparseCore>
+#include <cstdint>
+#include <vector>
+
+namespace incise::fem {
+
+/// Counted flops per element evaluation for one material (obtained by running the kernels once
+/// with incise::Counted; see element_flops()).
+struct ElementFlops {
+  std::uint64_t energy = 0;             ///< v·W
+  std::uint64_t force = 0;              ///< internal forces q (Table 4.3 "Force")
+  std::uint64_t force_and_product = 0;  ///< q and K_e·d ((4.3)+(4.4), Table 4.3 "Derivative")
+  std::uint64_t product = 0;            ///< K_e·d alone (matrix-free product)
+  std::uint64_t force_and_tangent = 0;  ///< q and the full 12×12 K_e
+};
+
+/// Counts the flops of every kernel for `material` at a generic, non-inverted deformation
+/// (branches in the kernels depend on parameters only, e.g. γ = 0 skips the exponential).
+ElementFlops element_flops(const material::Material& material);
+
+/// How fixed DOFs appear in the assembled tangent (see file comment).
+enum class FixedDofTreatment {
+  kKeep,     ///< the raw tangent K(u)
+  kIdentity  ///< fixed rows/columns zeroed, unit diagonal
+};
+
+/// A point force on a node (newtons).
+struct PointLoad {
+  Index node = 0;
+  Vec3 force = Vec3::Zero();
+};
+
+/// Nodes whose coordinate `axis` (0,1,2) lies within `tolerance` of `value` (metres).
+std::vector<Index> nodes_on_plane(const mesh::MeshData& mesh, int axis, double value,
+                                  double tolerance = 1e-9);
+
+/// Nodes inside the closed box [lo, hi] (metres).
+std::vector<Index> nodes_in_box(const mesh::MeshData& mesh, const Vec3& lo, const Vec3& hi);
+
+/// Elastic body made of linear tetrahedra of one material. See file comment for conventions.
+class ElasticProblem : public Problem {
+ public:
+  /// Takes a 3D tetrahedral mesh (reference configuration). Throws ParameterError when the
+  /// mesh is not 3D tetrahedral, references missing nodes, or has an element with
+  /// non-positive reference volume (naming the element).
+  ElasticProblem(const mesh::MeshData& mesh, const material::Material& material);
+
+  // --- constraints and loads -------------------------------------------------------------
+  /// Fix all three components of the given nodes (u = 0 there). Throws UsageError for a bad
+  /// node index.
+  void fix_nodes(const std::vector<Index>& nodes);
+  /// Fix one DOF (3·node + component).
+  void fix_dof(Eigen::Index dof);
+  /// Remove all constraints.
+  void clear_constraints();
+  /// Add a point load (N).
+  void add_point_load(const PointLoad& load);
+  /// Add the body force ρ·g (g in m/s², e.g. (0,0,−9.81)), lumped: each node receives a
+  /// quarter of ρ·g·v(τ) from every incident tetrahedron (§2.5).
+  void add_gravity(const Vec3& g);
+  /// Remove all loads.
+  void clear_loads();
+  /// f_ext (N), length size().
+  const VecX& external_force() const { return f_ext_; }
+
+  // --- incise::Problem --------------------------------------------------------------------
+  Eigen::Index size() const override { return 3 * static_cast<Eigen::Index>(num_nodes()); }
+  /// Π(u) = Σ v(τ) W(C_τ) − f_extᵀ u (J). +∞ and kInverted when an element with a log-term
+  /// material has det F ≤ 0; kNonFinite when the sum is not finite otherwise.
+  [[nodiscard]] EvalStatus energy(const VecX& u, double& energy) override;
+  /// g = Σ q_τ(u) − f_ext (N), not projected. On kInverted g is zero and *energy = +∞.
+  [[nodiscard]] EvalStatus gradient(const VecX& u, VecX& g, double* energy = nullptr) override;
+  /// out = K(u)·d matrix-free (element products (4.4), §3.1), not projected. On kInverted out
+  /// is zero.
+  [[nodiscard]] EvalStatus hessian_product(const VecX& u, const VecX& d, VecX& out) override;
+  /// Diagonal of K(u) (from element tangents). Fixed DOFs get 1. Returns false if inverted.
+  bool hessian_diagonal(const VecX& u, VecX& diag) override;
+  void project(VecX& v) const override;
+  bool is_fixed(Eigen::Index i) const override { return fixed_[static_cast<std::size_t>(i)] != 0; }
+  /// ‖f_ext‖₂ over free DOFs.
+  double external_force_norm() const override;
+  /// ρ·v(τ)/4 per incident tetrahedron, per DOF (kg).
+  const VecX& lumped_mass() const override { return mass_; }
+  /// Flops counted in all evaluations so far (element counts × evaluations + assembly adds).
+  std::uint64_t flops() const override { return flops_; }
+
+  // --- assembled tangent --------------------------------------------------------------------
+  /// Assembles K(u) into the fixed pattern (built once, on first use, with an element-to-entry
+  /// scatter map; later calls only overwrite values). Returns kInverted (matrix values then
+  /// unspecified) when an element is inverted.
+  [[nodiscard]] EvalStatus assemble_tangent(
+      const VecX& u, FixedDofTreatment treatment = FixedDofTreatment::kIdentity);
+  /// The matrix of the last assemble_tangent() (column-major, both triangles stored, n×n).
+  const Eigen::SparseMatrix<double>& tangent_matrix() const { return k_; }
+  /// Convenience: assemble and copy into `k`.
+  [[nodiscard]] EvalStatus tangent(const VecX& u, Eigen::SparseMatrix<double>& k,
+                                   FixedDofTreatment treatment = FixedDofTreatment::kIdentity);
+  /// Elastic forces only: f_int = Σ q_τ(u) (N).
+  [[nodiscard]] EvalStatus internal_forces(const VecX& u, VecX& f_int);
+
+  // --- access ---------------------------------------------------------------------------
+  Index num_nodes() const { return static_cast<Index>(points_.cols()); }
+  Index num_elements() const { return static_cast<Index>(cells_.cols()); }
+  const Eigen::Matrix3Xd& points() const { return points_; }
+  const mesh::CellMatrix& cells() const { return cells_; }
+  const material::Material& material() const { return material_; }
+  const TetReference& reference(Index e) const { return refs_[static_cast<std::size_t>(e)]; }
+  /// Counted flops per element kernel for this problem's material.
+  const ElementFlops& element_flop_counts() const { return element_flops_; }
+  /// Indices of free DOFs in increasing order (a free-DOF map for reduced systems).
+  std::vector<Eigen::Index> free_dofs() const;
+  /// Total reference volume (m³).
+  double volume() const;
+
+ private:
+  void gather(const VecX& u, Index e, Eigen::Matrix<double, 3, 4>& x) const;
+  void build_pattern();
+  void rebuild_mass();
+
+  Eigen::Matrix3Xd points_;
+  mesh::CellMatrix cells_;
+  material::Material material_;
+  std::vector<TetReference> refs_;
+  std::vector<char> fixed_;
+  std::vector<PointLoad> point_loads_;
+  Vec3 gravity_ = Vec3::Zero();
+  VecX f_ext_;
+  VecX mass_;
+  ElementFlops element_flops_;
+  std::uint64_t flops_ = 0;
+  Eigen::SparseMatrix<double> k_;
+  std::vector<int> scatter_;  ///< 144 value indices per element (row-major 12×12 block)
+  std::vector<int> diag_;     ///< value index of each diagonal entry
+};
+
+}  // namespace incise::fem

@@ -1,0 +1,90 @@
+#include <incise/core/error.hpp>
+#include <incise/material/material.hpp>
+
+#include <limits>
+#include <sstream>
+
+namespace incise::material {
+
+std::vector<std::string> registered_material_names() {
+  std::vector<std::string> names;
+  for (int i = 0; i < kNumModels; ++i)
+    names.emplace_back(visit_model(i, [](auto m) { return std::string(decltype(m)::kName); }));
+  return names;
+}
+
+int model_index(const std::string& name) {
+  const std::vector<std::string> names = registered_material_names();
+  for (int i = 0; i < static_cast<int>(names.size()); ++i)
+    if (names[static_cast<std::size_t>(i)] == name) return i;
+  std::ostringstream os;
+  os << "unknown material model '" << name << "'; registered models:";
+  for (const auto& n : names) os << " " << n;
+  throw ParameterError(os.str());
+}
+
+Material::Material(const std::string& name, const Parameters& p)
+    : name_(name), index_(material::model_index(name)), parameters_(p), lame_(to_lame(p)) {}
+
+bool Material::linear_geometry() const {
+  return visit_model(index_, [](auto m) { return decltype(m)::kLinearGeometry; });
+}
+
+bool Material::defined_when_inverted() const {
+  return visit_model(index_, [](auto m) { return decltype(m)::kDefinedWhenInverted; });
+}
+
+double Material::energy_density(const Mat3& c) const {
+  return visit_model(index_, [&](auto m) { return decltype(m)::energy(lame_, c); });
+}
+
+Mat3 Material::stress(const Mat3& c) const {
+  return visit_model(index_, [&](auto m) {
+    MaterialState<double> st;
+    return Mat3(decltype(m)::stress(lame_, c, st));
+  });
+}
+
+Mat3 Material::stress_derivative(const Mat3& c, const Mat3& h) const {
+  return visit_model(index_, [&](auto m) {
+    using M = decltype(m);
+    MaterialState<double> st;
+    (void)M::stress(lame_, c, st);
+    return Mat3(M::stress_derivative(lame_, st, h));
+  });
+}
+
+TangentModuli<double> Material::moduli(const Mat3& c) const {
+  return visit_model(index_, [&](auto m) {
+    using M = decltype(m);
+    MaterialState<double> st;
+    (void)M::stress(lame_, c, st);
+    return M::moduli(lame_, st);
+  });
+}
+
+PointEvaluation Material::evaluate(const Mat3& f) const {
+  PointEvaluation out;
+  if (linear_geometry()) {
+    const Mat3 g = f - Mat3::Identity();
+    const Mat3 c = Mat3::Identity() + g + g.transpose();
+    out.energy = energy_density(c);
+    out.second_piola = stress(c);
+    out.first_piola = out.second_piola;
+    return out;
+  }
+  if (!defined_when_inverted() && !(f.determinant() > 0.0)) {
+    out.inverted = true;
+    out.energy = std::numeric_limits<double>::infinity();
+    out.first_piola.setZero();
+    out.second_piola.setZero();
+    return out;
+  }
+  const Mat3 c = f.transpose() * f;
+  out.energy = energy_density(c);
+  out.second_piola = stress(c);
+  out.first_piola = f * out.second_piola;
+  return out;
+}
+
+}  // namespace incise::material
