@@ -1,0 +1,99 @@
+#pragma once
+/// \file dynamic_relaxation.hpp
+/// Dynamic relaxation (thesis §2.5, §4.1, §4.4.1): explicit SS22 time integration (θ₁ = ½,
+/// θ₂ = 0) of M ü + C u̇ + ∇Π(u) = 0 with lumped mass M (Problem::lumped_mass) and lumped
+/// damping C = ηM, run until the static residual rule is met; plus the ways of choosing its two
+/// parameters Δt and η.
+
+#include <incise/solver/eigen_estimates.hpp>
+#include <incise/solver/report.hpp>
+
+#include <vector>
+
+namespace incise::solver {
+
+/// Options of dynamic_relaxation().
+struct DynamicRelaxationOptions {
+  double time_step = 0.0;      ///< Δt (s), > 0
+  double damping = 0.0;        ///< η (1/s), ≥ 0; C = ηM
+  StoppingRule stop;           ///< (6.8)/(6.9) on the residual at the evaluation point ū
+  Budget budget;               ///< time steps / flops / seconds
+  double blowup_norm = 1e15;   ///< ‖u‖₂ above this is a blow-up (kUnstable), §4.4.1
+  IterationObserver observer;  ///< called after every step with ū and its residual
+};
+
+/// Runs SS22 from rest at u (updated in place). One step (2.56)–(2.60) with θ₁ = ½, θ₂ = 0:
+///   ū = u + ½Δt u̇,   ü = −P(∇Π(ū) + ηM u̇) / ((1 + ½Δtη) M),
+///   u ← u + Δt u̇ + ½Δt² ü,   u̇ ← u̇ + Δt ü.
+/// One gradient evaluation per step, at ū; the stopping rule is checked on ‖P∇Π(ū)‖, so on
+/// convergence u is set to that ū (the point whose residual was certified). On blow-up
+/// (‖u‖ > blowup_norm, kUnstable), inversion (kInverted) or non-finite values (kNonFinite) u is
+/// set to the last evaluated admissible point. Requires lumped masses (UsageError otherwise).
+SolverReport dynamic_relaxation(Problem& problem, VecX& u, const DynamicRelaxationOptions& options);
+
+/// CFL time-step estimate (2.61) of explicit SS22 with θ₁ = ½: Δt = (2/√3)·h/c with
+/// c = √((λ + 2µ)/ρ). h: shortest edge (m), lame_lambda, lame_mu (Pa), density (kg/m³).
+double cfl_time_step(double h, double lame_lambda, double lame_mu, double density);
+
+/// Options of find_stable_time_step() (§4.4.1).
+struct StableTimeStepOptions {
+  double flop_budget = 50e6;  ///< an undamped run must survive this many flops (thesis: 50 MFLOP)
+  double blowup_norm = 1e15;  ///< ‖u‖ beyond which the run counts as blown up
+  double reduction = 0.85;    ///< multiply Δt by this after each failure ("lowered by 15 %")
+  int max_reductions = 60;    ///< give up after this many reductions
+  long max_steps = 1000000;   ///< also stop each trial after this many steps
+};
+
+/// Outcome of find_stable_time_step().
+struct [[nodiscard]] StableTimeStep {
+  double time_step = 0.0;   ///< the first Δt whose undamped run survived (s); 0 when none did
+  int reductions = 0;       ///< number of 15 % reductions applied
+  bool found = false;       ///< a stable Δt was found
+  std::uint64_t flops = 0;  ///< total flops spent on the trials
+};
+
+/// The thesis' empirical critical time step (§4.4.1): starting from `initial` (e.g.
+/// cfl_time_step()), run an undamped simulation from u for options.flop_budget flops; if it blows
+/// up (or inverts / turns non-finite), lower Δt by 15 % and retry.
+StableTimeStep find_stable_time_step(Problem& problem, const VecX& u, double initial,
+                                     const StableTimeStepOptions& options = {});
+
+/// One point of a damping sweep.
+struct DampingTrial {
+  double damping = 0.0;                            ///< η (1/s)
+  StopReason reason = StopReason::kMaxIterations;  ///< outcome of the run
+  long iterations = 0;                             ///< time steps taken
+  std::uint64_t flops = 0;                         ///< flops taken
+};
+
+/// Outcome of sweep_damping().
+struct [[nodiscard]] DampingSweep {
+  std::vector<DampingTrial> trials;  ///< every η tried, in order
+  double best_damping = 0.0;         ///< η of the converged trial with fewest steps; 0 when none
+  long best_iterations = 0;          ///< its step count
+};
+
+/// The thesis' manual method (§4.4.1) automated: run dynamic_relaxation() from u for each η in
+/// `etas` with the given options (damping overwritten) and keep the fastest converged one.
+DampingSweep sweep_damping(Problem& problem, const VecX& u, const std::vector<double>& etas,
+                           const DynamicRelaxationOptions& options);
+
+/// Outcome of damping_from_spectrum().
+struct [[nodiscard]] SpectralDamping {
+  double damping = 0.0;     ///< η = 2ω = 4πf (1/s); 0 when no oscillation was found
+  double frequency = 0.0;   ///< dominant frequency f (Hz) of the undamped trajectory
+  double resolution = 0.0;  ///< FFT bin width (Hz)
+  long steps = 0;           ///< time steps simulated
+  StopReason reason = StopReason::kMaxIterations;  ///< outcome of the undamped run
+  std::uint64_t flops = 0;                         ///< flops spent
+};
+
+/// η from the dominant frequency of an undamped trajectory (spectrum by FFTW, module spectral):
+/// runs `steps` undamped SS22 steps from rest at u, samples s(t) = (u(t) − u₀)·r₀/‖r₀‖ (the
+/// displacement along the initial residual, dominated by the lowest mode for a smooth load),
+/// and returns η = 2·(2πf), i.e. 2√λ₁ with λ₁ = ω² (§4.1). A run that blows up returns
+/// damping 0 with its StopReason.
+SpectralDamping damping_from_spectrum(Problem& problem, const VecX& u, double time_step,
+                                      long steps);
+
+}  // namespace incise::solver

@@ -1,0 +1,47 @@
+#pragma once
+/// \file eigen_estimates.hpp
+/// Extreme eigenvalues of the generalized problem K w = λ M w (M lumped, K = K(u) tangent) on the
+/// free DOFs, which set the dynamic relaxation parameters of thesis §4.1: the critical time step
+/// Δt = 2/√λ_n and the critical damping η = 2√λ₁.
+
+#include <incise/solver/report.hpp>
+
+namespace incise::solver {
+
+/// An eigenvalue estimate of M⁻¹K (1/s²).
+struct [[nodiscard]] EigenEstimate {
+  double value = 0.0;         ///< Rayleigh quotient (w, K w)/(w, M w) of the final iterate (1/s²)
+  long iterations = 0;        ///< outer (power / inverse) iterations
+  long inner_iterations = 0;  ///< inner CG steps (inverse iteration)
+  double relative_change = 0.0;                    ///< |ρ_k − ρ_{k−1}|/ρ_k at exit
+  StopReason reason = StopReason::kMaxIterations;  ///< kConverged when the change met the tol.
+  std::uint64_t flops = 0;                         ///< counted flops
+  bool converged() const { return reason == StopReason::kConverged; }
+};
+
+/// Options for the eigenvalue iterations.
+struct EigenOptions {
+  double tolerance = 1e-6;        ///< stop when |ρ_k − ρ_{k−1}| ≤ tolerance·ρ_k
+  long max_iterations = 2000;     ///< outer iterations
+  double inner_tolerance = 1e-8;  ///< inverse iteration: relative CG tolerance of K y = M x
+  unsigned seed = 12345;          ///< seed of the deterministic random start vector
+};
+
+/// Largest eigenvalue λ_n of M⁻¹K at u by power iteration on P M⁻¹ K P with M-normalization.
+/// The Rayleigh quotient is a lower bound of λ_n, so 2/√value slightly overestimates the
+/// critical time step; use a safety factor. Requires Problem::lumped_mass() (UsageError if
+/// empty). Reports kIndefinite if (w,Kw) ≤ 0, kNonFinite/kInverted on failed evaluations.
+EigenEstimate largest_eigenvalue(Problem& problem, const VecX& u, const EigenOptions& options = {});
+
+/// Smallest eigenvalue λ₁ of M⁻¹K at u by inverse iteration, each step solving K y = M x on the
+/// free DOFs with projected_cg(). The Rayleigh quotient is an upper bound of λ₁.
+EigenEstimate smallest_eigenvalue(Problem& problem, const VecX& u,
+                                  const EigenOptions& options = {});
+
+/// Critical time step of explicit SS22 / central differences for eigenvalue λ_n: 2/√λ_n (§4.1).
+double critical_time_step(double lambda_max);
+
+/// Critical (optimal) damping η = 2√λ₁ (§4.1) in 1/s.
+double critical_damping(double lambda_min);
+
+}  // namespace incise::solver

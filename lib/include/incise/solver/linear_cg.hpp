@@ -1,0 +1,66 @@
+#pragma once
+/// \file linear_cg.hpp
+/// Matrix-free linear conjugate gradients (thesis §2.4.1, pseudo code after (2.42); §3.1 for the
+/// fixed-DOF handling by zeroing the constrained residual) and its Jacobi-preconditioned variant
+/// (the E Eᵀ = diag K preconditioner of §2.4.1 / §4.6).
+
+#include <incise/solver/report.hpp>
+
+#include <functional>
+
+namespace incise::solver {
+
+/// Preconditioner of the CG iterations.
+enum class Preconditioner {
+  kNone,   ///< plain CG (the thesis' choice)
+  kJacobi  ///< diagonal scaling by diag K(u) (Problem::hessian_diagonal); falls back to kNone
+           ///< when the problem provides no diagonal or a diagonal entry is ≤ 0
+};
+
+/// Options of linear_cg().
+struct LinearCgOptions {
+  StoppingRule stop;  ///< (6.8) or (6.9)
+  Budget budget;      ///< iteration / flop / time budgets
+  Preconditioner preconditioner = Preconditioner::kNone;
+  /// After the loop, evaluate the true gradient once and report its residual (the recursive
+  /// residual r_{k+1} = r_k − α K d drifts from f − K u in floating point).
+  bool recompute_residual = true;
+  IterationObserver observer;  ///< called after every CG step with the current u
+};
+
+/// Minimizes the quadratic model Π(u₀) + ∇Π(u₀)·x + ½ xᵀK(u₀)x over x with Px = x, i.e. solves
+/// K(u₀) x = −P∇Π(u₀) on the free DOFs, and sets u ← u₀ + x. For a linear problem (Π quadratic)
+/// this is the exact static solution (§3.1). K·d comes from Problem::hessian_product at u₀
+/// (matrix-free). The residual and the reaction forces are updated recursively with the same
+/// unprojected product, so the rule (6.9) costs no extra evaluations. Energy history is exact
+/// for a quadratic Π: Π_{k+1} = Π_k − ½ α_k (r_k, z_k).
+/// Stops with kIndefinite when dᵀK d ≤ 0 (u is left at the last iterate), kNonFinite or
+/// kInverted when an evaluation fails; never writes NaN into u.
+SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options);
+
+/// Linear operator out = A·in used by projected_cg(); returns the evaluation status.
+using LinearOperator = std::function<EvalStatus(const VecX& in, VecX& out)>;
+
+/// Outcome of projected_cg().
+struct InnerCgResult {
+  StopReason reason = StopReason::kMaxIterations;  ///< converged / indefinite / max_iterations...
+  long iterations = 0;                             ///< CG steps taken
+  double residual_norm = 0.0;                      ///< final ‖P(b − A x)‖₂ (recursive)
+  bool negative_curvature = false;                 ///< stopped at dᵀA d ≤ 0
+};
+
+/// CG on P A P x = P b started from x = 0 (x is overwritten), for inner solves (truncated
+/// Newton §2.4.3, inverse iteration). `problem` supplies the projection P; `inverse_diagonal`,
+/// when non-empty, is the Jacobi preconditioner D⁻¹ (zero at fixed DOFs). Stops when
+/// ‖r‖₂ ≤ tolerance, after max_iterations, or at non-positive curvature (then x holds the last
+/// iterate with positive curvature; x = 0 when the first direction already fails). Flops of the
+/// vector operations are added to `meter`.
+InnerCgResult projected_cg(const LinearOperator& apply, const Problem& problem,
+                           const VecX& inverse_diagonal, const VecX& b, VecX& x, double tolerance,
+                           long max_iterations, CostMeter& meter);
+
+/// Jacobi preconditioner D⁻¹ = 1/diag K(u) at free DOFs, 0 at fixed DOFs. Returns an empty
+/// vector when the problem has no diagonal or some free diagonal entry is not positive/finite.
+VecX jacobi_inverse_diagonal(Problem& problem, const VecX& u);
+
+}  // namespace incise::solver

@@ -1,0 +1,52 @@
+#pragma once
+/// \file nonlinear_cg.hpp
+/// Nonlinear conjugate gradients (thesis §2.4.2) with the line searches of §4.4.2: Newton,
+/// secant (4.9) and scale-dependent secant.
+
+#include <incise/solver/report.hpp>
+
+namespace incise::solver {
+
+/// β selection of the nonlinear CG search direction d_k = r_k + β_k d_{k−1}.
+enum class BetaRule {
+  kFletcherReeves,  ///< β = ‖r_k‖²/‖r_{k−1}‖² — (2.48) (the extracted text drops the square)
+  kPolakRibiere  ///< β = max{0, r_kᵀ(r_k − r_{k−1})/‖r_{k−1}‖²} — (2.49)
+};
+
+/// Line search of §4.4.2 for the 1-D equation g(α) = (∇Π(x + αd), d) = 0.
+enum class LineSearchKind {
+  kNewton,               ///< α ← α − g/g′ with g′ = (d, K(x+αd) d): one K·d per step
+  kSecant,               ///< g′ by the secant (4.9); K·d only in the first step
+  kScaleDependentSecant  ///< secant also in the first step, from a gradient at α₋₁ (§4.4.2)
+};
+
+/// Human-readable names ("fletcher-reeves", "newton", ...).
+const char* to_string(BetaRule b);
+const char* to_string(LineSearchKind l);
+
+/// Options of nonlinear_cg(). Defaults are the thesis' choice for §4.5 (secant, Polak-Ribière,
+/// ε_newton = 0.1).
+struct NonlinearCgOptions {
+  StoppingRule stop;                        ///< (6.8) or (6.9)
+  Budget budget;                            ///< outer iteration / flop / time budgets
+  BetaRule beta = BetaRule::kPolakRibiere;  ///< (2.48) or (2.49)
+  LineSearchKind line_search = LineSearchKind::kSecant;
+  double epsilon_newton = 0.1;  ///< stop the line search when |δ_j| < ε_newton |δ_0| (j > 0)
+  int j_max = 8;                ///< at most j_max line-search updates per outer iteration
+  /// α₋₁ of the scale-dependent secant (units of α: metres per unit of d; the thesis used
+  /// −0.001 for its cylinder, §4.5.1). Scale-dependent by nature.
+  double alpha_minus1 = -1e-3;
+  long restart_every = 0;   ///< restart d = r every this many steps; 0: every n steps
+  int max_backtracks = 30;  ///< halvings of a trial step that lands on Π = +∞ (inverted)
+  IterationObserver observer;
+};
+
+/// Minimizes Π from the given u (updated in place). Each outer iteration: choose d (restart to
+/// d = r when d is not a descent direction, every restart_every steps, or when PR gives β = 0),
+/// run the line search (the gradient at the accepted α is reused as the next residual, as the
+/// thesis does), update β. A trial step into Π = +∞ is halved towards the last admissible α
+/// (never accepted). Reports kIndefinite when the curvature along d is not positive at α = 0,
+/// kLineSearchFailed when no admissible α > 0 was found, kStagnated when α = 0.
+SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& options);
+
+}  // namespace incise::solver

@@ -1,0 +1,133 @@
+#pragma once
+/// \file report.hpp
+/// The common outcome report, budgets and stopping rules shared by every incise solver (linear
+/// CG, nonlinear CG, truncated Newton, dynamic relaxation). Numerical failure is a reported
+/// StopReason, never an exception or a NaN result (DESIGN §1 "Solvers and reports").
+
+#include <incise/core/error.hpp>
+#include <incise/core/problem.hpp>
+#include <incise/core/timer.hpp>
+#include <incise/core/types.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <vector>
+
+namespace incise::solver {
+
+/// Why a solver returned.
+enum class StopReason {
+  kConverged,         ///< the stopping rule (3.1)/(6.8) or (6.9) was met
+  kMaxIterations,     ///< Budget::max_iterations reached
+  kFlopBudget,        ///< Budget::max_flops reached
+  kTimeBudget,        ///< Budget::max_seconds reached
+  kInverted,          ///< no admissible step: every trial point had Π = +∞ (det F ≤ 0)
+  kNonFinite,         ///< a NaN/∞ appeared in a residual, energy or curvature
+  kIndefinite,        ///< non-positive curvature dᵀK d ≤ 0 where a minimizer needs it positive
+  kLineSearchFailed,  ///< the line search could not find an admissible step length
+  kStagnated,         ///< no further progress (zero step, or residual no longer decreasing)
+  kUnstable           ///< explicit dynamics blew up (‖u‖ > blow-up bound, §4.4.1)
+};
+
+/// Human-readable name ("converged", "max_iterations", ...).
+const char* to_string(StopReason r);
+
+/// Resource budgets. A solver stops with the matching StopReason as soon as one is exhausted
+/// (checked once per iteration, so it may overshoot by one iteration's cost).
+struct Budget {
+  long max_iterations = 100000;                                  ///< iterations (outer)
+  double max_flops = std::numeric_limits<double>::infinity();    ///< counted flops
+  double max_seconds = std::numeric_limits<double>::infinity();  ///< wall-clock seconds
+};
+
+/// Which residual norm rule decides convergence.
+enum class ResidualRule {
+  kExternalForce,  ///< ‖r‖₂ ≤ ε‖f_ex‖₂ — (6.8), the rule of chapters 3 and 4
+  kWithReactions  ///< ‖r‖₂ ≤ ε√(‖f_ex‖² + ‖f_react‖²) + (force_scale/√n) ε_round — (6.9)
+};
+
+/// Stopping rule parameters (§3.3, §4.2, (6.8), (6.9)). r = −P∇Π(u) is the projected residual;
+/// f_react = (I−P)∇Π(u) are the reaction forces at fixed DOFs (§3.1, §6.6).
+struct StoppingRule {
+  ResidualRule rule = ResidualRule::kWithReactions;  ///< (6.8) or (6.9)
+  double epsilon = 1e-3;                             ///< relative tolerance ε (dimensionless)
+  double epsilon_round = 1e-12;                      ///< ε_round of (6.9) (dimensionless)
+  /// E·d·H (2D) or E·H² (3D) of (6.9), newtons: the scale-free force magnitude. 0 disables the
+  /// rounding term (then a zero load with no reactions can only "converge" at r = 0 exactly).
+  double force_scale = 0.0;
+  double absolute_tolerance = 0.0;  ///< extra additive floor on the threshold, newtons
+};
+
+/// Threshold on ‖r‖₂ for the given rule. `n` is the number of unknowns (for (6.9)'s √n).
+double residual_threshold(const StoppingRule& rule, double external_force_norm,
+                          double reaction_norm, Eigen::Index n);
+
+/// Snapshot passed to an IterationObserver after every iteration.
+struct IterationInfo {
+  long iteration = 0;          ///< iterations completed
+  const VecX* u = nullptr;     ///< current iterate (displacements, m); valid during the call
+  double residual_norm = 0.0;  ///< ‖r‖₂ of that iterate (newtons), as the solver knows it
+  double energy = 0.0;         ///< Π of that iterate (J), as the solver knows it
+  std::uint64_t flops = 0;     ///< flops spent by the solver so far (observer excluded)
+  double seconds = 0.0;        ///< seconds spent by the solver so far (observer excluded)
+};
+
+/// Called after every iteration. The time and flops spent inside it are excluded from the
+/// solver's budgets and report, so observers (e.g. EnergyErrorTrace) do not bias measurements.
+using IterationObserver = std::function<void(const IterationInfo&)>;
+
+/// Outcome of one solver run. [[nodiscard]]: numerical failure is reported here.
+struct [[nodiscard]] SolverReport {
+  StopReason reason = StopReason::kMaxIterations;  ///< why the solver returned
+  long iterations = 0;        ///< outer iterations (CG steps, NCG steps, Newton steps,
+                              ///< time steps) completed
+  long inner_iterations = 0;  ///< inner CG steps (truncated Newton) or line-search
+                              ///< evaluations (nonlinear CG); 0 otherwise
+  std::uint64_t flops = 0;    ///< counted flops: Problem::flops() delta + solver vector ops
+  double seconds = 0.0;       ///< wall-clock seconds (observer time excluded)
+  double residual_norm = std::numeric_limits<double>::quiet_NaN();  ///< final ‖r‖₂ (N)
+  double threshold = 0.0;  ///< final stopping threshold on ‖r‖₂ (N)
+  double energy = std::numeric_limits<double>::quiet_NaN();  ///< final Π (J) when known
+  std::vector<double> residual_history;  ///< ‖r‖₂ after each iteration (index 0: start)
+  std::vector<double> energy_history;    ///< Π after each iteration (index 0: start)
+
+  /// True when reason == kConverged.
+  bool converged() const { return reason == StopReason::kConverged; }
+};
+
+/// Cost meter shared by the solvers: counts Problem::flops() deltas plus explicitly added
+/// vector-operation flops, and wall time, both excluding time/flops spent in observers.
+class CostMeter {
+ public:
+  /// Starts measuring `problem` now.
+  explicit CostMeter(const Problem& problem);
+  /// Adds solver-side flops (vector operations: a dot product of length n is 2n flops).
+  void add(std::uint64_t flops) { own_flops_ += flops; }
+  /// Flops since construction, observer excluded.
+  std::uint64_t flops() const;
+  /// Seconds since construction, observer excluded.
+  double seconds() const;
+  /// Calls `observer` (if set) with `info` (cost fields filled in here) and excludes its cost.
+  void observe(const IterationObserver& observer, IterationInfo info);
+  /// Budget check: the StopReason for an exhausted budget, or kConverged when none is.
+  StopReason exhausted(const Budget& budget, long iterations) const;
+
+ private:
+  const Problem& problem_;
+  std::uint64_t start_flops_;
+  std::uint64_t own_flops_ = 0;
+  std::uint64_t excluded_flops_ = 0;
+  double excluded_seconds_ = 0.0;
+  Timer timer_;
+};
+
+/// ‖v‖₂ of the components of v at fixed DOFs (the reaction force norm of (6.9) when v = ∇Π).
+double fixed_norm(const Problem& problem, const VecX& v);
+
+/// True when every entry of v is finite.
+inline bool all_finite(const VecX& v) {
+  return v.allFinite();
+}
+
+}  // namespace incise::solver

@@ -1,0 +1,176 @@
+#include <incise/solver/dynamic_relaxation.hpp>
+#include <incise/spectral/dominant_frequency.hpp>
+
+#include <cmath>
+
+namespace incise::solver {
+
+SolverReport dynamic_relaxation(Problem& problem, VecX& u,
+                                const DynamicRelaxationOptions& options) {
+  INCISE_CHECK(u.size() == problem.size(), "dynamic_relaxation: u has the wrong size");
+  INCISE_CHECK_PARAM(options.time_step > 0.0 && std::isfinite(options.time_step),
+                     "dynamic_relaxation: time_step must be positive");
+  INCISE_CHECK_PARAM(options.damping >= 0.0 && std::isfinite(options.damping),
+                     "dynamic_relaxation: damping must be non-negative");
+  const VecX& m = problem.lumped_mass();
+  INCISE_CHECK(m.size() == problem.size(), "dynamic_relaxation needs Problem::lumped_mass()");
+  INCISE_CHECK((m.array() > 0.0).all(), "dynamic_relaxation: lumped masses must be positive");
+
+  SolverReport rep;
+  CostMeter meter(problem);
+  const Eigen::Index n = u.size();
+  const auto nn = static_cast<std::uint64_t>(n);
+  const double dt = options.time_step, eta = options.damping;
+  const double fex = problem.external_force_norm();
+  // 1/((1 + ½Δtη) m_i): the diagonal of (M + θ₁Δt C)⁻¹ of (2.58) with θ₁ = ½, θ₂ = 0.
+  const VecX inv_mass = (m * (1.0 + 0.5 * dt * eta)).cwiseInverse();
+
+  VecX v = VecX::Zero(n), ubar = u, g, acc(n), last_good = u;
+  double energy = 0.0, last_energy = 0.0, rnorm = 0.0, threshold = 0.0;
+  long k = 0;
+  StopReason reason = StopReason::kConverged;
+  bool have_residual = false;
+  while (true) {
+    ubar = u + (0.5 * dt) * v;  // (2.56), θ₁ = ½
+    const EvalStatus st = problem.gradient(ubar, g, &energy);
+    if (st != EvalStatus::kOk || !g.allFinite() || !std::isfinite(energy)) {
+      reason = st == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
+      break;
+    }
+    last_good = ubar;
+    last_energy = energy;
+    acc = -g;
+    problem.project(acc);  // r = −P∇Π(ū)
+    rnorm = acc.norm();
+    threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+    have_residual = true;
+    rep.residual_history.push_back(rnorm);
+    rep.energy_history.push_back(energy);
+    if (k > 0) meter.observe(options.observer, IterationInfo{k, &ubar, rnorm, energy, 0, 0.0});
+    if (rnorm <= threshold) {
+      reason = StopReason::kConverged;
+      break;
+    }
+    reason = meter.exhausted(options.budget, k);
+    if (reason != StopReason::kConverged) break;
+    acc -= eta * m.cwiseProduct(v);  // v is projected already: P(r − ηMv) = r − ηMv
+    acc = acc.cwiseProduct(inv_mass);
+    u += dt * v + (0.5 * dt * dt) * acc;  // (2.59)
+    v += dt * acc;                        // (2.60)
+    meter.add(16 * nn);
+    ++k;
+    const double unorm = u.norm();
+    if (!std::isfinite(unorm) || unorm > options.blowup_norm) {
+      reason = StopReason::kUnstable;
+      break;
+    }
+  }
+  // Hand back the last evaluated admissible point: its residual is the one reported.
+  u = last_good;
+  rep.reason = reason;
+  rep.iterations = k;
+  rep.residual_norm = have_residual ? rnorm : std::numeric_limits<double>::quiet_NaN();
+  rep.threshold = threshold;
+  rep.energy = last_energy;
+  rep.flops = meter.flops();
+  rep.seconds = meter.seconds();
+  return rep;
+}
+
+double cfl_time_step(double h, double lame_lambda, double lame_mu, double density) {
+  INCISE_CHECK_PARAM(h > 0.0 && density > 0.0 && lame_lambda + 2.0 * lame_mu > 0.0,
+                     "cfl_time_step: h, density and λ + 2µ must be positive");
+  const double c = std::sqrt((lame_lambda + 2.0 * lame_mu) / density);
+  return 2.0 / std::sqrt(3.0) * h / c;  // (2.61)
+}
+
+StableTimeStep find_stable_time_step(Problem& problem, const VecX& u, double initial,
+                                     const StableTimeStepOptions& options) {
+  INCISE_CHECK_PARAM(initial > 0.0, "find_stable_time_step: initial time step must be positive");
+  INCISE_CHECK_PARAM(options.reduction > 0.0 && options.reduction < 1.0,
+                     "find_stable_time_step: reduction must lie in (0, 1)");
+  StableTimeStep out;
+  double dt = initial;
+  for (int i = 0; i <= options.max_reductions; ++i) {
+    DynamicRelaxationOptions o;
+    o.time_step = dt;
+    o.damping = 0.0;
+    o.stop.rule = ResidualRule::kExternalForce;
+    o.stop.epsilon = 0.0;  // never "converges": the run must survive the budget
+    o.budget.max_flops = options.flop_budget;
+    o.budget.max_iterations = options.max_steps;
+    o.blowup_norm = options.blowup_norm;
+    VecX w = u;
+    const SolverReport rep = dynamic_relaxation(problem, w, o);
+    out.flops += rep.flops;
+    if (rep.reason == StopReason::kFlopBudget || rep.reason == StopReason::kMaxIterations ||
+        rep.reason == StopReason::kConverged) {
+      out.time_step = dt;
+      out.reductions = i;
+      out.found = true;
+      return out;
+    }
+    dt *= options.reduction;
+  }
+  out.reductions = options.max_reductions;
+  return out;
+}
+
+DampingSweep sweep_damping(Problem& problem, const VecX& u, const std::vector<double>& etas,
+                           const DynamicRelaxationOptions& options) {
+  DampingSweep sweep;
+  for (double eta : etas) {
+    DynamicRelaxationOptions o = options;
+    o.damping = eta;
+    VecX w = u;
+    const SolverReport rep = dynamic_relaxation(problem, w, o);
+    sweep.trials.push_back(DampingTrial{eta, rep.reason, rep.iterations, rep.flops});
+    if (rep.converged() && (sweep.best_iterations == 0 || rep.iterations < sweep.best_iterations)) {
+      sweep.best_damping = eta;
+      sweep.best_iterations = rep.iterations;
+    }
+  }
+  return sweep;
+}
+
+SpectralDamping damping_from_spectrum(Problem& problem, const VecX& u, double time_step,
+                                      long steps) {
+  INCISE_CHECK_PARAM(steps >= 16, "damping_from_spectrum: need at least 16 steps");
+  SpectralDamping out;
+  VecX g;
+  if (problem.gradient(u, g) != EvalStatus::kOk || !g.allFinite()) {
+    out.reason = StopReason::kNonFinite;
+    return out;
+  }
+  VecX dir = -g;
+  problem.project(dir);
+  const double dn = dir.norm();
+  if (!(dn > 0.0)) {
+    out.reason = StopReason::kConverged;  // already in equilibrium: nothing oscillates
+    return out;
+  }
+  dir /= dn;
+  std::vector<double> samples;
+  samples.reserve(static_cast<std::size_t>(steps));
+  DynamicRelaxationOptions o;
+  o.time_step = time_step;
+  o.damping = 0.0;
+  o.stop.rule = ResidualRule::kExternalForce;
+  o.stop.epsilon = 0.0;
+  o.budget.max_iterations = steps;
+  o.observer = [&](const IterationInfo& info) { samples.push_back((*info.u - u).dot(dir)); };
+  VecX w = u;
+  const SolverReport rep = dynamic_relaxation(problem, w, o);
+  out.reason = rep.reason;
+  out.steps = rep.iterations;
+  out.flops = rep.flops;
+  if (rep.reason != StopReason::kMaxIterations || samples.size() < 16) return out;
+  const spectral::FrequencyEstimate f = spectral::dominant_frequency(samples, time_step);
+  out.frequency = f.frequency;
+  out.resolution = f.resolution;
+  const double pi = 3.14159265358979323846;
+  out.damping = 4.0 * pi * f.frequency;
+  return out;
+}
+
+}  // namespace incise::solver

@@ -1,0 +1,207 @@
+#include <incise/solver/linear_cg.hpp>
+
+#include <cmath>
+
+namespace incise::solver {
+namespace {
+
+StopReason status_reason(EvalStatus s) {
+  return s == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
+}
+
+// z = D⁻¹ r (or r when no preconditioner).
+void precondition(const VecX& inv_diag, const VecX& r, VecX& z) {
+  if (inv_diag.size() == 0)
+    z = r;
+  else
+    z = inv_diag.cwiseProduct(r);
+}
+
+}  // namespace
+
+VecX jacobi_inverse_diagonal(Problem& problem, const VecX& u) {
+  VecX diag;
+  if (!problem.hessian_diagonal(u, diag) || diag.size() != u.size()) return VecX();
+  VecX inv(diag.size());
+  for (Eigen::Index i = 0; i < diag.size(); ++i) {
+    if (problem.is_fixed(i)) {
+      inv[i] = 0.0;
+    } else {
+      if (!(diag[i] > 0.0) || !std::isfinite(diag[i])) return VecX();
+      inv[i] = 1.0 / diag[i];
+    }
+  }
+  return inv;
+}
+
+SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options) {
+  INCISE_CHECK(u.size() == problem.size(), "linear_cg: u has the wrong size");
+  SolverReport rep;
+  CostMeter meter(problem);
+  const Eigen::Index n = u.size();
+  const auto nn = static_cast<std::uint64_t>(n);
+  const VecX u0 = u;
+
+  VecX g;  // full (unprojected) gradient ∇Π(u) = K x − f, tracked recursively
+  double energy = 0.0;
+  EvalStatus st = problem.gradient(u, g, &energy);
+  if (st != EvalStatus::kOk || !g.allFinite()) {
+    rep.reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+    rep.flops = meter.flops();
+    rep.seconds = meter.seconds();
+    return rep;
+  }
+  VecX inv_diag;
+  if (options.preconditioner == Preconditioner::kJacobi)
+    inv_diag = jacobi_inverse_diagonal(problem, u0);
+
+  const double fex = problem.external_force_norm();
+  VecX r = -g;
+  problem.project(r);
+  VecX z, d, q(n);
+  precondition(inv_diag, r, z);
+  double rz = r.dot(z);
+  d = z;
+  double rnorm = r.norm();
+  double threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+  meter.add(6 * nn);
+  rep.residual_history.push_back(rnorm);
+  rep.energy_history.push_back(energy);
+
+  long k = 0;
+  StopReason reason = StopReason::kConverged;
+  while (true) {
+    if (rnorm <= threshold) {
+      reason = StopReason::kConverged;
+      break;
+    }
+    reason = meter.exhausted(options.budget, k);
+    if (reason != StopReason::kConverged) break;
+
+    st = problem.hessian_product(u0, d, q);
+    if (st != EvalStatus::kOk || !q.allFinite()) {
+      reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+      break;
+    }
+    const double curvature = d.dot(q);  // d is projected, so dᵀq = dᵀ P K P d
+    if (!std::isfinite(curvature)) {
+      reason = StopReason::kNonFinite;
+      break;
+    }
+    if (curvature <= 0.0) {
+      reason = StopReason::kIndefinite;
+      break;
+    }
+    const double alpha = rz / curvature;
+    u += alpha * d;
+    g += alpha * q;  // ∇Π(u + αd) = ∇Π(u) + αK d, including the reaction components
+    r = -g;
+    problem.project(r);
+    precondition(inv_diag, r, z);
+    const double rz_new = r.dot(z);
+    energy -= 0.5 * alpha * rz;  // exact decrease of a quadratic along a CG step
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    d = z + beta * d;
+    rnorm = r.norm();
+    threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+    meter.add(20 * nn);
+    ++k;
+    rep.residual_history.push_back(rnorm);
+    rep.energy_history.push_back(energy);
+    meter.observe(options.observer, IterationInfo{k, &u, rnorm, energy, 0, 0.0});
+    if (!std::isfinite(rnorm) || !std::isfinite(beta)) {
+      reason = StopReason::kNonFinite;
+      break;
+    }
+  }
+
+  if (!u.allFinite()) u = u0;  // never hand back NaN
+  if (options.recompute_residual && reason != StopReason::kNonFinite &&
+      reason != StopReason::kInverted) {
+    VecX gt;
+    double e = 0.0;
+    if (problem.gradient(u, gt, &e) == EvalStatus::kOk && gt.allFinite()) {
+      VecX rt = -gt;
+      problem.project(rt);
+      rnorm = rt.norm();
+      energy = e;
+      threshold = residual_threshold(options.stop, fex, fixed_norm(problem, gt), n);
+      // The recursive residual met the rule but the true one may not: report honestly.
+      if (reason == StopReason::kConverged && rnorm > threshold) reason = StopReason::kStagnated;
+    }
+  }
+  rep.reason = reason;
+  rep.iterations = k;
+  rep.residual_norm = rnorm;
+  rep.threshold = threshold;
+  rep.energy = energy;
+  rep.flops = meter.flops();
+  rep.seconds = meter.seconds();
+  return rep;
+}
+
+InnerCgResult projected_cg(const LinearOperator& apply, const Problem& problem,
+                           const VecX& inverse_diagonal, const VecX& b, VecX& x, double tolerance,
+                           long max_iterations, CostMeter& meter) {
+  const Eigen::Index n = b.size();
+  const auto nn = static_cast<std::uint64_t>(n);
+  InnerCgResult res;
+  x.setZero(n);
+  VecX r = b;
+  problem.project(r);
+  VecX z, d, q(n);
+  precondition(inverse_diagonal, r, z);
+  double rz = r.dot(z);
+  d = z;
+  double rnorm = r.norm();
+  meter.add(6 * nn);
+  long k = 0;
+  while (true) {
+    res.residual_norm = rnorm;
+    if (rnorm <= tolerance) {
+      res.reason = StopReason::kConverged;
+      break;
+    }
+    if (k >= max_iterations) {
+      res.reason = StopReason::kMaxIterations;
+      break;
+    }
+    const EvalStatus st = apply(d, q);
+    if (st != EvalStatus::kOk || !q.allFinite()) {
+      res.reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+      break;
+    }
+    problem.project(q);
+    const double curvature = d.dot(q);
+    if (!std::isfinite(curvature)) {
+      res.reason = StopReason::kNonFinite;
+      break;
+    }
+    if (curvature <= 0.0) {
+      res.reason = StopReason::kIndefinite;
+      res.negative_curvature = true;
+      break;
+    }
+    const double alpha = rz / curvature;
+    x += alpha * d;
+    r -= alpha * q;
+    precondition(inverse_diagonal, r, z);
+    const double rz_new = r.dot(z);
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    d = z + beta * d;
+    rnorm = r.norm();
+    meter.add(16 * nn);
+    ++k;
+    if (!std::isfinite(rnorm)) {
+      res.reason = StopReason::kNonFinite;
+      break;
+    }
+  }
+  res.iterations = k;
+  if (!x.allFinite()) x.setZero();
+  return res;
+}
+
+}  // namespace incise::solver

@@ -1,0 +1,221 @@
+#include <incise/solver/nonlinear_cg.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace incise::solver {
+
+const char* to_string(BetaRule b) {
+  return b == BetaRule::kFletcherReeves ? "fletcher-reeves" : "polak-ribiere";
+}
+
+const char* to_string(LineSearchKind l) {
+  switch (l) {
+    case LineSearchKind::kNewton: return "newton";
+    case LineSearchKind::kSecant: return "secant";
+    case LineSearchKind::kScaleDependentSecant: return "scale-dependent-secant";
+  }
+  return "?";
+}
+
+namespace {
+
+StopReason status_reason(EvalStatus s) {
+  return s == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
+}
+
+struct LineSearchResult {
+  StopReason reason = StopReason::kConverged;  // kConverged: an admissible α was found
+  double alpha = 0.0;
+  int evaluations = 0;
+};
+
+// §4.4.2: solve g(α) = (∇Π(x+αd), d) = 0 for α, starting at α₀ = 0 where the full gradient g0
+// is known. γ(α) = −g(α) = (r(α), d). On success `g_out`/`e_out` hold ∇Π and Π at x + αd.
+LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, const VecX& g0,
+                             double e0, double gamma0, const NonlinearCgOptions& opt,
+                             CostMeter& meter, VecX& g_out, double& e_out) {
+  const auto nn = static_cast<std::uint64_t>(x.size());
+  LineSearchResult res;
+  VecX xt(x.size()), s, gt;
+  double alpha = 0.0, gamma = gamma0;
+  double alpha_prev = 0.0, gamma_prev = gamma0;
+  double delta0 = 0.0;
+  g_out = g0;
+  e_out = e0;
+  for (int j = 0; j < opt.j_max; ++j) {
+    double c = 0.0;  // estimate of g′(α_j) = (d, K(x + α_j d) d)
+    bool need_product = opt.line_search == LineSearchKind::kNewton ||
+                        (j == 0 && opt.line_search == LineSearchKind::kSecant);
+    if (j == 0 && opt.line_search == LineSearchKind::kScaleDependentSecant) {
+      // Finite-difference curvature from a gradient at α₋₁ (4.9).
+      xt = x + opt.alpha_minus1 * d;
+      const EvalStatus st = problem.gradient(xt, gt);
+      ++res.evaluations;
+      meter.add(4 * nn);
+      if (st == EvalStatus::kOk && gt.allFinite()) {
+        const double gamma_m1 = -gt.dot(d);
+        c = (gamma0 - gamma_m1) / opt.alpha_minus1;
+      } else {
+        need_product = true;  // α₋₁ leaves the domain: fall back to one exact product
+      }
+    }
+    if (need_product) {
+      xt = x + alpha * d;
+      const EvalStatus st = problem.hessian_product(xt, d, s);
+      ++res.evaluations;
+      meter.add(4 * nn);
+      if (st != EvalStatus::kOk || !s.allFinite()) {
+        if (j == 0) {
+          res.reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+          return res;
+        }
+        break;
+      }
+      c = d.dot(s);
+    } else if (j > 0) {
+      c = -(gamma - gamma_prev) / (alpha - alpha_prev);  // secant (4.9)
+    }
+    if (!std::isfinite(c) || c <= 0.0) {
+      if (j == 0) {
+        res.reason = std::isfinite(c) ? StopReason::kIndefinite : StopReason::kNonFinite;
+        return res;
+      }
+      break;  // keep α_j: the secant lost curvature information
+    }
+    const double step = gamma / c;  // −δ_j
+    if (j == 0) {
+      delta0 = std::abs(step);
+    } else if (std::abs(step) < opt.epsilon_newton * delta0) {
+      break;  // |δ_j| < ε_newton |δ_0|: δ_j is not added, r_j is reused
+    }
+    double alpha_new = alpha + step;
+    bool admissible = false;
+    double et = 0.0;
+    for (int b = 0; b <= opt.max_backtracks; ++b) {
+      xt = x + alpha_new * d;
+      const EvalStatus st = problem.gradient(xt, gt, &et);
+      ++res.evaluations;
+      meter.add(2 * nn);
+      if (st == EvalStatus::kOk && gt.allFinite() && std::isfinite(et)) {
+        admissible = true;
+        break;
+      }
+      alpha_new = alpha + 0.5 * (alpha_new - alpha);  // backtrack towards the admissible α_j
+    }
+    if (!admissible) {
+      if (j == 0) {
+        res.reason = StopReason::kInverted;
+        return res;
+      }
+      break;
+    }
+    alpha_prev = alpha;
+    gamma_prev = gamma;
+    alpha = alpha_new;
+    g_out = gt;
+    e_out = et;
+    gamma = -gt.dot(d);
+    meter.add(2 * nn);
+  }
+  res.alpha = alpha;
+  if (alpha == 0.0) res.reason = StopReason::kStagnated;
+  return res;
+}
+
+}  // namespace
+
+SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& options) {
+  INCISE_CHECK(u.size() == problem.size(), "nonlinear_cg: u has the wrong size");
+  INCISE_CHECK_PARAM(options.j_max >= 1, "nonlinear_cg: j_max must be at least 1");
+  INCISE_CHECK_PARAM(options.epsilon_newton >= 0.0, "nonlinear_cg: epsilon_newton < 0");
+  INCISE_CHECK_PARAM(options.alpha_minus1 != 0.0, "nonlinear_cg: alpha_minus1 must be non-zero");
+  SolverReport rep;
+  CostMeter meter(problem);
+  const Eigen::Index n = u.size();
+  const auto nn = static_cast<std::uint64_t>(n);
+  const long restart_every = options.restart_every > 0 ? options.restart_every : long(n);
+  const double fex = problem.external_force_norm();
+
+  VecX g;
+  double energy = 0.0;
+  EvalStatus st = problem.gradient(u, g, &energy);
+  if (st != EvalStatus::kOk || !g.allFinite()) {
+    rep.reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+    rep.flops = meter.flops();
+    rep.seconds = meter.seconds();
+    return rep;
+  }
+  VecX r = -g;
+  problem.project(r);
+  VecX d = r;
+  double rr = r.squaredNorm();
+  double rnorm = std::sqrt(rr);
+  double threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+  rep.residual_history.push_back(rnorm);
+  rep.energy_history.push_back(energy);
+
+  long k = 0, since_restart = 0;
+  StopReason reason = StopReason::kConverged;
+  VecX g_new, r_new;
+  while (true) {
+    if (rnorm <= threshold) {
+      reason = StopReason::kConverged;
+      break;
+    }
+    reason = meter.exhausted(options.budget, k);
+    if (reason != StopReason::kConverged) break;
+
+    double gamma0 = r.dot(d);
+    if (!(gamma0 > 0.0) || since_restart >= restart_every) {
+      d = r;  // restart with steepest descent
+      gamma0 = rr;
+      since_restart = 0;
+    }
+    double e_new = energy;
+    const LineSearchResult ls =
+        line_search(problem, u, d, g, energy, gamma0, options, meter, g_new, e_new);
+    rep.inner_iterations += ls.evaluations;
+    if (ls.reason != StopReason::kConverged) {
+      reason = ls.reason;
+      break;
+    }
+    u += ls.alpha * d;
+    g.swap(g_new);
+    energy = e_new;
+    r_new = -g;
+    problem.project(r_new);
+    const double rr_new = r_new.squaredNorm();
+    double beta = 0.0;
+    if (options.beta == BetaRule::kFletcherReeves)
+      beta = rr_new / rr;  // (2.48)
+    else
+      beta = std::max(0.0, (rr_new - r_new.dot(r)) / rr);  // (2.49)
+    r.swap(r_new);
+    rr = rr_new;
+    rnorm = std::sqrt(rr);
+    d = r + beta * d;
+    ++since_restart;
+    if (beta == 0.0) since_restart = 0;  // PR reset = steepest descent restart
+    threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+    meter.add(12 * nn);
+    ++k;
+    rep.residual_history.push_back(rnorm);
+    rep.energy_history.push_back(energy);
+    meter.observe(options.observer, IterationInfo{k, &u, rnorm, energy, 0, 0.0});
+    if (!std::isfinite(rnorm) || !std::isfinite(beta)) {
+      reason = StopReason::kNonFinite;
+      break;
+    }
+  }
+  rep.reason = reason;
+  rep.iterations = k;
+  rep.residual_norm = rnorm;
+  rep.threshold = threshold;
+  rep.energy = energy;
+  rep.flops = meter.flops();
+  rep.seconds = meter.seconds();
+  return rep;
+}
+
+}  // namespace incise::solver

@@ -1,0 +1,71 @@
+#include <incise/solver/report.hpp>
+
+#include <cmath>
+
+namespace incise::solver {
+
+const char* to_string(StopReason r) {
+  switch (r) {
+    case StopReason::kConverged: return "converged";
+    case StopReason::kMaxIterations: return "max_iterations";
+    case StopReason::kFlopBudget: return "flop_budget";
+    case StopReason::kTimeBudget: return "time_budget";
+    case StopReason::kInverted: return "inverted";
+    case StopReason::kNonFinite: return "non_finite";
+    case StopReason::kIndefinite: return "indefinite";
+    case StopReason::kLineSearchFailed: return "line_search_failed";
+    case StopReason::kStagnated: return "stagnated";
+    case StopReason::kUnstable: return "unstable";
+  }
+  return "?";
+}
+
+double residual_threshold(const StoppingRule& rule, double external_force_norm,
+                          double reaction_norm, Eigen::Index n) {
+  double t = rule.absolute_tolerance;
+  if (rule.rule == ResidualRule::kExternalForce) {
+    t += rule.epsilon * external_force_norm;  // (6.8)
+  } else {
+    // (6.9): ε√(‖f_ex‖² + ‖f_react‖²) + (E d H / √n) ε_round.
+    t += rule.epsilon * std::hypot(external_force_norm, reaction_norm);
+    if (n > 0) t += rule.force_scale / std::sqrt(static_cast<double>(n)) * rule.epsilon_round;
+  }
+  return t;
+}
+
+CostMeter::CostMeter(const Problem& problem) : problem_(problem), start_flops_(problem.flops()) {}
+
+std::uint64_t CostMeter::flops() const {
+  return problem_.flops() - start_flops_ - excluded_flops_ + own_flops_;
+}
+
+double CostMeter::seconds() const {
+  return timer_.seconds() - excluded_seconds_;
+}
+
+void CostMeter::observe(const IterationObserver& observer, IterationInfo info) {
+  if (!observer) return;
+  info.flops = flops();
+  info.seconds = seconds();
+  const std::uint64_t f0 = problem_.flops();
+  Timer t;
+  observer(info);
+  excluded_seconds_ += t.seconds();
+  excluded_flops_ += problem_.flops() - f0;
+}
+
+StopReason CostMeter::exhausted(const Budget& budget, long iterations) const {
+  if (iterations >= budget.max_iterations) return StopReason::kMaxIterations;
+  if (static_cast<double>(flops()) >= budget.max_flops) return StopReason::kFlopBudget;
+  if (seconds() >= budget.max_seconds) return StopReason::kTimeBudget;
+  return StopReason::kConverged;
+}
+
+double fixed_norm(const Problem& problem, const VecX& v) {
+  double s = 0.0;
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    if (problem.is_fixed(i)) s += v[i] * v[i];
+  return std::sqrt(s);
+}
+
+}  // namespace incise::solver

@@ -1,0 +1,139 @@
+#include <incise/solver/truncated_newton.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace incise::solver {
+namespace {
+
+StopReason status_reason(EvalStatus s) {
+  return s == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
+}
+
+}  // namespace
+
+SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOptions& options) {
+  INCISE_CHECK(u.size() == problem.size(), "truncated_newton: u has the wrong size");
+  INCISE_CHECK_PARAM(options.forcing_max > 0.0 && options.forcing_max < 1.0,
+                     "truncated_newton: forcing_max must lie in (0, 1)");
+  SolverReport rep;
+  CostMeter meter(problem);
+  const Eigen::Index n = u.size();
+  const auto nn = static_cast<std::uint64_t>(n);
+  const long max_inner = options.max_inner > 0 ? options.max_inner : long(n);
+  const double fex = problem.external_force_norm();
+
+  VecX g;
+  double energy = 0.0;
+  EvalStatus st = problem.gradient(u, g, &energy);
+  if (st != EvalStatus::kOk || !g.allFinite()) {
+    rep.reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+    rep.flops = meter.flops();
+    rep.seconds = meter.seconds();
+    return rep;
+  }
+  VecX r = -g;
+  problem.project(r);
+  double rnorm = r.norm();
+  const double r0 = rnorm;
+  double threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+  rep.residual_history.push_back(rnorm);
+  rep.energy_history.push_back(energy);
+
+  long k = 0;
+  double last_step_norm = 0.0;
+  StopReason reason = StopReason::kConverged;
+  VecX p, ut, gt, rt;
+  while (true) {
+    if (rnorm <= threshold) {
+      reason = StopReason::kConverged;
+      break;
+    }
+    reason = meter.exhausted(options.budget, k);
+    if (reason != StopReason::kConverged) break;
+
+    // Inner solve K(u) p = r (§2.4.3 (∗)).
+    VecX inv_diag;
+    if (options.preconditioner == Preconditioner::kJacobi)
+      inv_diag = jacobi_inverse_diagonal(problem, u);
+    const double eta = std::min(options.forcing_max, std::sqrt(rnorm / std::max(r0, 1e-300)));
+    const double inner_tol = std::max(eta * rnorm, 0.5 * threshold);
+    const VecX u_fixed = u;
+    const InnerCgResult inner = projected_cg(
+        [&](const VecX& in, VecX& out) { return problem.hessian_product(u_fixed, in, out); },
+        problem, inv_diag, r, p, inner_tol, max_inner, meter);
+    rep.inner_iterations += inner.iterations;
+    if (inner.reason == StopReason::kNonFinite || inner.reason == StopReason::kInverted) {
+      reason = inner.reason;
+      break;
+    }
+    if (p.squaredNorm() == 0.0) {
+      // Negative curvature along the very first direction: scaled steepest descent.
+      if (inv_diag.size() == n) {
+        p = inv_diag.cwiseProduct(r);
+      } else if (last_step_norm > 0.0) {
+        p = r * (last_step_norm / rnorm);
+      } else {
+        reason = StopReason::kIndefinite;
+        break;
+      }
+    }
+    const double slope = r.dot(p);  // −∇Π·p > 0 for a descent direction
+    meter.add(2 * nn);
+    if (!(slope > 0.0)) {
+      reason = StopReason::kIndefinite;
+      break;
+    }
+
+    // Backtracking on Π (never into Π = +∞).
+    double alpha = 1.0;
+    bool accepted = false;
+    double e_new = 0.0;
+    for (int b = 0; b <= options.max_backtracks; ++b, alpha *= 0.5) {
+      ut = u + alpha * p;
+      st = problem.gradient(ut, gt, &e_new);
+      meter.add(2 * nn);
+      ++rep.inner_iterations;
+      if (st != EvalStatus::kOk || !gt.allFinite() || !std::isfinite(e_new)) continue;
+      rt = -gt;
+      problem.project(rt);
+      const double rnorm_t = rt.norm();
+      meter.add(2 * nn);
+      const double armijo = energy - 1e-4 * alpha * slope;
+      // Near the solution Π(u+αp) − Π(u) is below round-off of Π; then judge by the residual.
+      const double roundoff =
+          64.0 * std::numeric_limits<double>::epsilon() * std::max(std::abs(energy), 1e-300);
+      if (e_new <= armijo || (e_new <= energy + roundoff && rnorm_t < rnorm)) {
+        accepted = true;
+        rnorm = rnorm_t;
+        break;
+      }
+    }
+    if (!accepted) {
+      reason = StopReason::kLineSearchFailed;
+      break;
+    }
+    u.swap(ut);
+    g.swap(gt);
+    r.swap(rt);
+    energy = e_new;
+    last_step_norm = alpha * p.norm();
+    threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+    meter.add(4 * nn);
+    ++k;
+    rep.residual_history.push_back(rnorm);
+    rep.energy_history.push_back(energy);
+    meter.observe(options.observer, IterationInfo{k, &u, rnorm, energy, 0, 0.0});
+  }
+  rep.reason = reason;
+  rep.iterations = k;
+  rep.residual_norm = rnorm;
+  rep.threshold = threshold;
+  rep.energy = energy;
+  rep.flops = meter.flops();
+  rep.seconds = meter.seconds();
+  return rep;
+}
+
+}  // namespace incise::solver

@@ -1,0 +1,350 @@
+/// \file augmented_equivalence_test.cpp
+/// Equivalence property of the augmented-matrix method (Yeung, Crouch, Pothen 2016, §3.1–3.2):
+/// after every step of a random sequence of element removals and additions (column
+/// replacements, eqs. 4–6), cuts that duplicate a node and reconnect the elements on one side
+/// of a plane (§4.3.2; expansion with new DOFs, eq. 12), Dirichlet impositions and releases
+/// (eqs. 3, 5, 9, 11), force changes and background refactorizations (§3.6), the augmented
+/// solution (displacements and reactions) equals the solution of a fresh CHOLMOD factorization
+/// of the modified system. Matrices: the stand-in vector-Laplacian family of
+/// augmented_stand_in.hpp on the paper's beam (5×5×h grid) and brick (1×1×2) meshes.
+
+#include "augmented_reference.hpp"
+#include "augmented_stand_in.hpp"
+
+#include <incise/mesh/generators.hpp>
+#include <incise_test/seed.hpp>
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <random>
+#include <string>
+
+namespace incise::test {
+namespace {
+
+using solver::AugmentedOptions;
+using solver::AugmentedStatus;
+using solver::AugmentedSystem;
+using solver::SchurPreconditioner;
+
+/// Relative tolerance of the equivalence: the meshes are tiny (κ(K) ≲ 1e4, κ of the Schur
+/// system similar), GMRES stops at a relative residual 1e-13, so the error bound
+/// κ·(1e-13 + n·eps) stays well below 1e-9, the tolerance the issue asks for.
+constexpr double kRelTol = 1e-9;
+
+struct Sequence {
+  CutModel model;
+  AugmentedSystem aug;
+  std::map<int, double> dirichlet;
+  Eigen::VectorXd f;
+  int steps_checked = 0;
+  int cuts = 0, removals = 0, additions = 0, imposed = 0, released = 0, swaps = 0;
+  int max_m = 0;
+
+  explicit Sequence(const CutModel& m, AugmentedOptions opt) : model(m), aug(opt) {
+    const solver::FactorStatus s = aug.initialize(model.assemble());
+    EXPECT_EQ(s, solver::FactorStatus::kOk);
+    f = Eigen::VectorXd::Zero(model.num_dofs);
+  }
+
+  static void remove(CutModel& m, AugmentedSystem* aug, int e) {
+    if (aug) aug->add_element(m.dofs(e), m.element_matrix(e), -1.0);
+    m.active[e] = 0;
+  }
+  static void add(CutModel& m, AugmentedSystem* aug, int e) {
+    if (aug) aug->add_element(m.dofs(e), m.element_matrix(e), +1.0);
+    m.active[e] = 1;
+  }
+  /// Node duplication (§4.3.2): elements incident to `p` whose centroid lies on the positive
+  /// side of the plane through p with normal `nrm` are reconnected to a new copy p′.
+  /// Returns false when the plane does not split the active star of p.
+  static bool cut(CutModel& m, AugmentedSystem* aug, int p, const Eigen::Vector3d& nrm) {
+    std::vector<int> moved;
+    int active_star = 0, active_moved = 0;
+    for (size_t e = 0; e < m.tets.size(); ++e) {
+      bool inc = false;
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (int a = 0; a < 4; ++a) {
+        inc = inc || m.tets[e][a] == p;
+        c += 0.25 * m.points.col(m.tets[e][a]);
+      }
+      if (!inc) continue;
+      if (m.active[e]) ++active_star;
+      if ((c - m.points.col(p)).dot(nrm) > 0) {
+        moved.push_back(static_cast<int>(e));
+        if (m.active[e]) ++active_moved;
+      }
+    }
+    if (active_moved == 0 || active_moved == active_star) return false;
+    const int q = static_cast<int>(m.points.cols());
+    m.points.conservativeResize(3, q + 1);
+    m.points.col(q) = m.points.col(p);
+    int first = m.num_dofs;
+    if (aug) {
+      first = aug->add_dofs(3);
+      EXPECT_EQ(first, m.num_dofs);
+    }
+    m.node_dof.push_back(first);
+    m.num_dofs += 3;
+    for (int e : moved) {
+      if (m.active[e] && aug) aug->add_element(m.dofs(e), m.element_matrix(e), -1.0);
+      for (int a = 0; a < 4; ++a) {
+        if (m.tets[e][a] == p) m.tets[e][a] = q;
+      }
+      if (m.active[e] && aug) aug->add_element(m.dofs(e), m.element_matrix(e), +1.0);
+    }
+    return true;
+  }
+
+  void check(const char* what) {
+    if (f.size() != model.num_dofs) f.conservativeResize(model.num_dofs);
+    aug.set_force(f);
+    Eigen::VectorXd a, r;
+    const solver::AugmentedReport rep = aug.solve(a, r);
+    ASSERT_TRUE(rep.ok()) << what << ": " << solver::to_string(rep.status) << " " << rep.advice
+                          << " (m=" << rep.m << ", gmres it=" << rep.gmres.iterations << ")";
+    swaps += rep.refactorization_swapped ? 1 : 0;
+    max_m = std::max(max_m, rep.m);
+    const ReferenceSolution ref = reference_solve(model.assemble(), f, dirichlet);
+    ASSERT_TRUE(ref.ok) << what;
+    const double a_scale = std::max(ref.a.norm(), 1e-300);
+    EXPECT_LE((a - ref.a).norm(), kRelTol * a_scale)
+        << what << " step " << steps_checked << " m=" << rep.m;
+    const double r_scale = std::max(ref.r.norm() + f.norm(), 1e-300);
+    EXPECT_LE((r - ref.r).norm(), kRelTol * r_scale)
+        << what << " step " << steps_checked << " m=" << rep.m;
+    ++steps_checked;
+  }
+};
+
+struct Family {
+  const char* name;
+  mesh::MeshData (*make)();
+  SchurPreconditioner preconditioner;
+};
+
+mesh::MeshData small_beam() { return mesh::make_beam(6, 0.1); }    // 5×5×6 nodes
+mesh::MeshData small_brick() { return mesh::make_brick(2); }        // 3×3×5 nodes
+
+class AugmentedEquivalence : public ::testing::TestWithParam<Family> {};
+
+// Yeung et al. 2016 eqs. 4–17: ≥ 200 random steps per default run across the parameter sets
+// (4 families × 2 seeds × 30 steps), each compared with a fresh factorization.
+TEST_P(AugmentedEquivalence, RandomCutsRemovalsConstraintsEq4to17) {
+  const Family fam = GetParam();
+  INCISE_SEEDED_RNG(rng, 5);
+  const int seeds = 2;
+  const int steps = scaled(30);
+  int total = 0;
+  for (int s = 0; s < seeds; ++s) {
+    std::mt19937_64 r(rng());
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    AugmentedOptions opt;
+    opt.gmres.tolerance = 1e-13;
+    opt.gmres.restart = 300;
+    opt.gmres.max_iterations = 3000;
+    opt.preconditioner = fam.preconditioner;
+    opt.cholmod.kind = (s % 2 == 0) ? solver::CholmodKind::kSupernodal
+                                    : solver::CholmodKind::kSimplicialLdl;
+    Sequence seq(CutModel::from_mesh(fam.make(), 1e-9), opt);
+    // Initial load: pull on the far end.
+    for (int v = 0; v < static_cast<int>(seq.model.node_dof.size()); ++v) {
+      if (seq.model.node_dof[v] >= 0 && seq.model.points(2, v) > seq.model.points.row(2).maxCoeff() - 1e-9)
+        seq.f(seq.model.node_dof[v] + 1) = 1.0;
+    }
+    seq.check("initial");
+    for (int step = 0; step < steps; ++step) {
+      const double u = 0.5 * (unit(r) + 1.0);
+      std::string what;
+      CutModel cand = seq.model;
+      std::map<int, double> cand_dir = seq.dirichlet;
+      enum { kRemove, kAdd, kCut, kImpose, kRelease, kForce, kRefactor } op;
+      if (u < 0.22) op = kRemove;
+      else if (u < 0.34) op = kAdd;
+      else if (u < 0.56) op = kCut;
+      else if (u < 0.72) op = kImpose;
+      else if (u < 0.82) op = kRelease;
+      else if (u < 0.92) op = kForce;
+      else op = kRefactor;
+      int arg = -1;
+      Eigen::Vector3d nrm = Eigen::Vector3d::Zero();
+      std::vector<int> act, inact, movable;
+      for (size_t e = 0; e < cand.tets.size(); ++e) (cand.active[e] ? act : inact).push_back(static_cast<int>(e));
+      for (size_t v = 0; v < cand.node_dof.size(); ++v)
+        if (cand.node_dof[v] >= 0) movable.push_back(static_cast<int>(v));
+      auto pick = [&](const std::vector<int>& v) { return v[static_cast<size_t>(r() % v.size())]; };
+      bool valid = true;
+      switch (op) {
+        case kRemove:
+          what = "remove element";
+          arg = pick(act);
+          Sequence::remove(cand, nullptr, arg);
+          break;
+        case kAdd:
+          what = "add element";
+          if (inact.empty()) { valid = false; break; }
+          arg = pick(inact);
+          Sequence::add(cand, nullptr, arg);
+          break;
+        case kCut:
+          what = "cut (duplicate node)";
+          arg = pick(movable);
+          nrm = Eigen::Vector3d(unit(r), unit(r), unit(r)).normalized();
+          valid = Sequence::cut(cand, nullptr, arg, nrm);
+          break;
+        case kImpose:
+          what = "impose Dirichlet";
+          arg = pick(movable);
+          for (int i = 0; i < 3; ++i) cand_dir[cand.node_dof[arg] + i] = 0.1 * unit(r);
+          break;
+        case kRelease:
+          what = "release Dirichlet";
+          if (cand_dir.empty()) { valid = false; break; }
+          {
+            auto it = cand_dir.begin();
+            std::advance(it, static_cast<long>(r() % cand_dir.size()));
+            arg = it->first;
+            cand_dir.erase(it);
+          }
+          break;
+        case kForce:
+          what = "change forces";
+          break;
+        case kRefactor:
+          what = "refactorization";
+          break;
+      }
+      if (!valid) continue;
+      if (op == kRemove || op == kCut || op == kRelease) {
+        // Keep the modified system nonsingular (singular cases are tested separately).
+        Eigen::VectorXd fc = Eigen::VectorXd::Zero(cand.num_dofs);
+        if (!reference_solve(cand.assemble(), fc, cand_dir).ok) continue;
+      }
+      switch (op) {
+        case kRemove:
+          Sequence::remove(seq.model, &seq.aug, arg);
+          ++seq.removals;
+          break;
+        case kAdd:
+          Sequence::add(seq.model, &seq.aug, arg);
+          ++seq.additions;
+          break;
+        case kCut:
+          ASSERT_TRUE(Sequence::cut(seq.model, &seq.aug, arg, nrm));
+          ++seq.cuts;
+          break;
+        case kImpose:
+          for (int i = 0; i < 3; ++i) seq.aug.impose_dirichlet(cand.node_dof[arg] + i, cand_dir[cand.node_dof[arg] + i]);
+          seq.dirichlet = cand_dir;
+          ++seq.imposed;
+          break;
+        case kRelease:
+          seq.aug.release_dirichlet(arg);
+          seq.dirichlet = cand_dir;
+          ++seq.released;
+          break;
+        case kForce:
+          seq.f = Eigen::VectorXd::Zero(seq.model.num_dofs);
+          for (int k = 0; k < 3; ++k) seq.f(static_cast<int>(r() % seq.model.num_dofs)) = unit(r);
+          break;
+        case kRefactor:
+          if (!seq.aug.start_refactorization() || u > 0.96) (void)seq.aug.wait_for_refactorization();
+          break;
+      }
+      seq.check(what.c_str());
+      if (::testing::Test::HasFatalFailure()) return;
+    }
+    (void)seq.aug.wait_for_refactorization();
+    seq.check("after final refactorization");
+    total += seq.steps_checked;
+    RecordProperty("cuts_" + std::to_string(s), seq.cuts);
+    // The sequence must really exercise every kind of change.
+    EXPECT_GT(seq.cuts + seq.removals, 0);
+    EXPECT_GT(seq.imposed, 0);
+  }
+  EXPECT_GE(total, 2 * steps);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Families, AugmentedEquivalence,
+    ::testing::Values(Family{"beam_diag", &small_beam, SchurPreconditioner::kDiagonal},
+                      Family{"brick_spai", &small_brick, SchurPreconditioner::kTridiagonalSpai},
+                      Family{"beam_none", &small_beam, SchurPreconditioner::kNone},
+                      Family{"brick_diag", &small_brick, SchurPreconditioner::kDiagonal}),
+    [](const ::testing::TestParamInfo<Family>& info) { return std::string(info.param.name); });
+
+// Eq. 1: replacing one column (and, by symmetry, its row) by an explicit example.
+TEST(AugmentedEquivalence, SingleElementRemovalEq1) {
+  CutModel m = CutModel::from_mesh(mesh::make_box(1, 1, 2, 1, 1, 2));
+  AugmentedSystem aug;
+  ASSERT_EQ(aug.initialize(m.assemble()), solver::FactorStatus::kOk);
+  Eigen::VectorXd f = Eigen::VectorXd::LinSpaced(m.num_dofs, -1, 1);
+  aug.add_element(m.dofs(0), m.element_matrix(0), -1.0);
+  m.active[0] = 0;
+  aug.set_force(f);
+  Eigen::VectorXd a, r;
+  const solver::AugmentedReport rep = aug.solve(a, r);
+  ASSERT_TRUE(rep.ok()) << rep.advice;
+  EXPECT_EQ(rep.m, aug.num_replaced());
+  const ReferenceSolution ref = reference_solve(m.assemble(), f, {});
+  ASSERT_TRUE(ref.ok);
+  EXPECT_LE((a - ref.a).norm(), kRelTol * ref.a.norm());
+  EXPECT_EQ(r.norm(), 0.0);
+}
+
+// Failure as status (issue 5): a DOF without stiffness (all its elements removed).
+TEST(AugmentedFailure, DofWithoutStiffnessIsSingularStatus) {
+  CutModel m = CutModel::from_mesh(mesh::make_box(1, 1, 2, 1, 1, 2));
+  AugmentedSystem aug;
+  ASSERT_EQ(aug.initialize(m.assemble()), solver::FactorStatus::kOk);
+  const int top = static_cast<int>(m.points.cols()) - 1;  // a top corner node
+  for (size_t e = 0; e < m.tets.size(); ++e) {
+    for (int a = 0; a < 4; ++a) {
+      if (m.tets[e][a] == top && m.active[e]) {
+        aug.add_element(m.dofs(static_cast<int>(e)), m.element_matrix(static_cast<int>(e)), -1);
+        m.active[e] = 0;
+      }
+    }
+  }
+  Eigen::VectorXd f = Eigen::VectorXd::Ones(m.num_dofs);
+  aug.set_force(f);
+  Eigen::VectorXd a, r;
+  const solver::AugmentedReport rep = aug.solve(a, r);
+  EXPECT_EQ(rep.status, AugmentedStatus::kSingularModifiedSystem) << rep.advice;
+  EXPECT_FALSE(rep.advice.empty());
+  EXPECT_TRUE(a.allFinite());
+  // The fresh factorization of the same system reports not-positive-definite as well.
+  solver::CholmodFactor fac;
+  EXPECT_EQ(fac.compute(m.assemble(), 1), solver::FactorStatus::kNotPositiveDefinite);
+}
+
+// Failure as status: a cut through a whole layer frees the top part of a beam (rigid-body
+// modes); with a net force on the freed part the system is inconsistent.
+TEST(AugmentedFailure, CutFreeingComponentIsReported) {
+  CutModel m = CutModel::from_mesh(mesh::make_box(1, 1, 3, 1, 1, 3));
+  AugmentedSystem aug(AugmentedOptions{});
+  ASSERT_EQ(aug.initialize(m.assemble()), solver::FactorStatus::kOk);
+  const int nodes = static_cast<int>(m.points.cols());
+  for (int v = 0; v < nodes; ++v) {
+    if (std::abs(m.points(2, v) - 2.0) < 1e-9) {
+      ASSERT_TRUE(Sequence::cut(m, &aug, v, Eigen::Vector3d(0, 0, 1)));
+    }
+  }
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(m.num_dofs);
+  for (int v = 0; v < nodes; ++v) {
+    if (m.points(2, v) > 2.5) f(m.node_dof[v] + 2) = 1.0;  // net upward pull on the free part
+  }
+  aug.set_force(f);
+  Eigen::VectorXd a, r;
+  const solver::AugmentedReport rep = aug.solve(a, r);
+  EXPECT_NE(rep.status, AugmentedStatus::kOk)
+      << "gmres " << solver::to_string(rep.gmres.status) << " res " << rep.gmres.relative_residual;
+  EXPECT_FALSE(rep.advice.empty());
+  EXPECT_TRUE(a.allFinite());
+  solver::CholmodFactor fac;
+  EXPECT_EQ(fac.compute(m.assemble(), 1), solver::FactorStatus::kNotPositiveDefinite);
+}
+
+}  // namespace
+}  // namespace incise::test

@@ -1,0 +1,162 @@
+/// Linear CG (thesis §2.4.1, §3.1): equivalence with a dense direct solve, Jacobi variant,
+/// stopping rules (6.8)/(6.9), budgets and the indefinite status.
+#include <incise/solver/linear_cg.hpp>
+#include <incise_test/seed.hpp>
+
+#include "test_problems.hpp"
+
+#include <gtest/gtest.h>
+
+namespace incise::solver {
+namespace {
+
+using test::QuadraticProblem;
+using test::random_spd_problem;
+
+// CG ≡ dense LDLT on the free block: for ε = 1e-12 relative and cond ≤ 1e3, the error bound
+// ‖x − x̂‖ ≤ cond·ε‖x̂‖ gives ≤ 1e-9; 1e-8 leaves a margin for the recursive-residual drift.
+constexpr double kDirectTol = 1e-8;
+
+TEST(LinearCg, EqualsDenseLdltOnRandomSpd_Sec2_4_1) {
+  INCISE_SEEDED_RNG(rng, 41);
+  for (int trial = 0; trial < test::scaled(5); ++trial) {
+    const int n = 20 + 7 * trial;
+    QuadraticProblem p = random_spd_problem(rng, n, 1e3, 3);
+    for (Preconditioner pc : {Preconditioner::kNone, Preconditioner::kJacobi}) {
+      VecX u = VecX::Zero(n);
+      LinearCgOptions o;
+      o.stop.rule = ResidualRule::kExternalForce;
+      o.stop.epsilon = 1e-12;
+      o.preconditioner = pc;
+      const SolverReport rep = linear_cg(p, u, o);
+      ASSERT_TRUE(rep.converged()) << to_string(rep.reason);
+      const VecX x = p.direct_solution();
+      EXPECT_LE((u - x).norm(), kDirectTol * x.norm());
+      EXPECT_EQ(u[0], 0.0);  // fixed DOFs never move (§3.1)
+      EXPECT_LE(rep.residual_norm, rep.threshold);
+      EXPECT_EQ(rep.residual_history.size(), std::size_t(rep.iterations + 1));
+      EXPECT_GT(rep.flops, 0u);
+    }
+  }
+}
+
+TEST(LinearCg, EnergyHistoryIsExactAndDecreasing) {
+  INCISE_SEEDED_RNG(rng, 42);
+  QuadraticProblem p = random_spd_problem(rng, 30, 1e2, 2);
+  VecX u = VecX::Zero(30);
+  LinearCgOptions o;
+  o.stop.epsilon = 1e-10;
+  const SolverReport rep = linear_cg(p, u, o);
+  ASSERT_TRUE(rep.converged());
+  double e = 0.0;
+  ASSERT_EQ(p.energy(u, e), EvalStatus::kOk);
+  // Recursive energy vs recomputed: round-off of O(n) operations on O(1) numbers.
+  constexpr double kEnergyTol = 1e-10;
+  EXPECT_NEAR(rep.energy_history.back(), e, kEnergyTol * std::max(1.0, std::abs(e)));
+  for (std::size_t i = 1; i < rep.energy_history.size(); ++i)
+    EXPECT_LE(rep.energy_history[i], rep.energy_history[i - 1]);
+}
+
+TEST(LinearCg, JacobiHelpsBadlyScaledDiagonal) {
+  // Diagonal scaling makes a badly scaled SPD matrix well conditioned: PCG must need fewer steps.
+  INCISE_SEEDED_RNG(rng, 43);
+  QuadraticProblem base = random_spd_problem(rng, 40, 10.0, 0);
+  VecX s(40);
+  for (int i = 0; i < 40; ++i) s[i] = std::pow(10.0, 3.0 * i / 39.0);
+  const Eigen::MatrixXd a = s.asDiagonal() * base.matrix() * s.asDiagonal();
+  QuadraticProblem p(a, base.rhs(), std::vector<bool>(40, false), VecX::Ones(40));
+  LinearCgOptions o;
+  o.stop.epsilon = 1e-8;
+  o.stop.rule = ResidualRule::kExternalForce;
+  VecX u1 = VecX::Zero(40), u2 = VecX::Zero(40);
+  const SolverReport plain = linear_cg(p, u1, o);
+  o.preconditioner = Preconditioner::kJacobi;
+  const SolverReport jac = linear_cg(p, u2, o);
+  ASSERT_TRUE(jac.converged());
+  EXPECT_LT(jac.iterations, plain.iterations);
+}
+
+TEST(LinearCg, ReactionRule6_9ConvergesWithoutExternalLoad) {
+  // Prescribed non-zero displacement at a fixed DOF and no load: (6.8) has threshold 0, (6.9)
+  // uses the reaction force and converges.
+  INCISE_SEEDED_RNG(rng, 44);
+  QuadraticProblem q = random_spd_problem(rng, 25, 50.0, 2);
+  std::vector<bool> fixed(25, false);
+  fixed[0] = fixed[1] = true;
+  QuadraticProblem p2(q.matrix(), VecX::Zero(25), fixed, VecX::Ones(25));
+  VecX u = VecX::Zero(25);
+  u[0] = 0.01;  // prescribed displacement
+  LinearCgOptions o;
+  o.stop.rule = ResidualRule::kWithReactions;
+  o.stop.epsilon = 1e-9;
+  o.stop.force_scale = 1.0;
+  const SolverReport rep = linear_cg(p2, u, o);
+  ASSERT_TRUE(rep.converged()) << to_string(rep.reason);
+  EXPECT_EQ(u[0], 0.01);
+  EXPECT_GT(rep.threshold, 0.0);
+}
+
+TEST(LinearCg, ThresholdFormula6_9) {
+  StoppingRule r;
+  r.rule = ResidualRule::kWithReactions;
+  r.epsilon = 1e-3;
+  r.epsilon_round = 1e-10;
+  r.force_scale = 400.0;
+  // ε√(3² + 4²) + 400/√16·1e-10 = 5e-3 + 1e-8, evaluated in floating point.
+  EXPECT_DOUBLE_EQ(residual_threshold(r, 3.0, 4.0, 16), 5e-3 + 1e-8);
+  r.rule = ResidualRule::kExternalForce;
+  EXPECT_DOUBLE_EQ(residual_threshold(r, 3.0, 4.0, 16), 3e-3);
+}
+
+TEST(LinearCg, BudgetsHonoured) {
+  INCISE_SEEDED_RNG(rng, 45);
+  QuadraticProblem p = random_spd_problem(rng, 40, 1e4, 0);
+  LinearCgOptions o;
+  o.stop.epsilon = 1e-14;
+  o.budget.max_iterations = 3;
+  VecX u = VecX::Zero(40);
+  SolverReport rep = linear_cg(p, u, o);
+  EXPECT_EQ(rep.reason, StopReason::kMaxIterations);
+  EXPECT_EQ(rep.iterations, 3);
+  o.budget.max_iterations = 100000;
+  o.budget.max_flops = 20000;  // one product costs 2·40² = 3200 flops
+  u.setZero();
+  rep = linear_cg(p, u, o);
+  EXPECT_EQ(rep.reason, StopReason::kFlopBudget);
+  EXPECT_GE(rep.flops, 20000u);
+  EXPECT_LT(rep.flops, 20000u + 2 * 3200u + 2000u);  // overshoot at most one iteration
+  o.budget.max_flops = std::numeric_limits<double>::infinity();
+  o.budget.max_seconds = 0.0;
+  u.setZero();
+  rep = linear_cg(p, u, o);
+  EXPECT_EQ(rep.reason, StopReason::kTimeBudget);
+  EXPECT_TRUE(u.allFinite());
+}
+
+TEST(LinearCg, IndefiniteReportedNoNaN) {
+  INCISE_SEEDED_RNG(rng, 46);
+  QuadraticProblem q = random_spd_problem(rng, 20, 10.0, 0);
+  Eigen::MatrixXd a = q.matrix() - 5.0 * Eigen::MatrixXd::Identity(20, 20);  // λ ∈ [−4, 5]
+  QuadraticProblem p(a, q.rhs(), std::vector<bool>(20, false), VecX::Ones(20));
+  VecX u = VecX::Zero(20);
+  LinearCgOptions o;
+  o.stop.epsilon = 1e-10;
+  const SolverReport rep = linear_cg(p, u, o);
+  EXPECT_EQ(rep.reason, StopReason::kIndefinite);
+  EXPECT_TRUE(u.allFinite());
+}
+
+TEST(ProjectedCg, SolvesSpdSystemFromZero) {
+  INCISE_SEEDED_RNG(rng, 47);
+  QuadraticProblem p = random_spd_problem(rng, 30, 100.0, 4);
+  CostMeter meter(p);
+  VecX x;
+  const InnerCgResult res =
+      projected_cg([&](const VecX& in, VecX& out) { return p.hessian_product(in, in, out); }, p,
+                   VecX(), p.rhs(), x, 1e-12 * p.rhs().norm(), 1000, meter);
+  ASSERT_EQ(res.reason, StopReason::kConverged);
+  EXPECT_LE((x - p.direct_solution()).norm(), kDirectTol * x.norm());
+}
+
+}  // namespace
+}  // namespace incise::solver

@@ -1,0 +1,212 @@
+/// Nonlinear CG (§2.4.2, line searches §4.4.2) and truncated Newton (§2.4.3) on a convex
+/// nonlinear spring chain with an inversion barrier; statuses on +∞ regions and indefinite
+/// problems; budgets.
+#include <incise/solver/nonlinear_cg.hpp>
+#include <incise/solver/truncated_newton.hpp>
+#include <incise_test/seed.hpp>
+
+#include "test_problems.hpp"
+
+#include <gtest/gtest.h>
+
+namespace incise::solver {
+namespace {
+
+using test::QuadraticProblem;
+using test::SpringChain;
+
+SpringChain make_chain(std::mt19937_64& rng, int n, double load_scale) {
+  std::uniform_real_distribution<double> unif(-1.0, 1.0);
+  VecX f(n + 1);
+  for (int i = 0; i <= n; ++i) f[i] = load_scale * unif(rng);
+  return SpringChain(n, 100.0, 50.0, 0.5, 0.1, f);
+}
+
+VecX newton_reference(SpringChain& p) {
+  VecX u = VecX::Zero(p.size());
+  TruncatedNewtonOptions o;
+  o.stop.rule = ResidualRule::kExternalForce;
+  o.stop.epsilon = 1e-12;
+  const SolverReport rep = truncated_newton(p, u, o);
+  EXPECT_TRUE(rep.converged()) << to_string(rep.reason);
+  return u;
+}
+
+TEST(TruncatedNewton, ReachesReferenceTolerance_Sec4_2) {
+  INCISE_SEEDED_RNG(rng, 51);
+  SpringChain p = make_chain(rng, 40, 20.0);
+  VecX u = VecX::Zero(p.size());
+  TruncatedNewtonOptions o;
+  o.stop.rule = ResidualRule::kExternalForce;
+  o.stop.epsilon = 1e-8;  // §4.2 reference tolerance
+  const SolverReport rep = truncated_newton(p, u, o);
+  ASSERT_TRUE(rep.converged()) << to_string(rep.reason);
+  EXPECT_LE(rep.residual_norm, 1e-8 * p.external_force_norm());
+  EXPECT_LT(rep.iterations, 30);  // superlinear: a handful of Newton steps
+  EXPECT_EQ(u[0], 0.0);
+}
+
+TEST(TruncatedNewton, QuadraticInOneStepWithTightInnerSolve) {
+  INCISE_SEEDED_RNG(rng, 52);
+  QuadraticProblem p = test::random_spd_problem(rng, 25, 100.0, 2);
+  VecX u = VecX::Zero(25);
+  TruncatedNewtonOptions o;
+  o.stop.rule = ResidualRule::kExternalForce;
+  o.stop.epsilon = 1e-10;
+  const SolverReport rep = truncated_newton(p, u, o);
+  ASSERT_TRUE(rep.converged());
+  // Inexact inner solves (forcing η ≤ 0.5) converge superlinearly: ≤ 8 steps from 1 to 1e-10.
+  EXPECT_LE(rep.iterations, 8);
+  EXPECT_LE((u - p.direct_solution()).norm(), 1e-8 * u.norm());
+}
+
+struct NcgCase {
+  BetaRule beta;
+  LineSearchKind ls;
+};
+
+class NonlinearCgEquivalence : public ::testing::TestWithParam<NcgCase> {};
+
+TEST_P(NonlinearCgEquivalence, MatchesNewtonAtMinimizer_Sec2_4_2_Sec4_4_2) {
+  INCISE_SEEDED_RNG(rng, 53);
+  SpringChain p = make_chain(rng, 30, 20.0);
+  const VecX ref = newton_reference(p);
+  VecX u = VecX::Zero(p.size());
+  NonlinearCgOptions o;
+  o.beta = GetParam().beta;
+  o.line_search = GetParam().ls;
+  o.stop.rule = ResidualRule::kExternalForce;
+  o.stop.epsilon = 1e-9;
+  o.alpha_minus1 = -1e-4;
+  o.budget.max_iterations = 20000;
+  const SolverReport rep = nonlinear_cg(p, u, o);
+  ASSERT_TRUE(rep.converged()) << to_string(rep.reason) << " after " << rep.iterations;
+  // ‖u − û‖ ≤ ‖r‖/λ_min(K) with λ_min ≥ k/L·(1+µ/s²)/n² ~ 1 N/m here and ‖r‖ ≤ 1e-9‖f‖ ≈
+  // 1e-7 N, so 1e-6 m leaves a factor 10.
+  constexpr double kMinimizerTol = 1e-6;
+  EXPECT_LE((u - ref).norm(), kMinimizerTol);
+  EXPECT_EQ(u[0], 0.0);
+  EXPECT_GT(rep.inner_iterations, 0);
+  EXPECT_EQ(rep.energy_history.size(), std::size_t(rep.iterations + 1));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    AllRules, NonlinearCgEquivalence,
+    ::testing::Values(NcgCase{BetaRule::kFletcherReeves, LineSearchKind::kNewton},
+                      NcgCase{BetaRule::kFletcherReeves, LineSearchKind::kSecant},
+                      NcgCase{BetaRule::kFletcherReeves, LineSearchKind::kScaleDependentSecant},
+                      NcgCase{BetaRule::kPolakRibiere, LineSearchKind::kNewton},
+                      NcgCase{BetaRule::kPolakRibiere, LineSearchKind::kSecant},
+                      NcgCase{BetaRule::kPolakRibiere, LineSearchKind::kScaleDependentSecant}));
+
+TEST(NonlinearCg, QuadraticLikeLinearCg) {
+  // On a quadratic Π the exact Newton line search makes NCG-FR linear CG: n steps at most in
+  // exact arithmetic; we allow 2n for round-off.
+  INCISE_SEEDED_RNG(rng, 54);
+  QuadraticProblem p = test::random_spd_problem(rng, 20, 30.0, 1);
+  VecX u = VecX::Zero(20);
+  NonlinearCgOptions o;
+  o.beta = BetaRule::kFletcherReeves;
+  o.line_search = LineSearchKind::kNewton;
+  o.stop.rule = ResidualRule::kExternalForce;
+  o.stop.epsilon = 1e-10;
+  const SolverReport rep = nonlinear_cg(p, u, o);
+  ASSERT_TRUE(rep.converged());
+  EXPECT_LE(rep.iterations, 40);
+  EXPECT_LE((u - p.direct_solution()).norm(), 1e-8 * u.norm());
+}
+
+TEST(NonlinearCg, InfiniteEnergyRegionNeverEnteredNoNaN) {
+  // A huge compressive load: the minimizer sits close to s → 0 where Π = +∞. Every trial point
+  // that inverts a spring must be rejected; the result is finite and admissible either way.
+  INCISE_SEEDED_RNG(rng, 55);
+  const int n = 10;
+  VecX f = VecX::Zero(n + 1);
+  f[n] = -1e4;  // pushes the free end through the clamp if unopposed
+  SpringChain p(n, 100.0, 0.0, 0.01, 0.1, f);
+  for (LineSearchKind ls :
+       {LineSearchKind::kNewton, LineSearchKind::kSecant, LineSearchKind::kScaleDependentSecant}) {
+    VecX u = VecX::Zero(n + 1);
+    NonlinearCgOptions o;
+    o.line_search = ls;
+    o.stop.epsilon = 1e-8;
+    o.budget.max_iterations = 2000;
+    const SolverReport rep = nonlinear_cg(p, u, o);
+    SCOPED_TRACE(to_string(ls));
+    EXPECT_TRUE(u.allFinite());
+    double e = 0.0;
+    EXPECT_EQ(p.energy(u, e), EvalStatus::kOk) << "returned an inverted state";
+    EXPECT_TRUE(std::isfinite(rep.residual_norm));
+    for (double h : rep.energy_history) EXPECT_TRUE(std::isfinite(h));
+  }
+  VecX u = VecX::Zero(n + 1);
+  TruncatedNewtonOptions to;
+  to.stop.epsilon = 1e-8;
+  const SolverReport rep = truncated_newton(p, u, to);
+  EXPECT_TRUE(u.allFinite());
+  double e = 0.0;
+  EXPECT_EQ(p.energy(u, e), EvalStatus::kOk);
+  EXPECT_TRUE(rep.converged()) << to_string(rep.reason);
+}
+
+TEST(NonlinearCg, StartInsideInvertedRegionReportsInverted) {
+  VecX f = VecX::Zero(6);
+  SpringChain p(5, 1.0, 0.0, 1.0, 0.1, f);
+  VecX u = VecX::Zero(6);
+  u[3] = -1.0;  // spring 3 has s < 0
+  NonlinearCgOptions o;
+  const SolverReport rep = nonlinear_cg(p, u, o);
+  EXPECT_EQ(rep.reason, StopReason::kInverted);
+  TruncatedNewtonOptions to;
+  const SolverReport rep2 = truncated_newton(p, u, to);
+  EXPECT_EQ(rep2.reason, StopReason::kInverted);
+}
+
+TEST(NonlinearCg, IndefiniteProblemReportsStatus) {
+  INCISE_SEEDED_RNG(rng, 56);
+  QuadraticProblem q = test::random_spd_problem(rng, 15, 10.0, 0);
+  const Eigen::MatrixXd a = q.matrix() - 20.0 * Eigen::MatrixXd::Identity(15, 15);  // negative
+  QuadraticProblem p(a, q.rhs(), std::vector<bool>(15, false), VecX::Ones(15));
+  for (LineSearchKind ls :
+       {LineSearchKind::kNewton, LineSearchKind::kSecant, LineSearchKind::kScaleDependentSecant}) {
+    VecX u = VecX::Zero(15);
+    NonlinearCgOptions o;
+    o.line_search = ls;
+    const SolverReport rep = nonlinear_cg(p, u, o);
+    EXPECT_EQ(rep.reason, StopReason::kIndefinite) << to_string(ls);
+    EXPECT_TRUE(u.allFinite());
+  }
+  VecX u = VecX::Zero(15);
+  TruncatedNewtonOptions to;
+  to.preconditioner = Preconditioner::kNone;
+  const SolverReport rep = truncated_newton(p, u, to);
+  EXPECT_EQ(rep.reason, StopReason::kIndefinite);
+  EXPECT_TRUE(u.allFinite());
+}
+
+TEST(NonlinearCg, BudgetsHonoured) {
+  INCISE_SEEDED_RNG(rng, 57);
+  SpringChain p = make_chain(rng, 60, 20.0);
+  NonlinearCgOptions o;
+  o.stop.epsilon = 1e-14;
+  o.budget.max_iterations = 5;
+  VecX u = VecX::Zero(p.size());
+  SolverReport rep = nonlinear_cg(p, u, o);
+  EXPECT_EQ(rep.reason, StopReason::kMaxIterations);
+  EXPECT_EQ(rep.iterations, 5);
+  o.budget.max_iterations = 1000000;
+  o.budget.max_flops = 5e4;
+  u.setZero();
+  rep = nonlinear_cg(p, u, o);
+  EXPECT_EQ(rep.reason, StopReason::kFlopBudget);
+  TruncatedNewtonOptions to;
+  to.stop.epsilon = 1e-14;
+  to.budget.max_iterations = 1;
+  u.setZero();
+  rep = truncated_newton(p, u, to);
+  EXPECT_EQ(rep.reason, StopReason::kMaxIterations);
+  EXPECT_EQ(rep.iterations, 1);
+}
+
+}  // namespace
+}  // namespace incise::solver
