@@ -482,18 +482,9 @@ bool Cutter::apply_local_op(const std::vector<Index>& old_elements,
     }
     if (classes != 1) return false;
   }
-  // Apply: reuse handles of the old elements, then add or remove the difference.
-  size_t i = 0;
-  for (; i < old_sorted.size() && i < new_tets.size(); ++i) {
-    mesh_.set_element(old_sorted[i], new_tets[i]);
-    r.changed_elements.push_back(old_sorted[i]);
-  }
-  for (size_t k = i; k < old_sorted.size(); ++k) {
-    mesh_.remove_element(old_sorted[k]);
-    r.changed_elements.push_back(old_sorted[k]);
-  }
-  for (size_t k = i; k < new_tets.size(); ++k)
-    r.changed_elements.push_back(mesh_.add_element(new_tets[k]));
+  // Apply through replace-elements (§7.3).
+  for (Index e : old_sorted) r.changed_elements.push_back(e);
+  for (Index e : mesh_.replace(old_sorted, new_tets)) r.changed_elements.push_back(e);
   for (Index v : nodes) {
     if (mesh_.unused(v)) r.removed_nodes.push_back(v);
   }
@@ -664,7 +655,7 @@ void Cutter::cut_free(Index e, CutStepReport& r) {
     for (Index c : changed) r.changed_elements.push_back(c);
   }
   const Tet t = mesh_.element(e);
-  mesh_.remove_element(e);
+  (void)mesh_.replace({e}, {});
   r.changed_elements.push_back(e);
   for (Index v : t) {
     if (mesh_.unused(v)) r.removed_nodes.push_back(v);

@@ -1,18 +1,20 @@
 #pragma once
 /// \file cut_mesh.hpp
-/// The working tetrahedral mesh of the cutter (thesis ch. 3): reference and deformed node
-/// positions, oriented tetrahedra with stable integer handles, node→element incidence (the
-/// star of every node), fixed-node flags and the node substitution (dissection) of §7.3.
+/// The working tetrahedral mesh of the cutter (thesis ch. 3): the connectivity of ch. 7
+/// (`mesh::Connectivity`: Elements, Faces with mates, boundary map, watchers) plus what cutting
+/// needs next to it — reference and deformed node positions, fixed-node flags and the original
+/// node each node descends from.
 ///
-/// Adjacency is derived from the stars (two elements are neighbours when they share three
-/// nodes), so an edit only touches the stars of the nodes involved and every query is local:
-/// the cost of a cut depends on the cut, not on the mesh size. All topological edits go
-/// through `set_element`, `add_element`, `remove_element` and `dissect`; `validate()` checks
-/// the simplicial-mesh invariants of §7.2 in the form stated there (each oriented face in at
-/// most one element, (7.1)–(7.3); every face in at most two elements with opposite
-/// orientations; the star of every node face-connected, the precondition of dissection §7.3).
-
+/// Every topological edit goes through the connectivity's `replace_elements` (collapses,
+/// splits, removals) or through `mesh::dissect` (node substitution by change-elements, §7.3),
+/// so watchers registered on `connectivity()` see every change. Elements are addressed by
+/// their slot index (an `Index`), with the vertex order of `Connectivity::cells()`: the
+/// canonical sorted vertices with the first two swapped for a negative sign, so that local
+/// node k is `element(e)[k]` and local face j is the face opposite local node j. All queries
+/// are local (stars from the vertex→element incidence), so the cost of a cut depends on the
+/// cut, not on the mesh size.
 #include <incise/core/types.hpp>
+#include <incise/mesh/connectivity.hpp>
 #include <incise/mesh/mesh_data.hpp>
 
 #include <array>
@@ -33,7 +35,7 @@ inline constexpr int kTetEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {
 
 /// Outcome of CutMesh::validate(): every violated invariant, by name and object.
 struct [[nodiscard]] CutMeshValidation {
-  std::vector<std::string> violations;  ///< empty when valid (at most 50 are listed)
+  std::vector<std::string> violations;  ///< "[invariant] message", at most 50 listed
   Index violation_count = 0;            ///< total number of violations found
   Index inverted_reference = 0;  ///< live elements with reference volume ≤ 0 (not an invariant)
   Index inverted_deformed = 0;   ///< live elements with deformed volume ≤ 0 (not an invariant)
@@ -44,15 +46,18 @@ struct [[nodiscard]] CutMeshValidation {
 class CutMesh {
  public:
   /// Builds from a 3D MeshData; deformed = reference. Throws ParameterError if the mesh is
-  /// not tetrahedral or refers to a missing node.
+  /// not tetrahedral, UsageError (from Connectivity) if its cells do not form a valid mesh.
   explicit CutMesh(const mesh::MeshData& data);
 
   Index num_nodes() const { return static_cast<Index>(ref_.size()); }
-  /// Capacity of element handles (live and removed); handles are < element_capacity().
-  Index element_capacity() const { return static_cast<Index>(tets_.size()); }
+  /// Capacity of element slots (live and free); element indices are < element_capacity().
+  Index element_capacity() const { return conn_.element_capacity(); }
   /// Number of live elements.
-  Index num_elements() const { return live_elements_; }
-  bool alive(Index e) const { return alive_[static_cast<size_t>(e)] != 0; }
+  Index num_elements() const { return conn_.num_elements(); }
+  bool alive(Index e) const {
+    return e >= 0 && e < element_capacity() && conn_.element_at(e).valid();
+  }
+  /// Nodes of live element e in the cells() order (positive orientation preserved).
   const Tet& element(Index e) const { return tets_[static_cast<size_t>(e)]; }
 
   /// Reference position of node v (m).
@@ -65,15 +70,19 @@ class CutMesh {
   void set_deformed(const Eigen::Matrix3Xd& x);
   /// Counter incremented whenever deformed positions change in bulk.
   std::uint64_t positions_version() const { return positions_version_; }
+  /// Reference positions as a 3 × num_nodes matrix.
+  Eigen::Matrix3Xd reference_matrix() const;
+  /// Deformed positions as a 3 × num_nodes matrix.
+  Eigen::Matrix3Xd deformed_matrix() const;
 
   bool fixed(Index v) const { return fixed_[static_cast<size_t>(v)] != 0; }
   void set_fixed(Index v, bool f) { fixed_[static_cast<size_t>(v)] = f ? 1 : 0; }
   /// The original node a node descends from through dissection copies (itself otherwise).
   Index origin(Index v) const { return origin_[static_cast<size_t>(v)]; }
-  /// Elements containing node v (the star of v), unordered.
-  const std::vector<Index>& star(Index v) const { return star_[static_cast<size_t>(v)]; }
+  /// Elements containing node v (the star of v, §7.3), unordered.
+  std::vector<Index> star(Index v) const;
   /// True if node v belongs to no live element (removed by a collapse or a cut-free).
-  bool unused(Index v) const { return star(v).empty(); }
+  bool unused(Index v) const { return conn_.star_size(v) == 0; }
 
   /// Element sharing the face opposite local node j of e, or −1 on the boundary.
   Index neighbor(Index e, int j) const;
@@ -82,31 +91,36 @@ class CutMesh {
   /// Whether node v lies on a boundary face.
   bool on_boundary(Index v) const;
 
-  /// Appends a node with the given positions, fixed flag and origin; returns its index.
+  /// Appends a node (and a connectivity vertex) with the given positions, fixed flag and
+  /// origin; returns its index.
   Index add_node(const Vec3& X, const Vec3& x, bool is_fixed, Index origin_node);
-  /// Replaces the nodes of element e (change-elements, §7.3); stars are updated.
-  void set_element(Index e, const Tet& t);
-  /// Adds an element; returns its handle (a removed handle is reused).
-  Index add_element(const Tet& t);
-  /// Removes element e (its handle becomes free).
-  void remove_element(Index e);
+  /// replace-elements (§7.3): removes elements `remove`, adds `add` (positively oriented node
+  /// quadruples); returns the slots of the added elements. Throws UsageError (from
+  /// Connectivity) when the result would not be a pseudo-manifold; callers check first.
+  std::vector<Index> replace(const std::vector<Index>& remove, const std::vector<Tet>& add);
 
   /// Reference signed volume of element t given as nodes (m³).
   double reference_volume(const Tet& t) const;
   /// Deformed signed volume (m³).
   double deformed_volume(const Tet& t) const;
 
-  /// Dissection by node substitution (thesis §7.3): `faces` lists interior faces as
-  /// (element, local face) pairs; for each node of those faces its star is split into
-  /// (v, C)-connected classes, the class holding the lowest element handle keeps v and every
-  /// other class gets a copy (same X, x, fixed flag, origin). The element count is unchanged.
-  /// Appends changed element handles to `changed` and new nodes to `new_nodes`; returns the
-  /// number of faces that actually ended up on the boundary.
+  /// Dissection by node substitution through mesh::dissect (thesis §7.3): `faces` lists
+  /// interior faces as (element, local face) pairs. New nodes copy X, x, the fixed flag and
+  /// the origin of the node they split from (displacement carried over). The element count
+  /// is unchanged. Appends changed element slots to `changed` and new nodes to `new_nodes`;
+  /// returns the number of listed faces that ended on the boundary (Fig. 7.7: some may not).
   Index dissect(const std::vector<std::pair<Index, int>>& faces, std::vector<Index>& changed,
                 std::vector<Index>& new_nodes);
 
-  /// Checks the invariants listed in the file comment over the whole mesh (O(n)).
+  /// mesh::validate() of the connectivity — (7.1)–(7.5), mate symmetry, boundary map,
+  /// connected stars, incidence, reference orientation — plus finite positions; counts
+  /// inverted elements in both configurations. O(n).
   CutMeshValidation validate() const;
+
+  /// The connectivity (register watchers here to follow cuts, §7.4).
+  const mesh::Connectivity& connectivity() const { return conn_; }
+  /// Mutable access for registering watchers; edits must go through CutMesh.
+  mesh::Connectivity& connectivity() { return conn_; }
 
   /// Exports the live elements and all nodes. With `compact`, unused nodes are dropped and
   /// `node_map` (old → new, −1 for dropped) is filled. Positions: reference if !deformed.
@@ -114,17 +128,14 @@ class CutMesh {
                               std::vector<Index>* node_map = nullptr) const;
 
  private:
-  void star_remove(Index v, Index e);
+  void refresh(Index e);
 
+  mesh::Connectivity conn_;
+  std::vector<Tet> tets_;  ///< per slot: cells() order of the element's simplex
   std::vector<Vec3> ref_;
   std::vector<Vec3> def_;
   std::vector<char> fixed_;
   std::vector<Index> origin_;
-  std::vector<std::vector<Index>> star_;
-  std::vector<Tet> tets_;
-  std::vector<char> alive_;
-  std::vector<Index> free_;
-  Index live_elements_ = 0;
   std::uint64_t positions_version_ = 0;
 };
 
