@@ -18,4 +18,7 @@ struct Command {
   int (*run)(const Args& args, std::ostream& out, std::ostream& err);
 };
 
+/// `incise mesh check FILE [--vtu OUT] [--reorient] [--merge-duplicates]` (lib/cli/mesh.cpp).
+int run_mesh(const Args& args, std::ostream& out, std::ostream& err);
+
 }  // namespace incise::cli

@@ -18,6 +18,7 @@ int version(const Args&, std::ostream& out, std::ostream&) {
 // Registered subcommands. Add one line per subcommand family (declared in commands.hpp).
 const Command kCommands[] = {
     {"version", "print the version", &version},
+    {"mesh", "mesh check FILE [--vtu OUT]: load, report quality, validate (7.1)-(7.5)", &run_mesh},
 };
 
 void usage(std::ostream& os) {

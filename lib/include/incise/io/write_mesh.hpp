@@ -1,0 +1,46 @@
+#pragma once
+/// \file write_mesh.hpp
+/// Writers: VTU (ParaView XML unstructured grid, ASCII) with point and cell data arrays, and
+/// the readable formats (Gmsh 2.2/4.1, Medit, TetGen, OFF) so that every reader has a
+/// round-trip test. Coordinates are written with 17 significant digits (exact round trip).
+/// Throws incise::Error when the file cannot be written and UsageError on inconsistent input.
+
+#include <incise/mesh/mesh_data.hpp>
+
+#include <string>
+#include <vector>
+
+namespace incise::io {
+
+/// A named data array: `components` values per point or per cell, stored point/cell-major
+/// (values[i*components + c]). Length must be components × (number of points or cells).
+struct DataArray {
+  std::string name;
+  int components = 1;
+  std::vector<double> values;
+};
+
+/// Writes `m` as a VTU file (VTK XML UnstructuredGrid, ascii). Cells are VTK_TETRA (10) or
+/// VTK_TRIANGLE (5). Cell tags, when present, are written as the Int32 cell array "tag" and
+/// point tags as point array "tag"; `point_data` and `cell_data` are added as Float64 arrays.
+void write_vtu(const std::string& path, const mesh::MeshData& m,
+               const std::vector<DataArray>& point_data = {},
+               const std::vector<DataArray>& cell_data = {});
+
+/// Gmsh ASCII writer, version 2.2 or 4.1 (`version` = 22 or 41). Cells are written as
+/// tetrahedra (or triangles), facets as triangles; tags become physical tags (4.1: one entity
+/// per distinct tag, with $Entities). Nodes are numbered from 1.
+void write_gmsh(const std::string& path, const mesh::MeshData& m, int version = 41);
+
+/// Medit .mesh writer (MeshVersionFormatted 2, Dimension 3 — or 2 for planar triangle meshes
+/// when `planar2d`), 1-based, tags as references (0 when absent).
+void write_medit(const std::string& path, const mesh::MeshData& m, bool planar2d = false);
+
+/// TetGen writer: `base`.node and `base`.ele (1-based, region attribute = cell tag when
+/// present, boundary marker = point tag when present). Tetrahedral meshes only.
+void write_tetgen(const std::string& base, const mesh::MeshData& m);
+
+/// OFF writer for triangle meshes (dimension 2).
+void write_off(const std::string& path, const mesh::MeshData& m);
+
+}  // namespace incise::io

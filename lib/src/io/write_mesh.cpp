@@ -1,0 +1,268 @@
+#include <incise/core/error.hpp>
+#include <incise/io/write_mesh.hpp>
+#include <incise/mesh/quality.hpp>
+
+#include <map>
+#include <set>
+
+#include "writer_support.hpp"
+
+namespace incise::io {
+
+namespace {
+
+using detail::TextWriter;
+
+void check_mesh(const mesh::MeshData& m) {
+  INCISE_CHECK(m.dimension == 2 || m.dimension == 3, "writer: dimension must be 2 or 3");
+  INCISE_CHECK(m.cells.rows() == m.dimension + 1 || m.cells.cols() == 0,
+               "writer: cells must have dimension+1 rows");
+  INCISE_CHECK(m.cell_tags.empty() || m.cell_tags.size() == static_cast<std::size_t>(m.num_cells()),
+               "writer: cell_tags must be empty or one per cell");
+  INCISE_CHECK(
+      m.point_tags.empty() || m.point_tags.size() == static_cast<std::size_t>(m.num_points()),
+      "writer: point_tags must be empty or one per point");
+  INCISE_CHECK(
+      m.facet_tags.empty() || m.facet_tags.size() == static_cast<std::size_t>(m.facets.cols()),
+      "writer: facet_tags must be empty or one per facet");
+  for (Eigen::Index c = 0; c < m.cells.cols(); ++c)
+    for (Eigen::Index r = 0; r < m.cells.rows(); ++r)
+      INCISE_CHECK(m.cells(r, c) >= 0 && m.cells(r, c) < m.num_points(),
+                   "writer: cell vertex index out of range");
+}
+
+bool write_facets(const mesh::MeshData& m) {
+  return m.dimension == 3 && m.facets.rows() == 3;
+}
+
+void check_array(const DataArray& a, Eigen::Index n, const char* what) {
+  INCISE_CHECK(a.components >= 1, "write_vtu: components must be >= 1");
+  INCISE_CHECK(
+      a.values.size() == static_cast<std::size_t>(a.components) * static_cast<std::size_t>(n),
+      std::string("write_vtu: ") + what + " array '" + a.name + "' has the wrong length");
+  INCISE_CHECK(!a.name.empty() && a.name.find_first_of("\"<>&") == std::string::npos,
+               "write_vtu: array names must be non-empty without \" < > &");
+}
+
+void vtu_array(TextWriter& w, const DataArray& a) {
+  w << "        <DataArray type=\"Float64\" Name=\"" << a.name << "\" NumberOfComponents=\""
+    << a.components << "\" format=\"ascii\">\n";
+  for (std::size_t i = 0; i < a.values.size(); ++i)
+    w << a.values[i] << ((i + 1) % static_cast<std::size_t>(a.components) == 0 ? '\n' : ' ');
+  w << "        </DataArray>\n";
+}
+
+void vtu_tags(TextWriter& w, const std::vector<int>& tags) {
+  w << "        <DataArray type=\"Int32\" Name=\"tag\" format=\"ascii\">\n";
+  for (int t : tags) w << t << '\n';
+  w << "        </DataArray>\n";
+}
+
+}  // namespace
+
+void write_vtu(const std::string& path, const mesh::MeshData& m,
+               const std::vector<DataArray>& point_data, const std::vector<DataArray>& cell_data) {
+  check_mesh(m);
+  for (const auto& a : point_data) check_array(a, m.num_points(), "point");
+  for (const auto& a : cell_data) check_array(a, m.num_cells(), "cell");
+  const int k = m.dimension + 1;
+  TextWriter w;
+  w << "<?xml version=\"1.0\"?>\n"
+    << "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+    << "  <UnstructuredGrid>\n"
+    << "    <Piece NumberOfPoints=\"" << static_cast<long long>(m.num_points())
+    << "\" NumberOfCells=\"" << static_cast<long long>(m.num_cells()) << "\">\n";
+  w << "      <PointData>\n";
+  if (!m.point_tags.empty()) vtu_tags(w, m.point_tags);
+  for (const auto& a : point_data) vtu_array(w, a);
+  w << "      </PointData>\n      <CellData>\n";
+  if (!m.cell_tags.empty()) vtu_tags(w, m.cell_tags);
+  for (const auto& a : cell_data) vtu_array(w, a);
+  w << "      </CellData>\n      <Points>\n"
+    << "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (Index i = 0; i < m.num_points(); ++i)
+    w << m.points(0, i) << ' ' << m.points(1, i) << ' ' << m.points(2, i) << '\n';
+  w << "        </DataArray>\n      </Points>\n      <Cells>\n"
+    << "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (Index c = 0; c < m.num_cells(); ++c)
+    for (int r = 0; r < k; ++r) w << m.cells(r, c) << (r + 1 == k ? '\n' : ' ');
+  w << "        </DataArray>\n"
+    << "        <DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n";
+  for (Index c = 0; c < m.num_cells(); ++c) w << static_cast<long long>(c + 1) * k << '\n';
+  w << "        </DataArray>\n"
+    << "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+  const int type = m.dimension == 3 ? 10 : 5;  // VTK_TETRA, VTK_TRIANGLE
+  for (Index c = 0; c < m.num_cells(); ++c) w << type << '\n';
+  w << "        </DataArray>\n      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
+  w.save(path);
+}
+
+void write_gmsh(const std::string& path, const mesh::MeshData& m, int version) {
+  check_mesh(m);
+  INCISE_CHECK_PARAM(version == 22 || version == 41, "write_gmsh: version must be 22 or 41");
+  const int k = m.dimension + 1;
+  const int cell_type = m.dimension == 3 ? 4 : 2;
+  const bool facets = write_facets(m);
+  const Index nf = facets ? static_cast<Index>(m.facets.cols()) : 0;
+  auto cell_tag = [&](Index c) { return m.cell_tags.empty() ? 0 : m.cell_tags[c]; };
+  auto facet_tag = [&](Index f) { return m.facet_tags.empty() ? 0 : m.facet_tags[f]; };
+  TextWriter w;
+  if (version == 22) {
+    w << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n"
+      << static_cast<long long>(m.num_points()) << '\n';
+    for (Index i = 0; i < m.num_points(); ++i)
+      w << static_cast<long long>(i + 1) << ' ' << m.points(0, i) << ' ' << m.points(1, i) << ' '
+        << m.points(2, i) << '\n';
+    w << "$EndNodes\n$Elements\n" << static_cast<long long>(m.num_cells() + nf) << '\n';
+    long long id = 1;
+    for (Index f = 0; f < nf; ++f)
+      w << id++ << " 2 2 " << facet_tag(f) << ' ' << facet_tag(f) << ' ' << m.facets(0, f) + 1
+        << ' ' << m.facets(1, f) + 1 << ' ' << m.facets(2, f) + 1 << '\n';
+    for (Index c = 0; c < m.num_cells(); ++c) {
+      w << id++ << ' ' << cell_type << " 2 " << cell_tag(c) << ' ' << cell_tag(c);
+      for (int r = 0; r < k; ++r) w << ' ' << m.cells(r, c) + 1;
+      w << '\n';
+    }
+    w << "$EndElements\n";
+    w.save(path);
+    return;
+  }
+  // 4.1: one entity per distinct tag; entity e has physical tag `tag` unless tag is 0.
+  std::set<int> cell_tags, facet_tags;
+  for (Index c = 0; c < m.num_cells(); ++c) cell_tags.insert(cell_tag(c));
+  for (Index f = 0; f < nf; ++f) facet_tags.insert(facet_tag(f));
+  if (cell_tags.empty()) cell_tags.insert(0);
+  std::map<int, int> cell_entity, facet_entity;
+  for (int t : cell_tags) cell_entity.emplace(t, static_cast<int>(cell_entity.size()) + 1);
+  for (int t : facet_tags) facet_entity.emplace(t, static_cast<int>(facet_entity.size()) + 1);
+  const auto bb = mesh::bounding_box(m.points);
+  auto box = [&](TextWriter& o) {
+    o << bb[0].x() << ' ' << bb[0].y() << ' ' << bb[0].z() << ' ' << bb[1].x() << ' ' << bb[1].y()
+      << ' ' << bb[1].z();
+  };
+  auto phys = [&](TextWriter& o, int tag) {
+    if (tag == 0)
+      o << " 0";
+    else
+      o << " 1 " << tag;
+  };
+  w << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n0 0 ";
+  const bool volume = m.dimension == 3;
+  const std::size_t n_surf = volume ? facet_entity.size() : cell_entity.size();
+  w << static_cast<long long>(n_surf) << ' '
+    << (volume ? static_cast<long long>(cell_entity.size()) : 0LL) << '\n';
+  for (const auto& [tag, e] : (volume ? facet_entity : cell_entity)) {
+    w << e << ' ';
+    box(w);
+    phys(w, tag);
+    w << " 0\n";
+  }
+  if (volume)
+    for (const auto& [tag, e] : cell_entity) {
+      w << e << ' ';
+      box(w);
+      phys(w, tag);
+      w << " 0\n";
+    }
+  w << "$EndEntities\n$Nodes\n1 " << static_cast<long long>(m.num_points()) << " 1 "
+    << static_cast<long long>(m.num_points()) << '\n'
+    << m.dimension << " 1 0 " << static_cast<long long>(m.num_points()) << '\n';
+  for (Index i = 0; i < m.num_points(); ++i) w << static_cast<long long>(i + 1) << '\n';
+  for (Index i = 0; i < m.num_points(); ++i)
+    w << m.points(0, i) << ' ' << m.points(1, i) << ' ' << m.points(2, i) << '\n';
+  w << "$EndNodes\n$Elements\n";
+  // Blocks: facets by tag, then cells by tag.
+  std::map<int, std::vector<Index>> facet_blocks, cell_blocks;
+  for (Index f = 0; f < nf; ++f) facet_blocks[facet_tag(f)].push_back(f);
+  for (Index c = 0; c < m.num_cells(); ++c) cell_blocks[cell_tag(c)].push_back(c);
+  const long long total = nf + m.num_cells();
+  w << static_cast<long long>(facet_blocks.size() + cell_blocks.size()) << ' ' << total << " 1 "
+    << total << '\n';
+  long long id = 1;
+  for (const auto& [tag, list] : facet_blocks) {
+    w << "2 " << facet_entity[tag] << " 2 " << static_cast<long long>(list.size()) << '\n';
+    for (Index f : list)
+      w << id++ << ' ' << m.facets(0, f) + 1 << ' ' << m.facets(1, f) + 1 << ' '
+        << m.facets(2, f) + 1 << '\n';
+  }
+  for (const auto& [tag, list] : cell_blocks) {
+    w << m.dimension << ' ' << cell_entity[tag] << ' ' << cell_type << ' '
+      << static_cast<long long>(list.size()) << '\n';
+    for (Index c : list) {
+      w << id++;
+      for (int r = 0; r < k; ++r) w << ' ' << m.cells(r, c) + 1;
+      w << '\n';
+    }
+  }
+  w << "$EndElements\n";
+  w.save(path);
+}
+
+void write_medit(const std::string& path, const mesh::MeshData& m, bool planar2d) {
+  check_mesh(m);
+  INCISE_CHECK(!planar2d || m.dimension == 2, "write_medit: planar2d needs a triangle mesh");
+  TextWriter w;
+  w << "MeshVersionFormatted 2\n\nDimension " << (planar2d ? 2 : 3) << "\n\nVertices\n"
+    << static_cast<long long>(m.num_points()) << '\n';
+  for (Index i = 0; i < m.num_points(); ++i) {
+    w << m.points(0, i) << ' ' << m.points(1, i);
+    if (!planar2d) w << ' ' << m.points(2, i);
+    w << ' ' << (m.point_tags.empty() ? 0 : m.point_tags[i]) << '\n';
+  }
+  auto block = [&](const char* name, const mesh::CellMatrix& cells, const std::vector<int>& tags) {
+    w << '\n' << name << '\n' << static_cast<long long>(cells.cols()) << '\n';
+    for (Eigen::Index c = 0; c < cells.cols(); ++c) {
+      for (Eigen::Index r = 0; r < cells.rows(); ++r) w << cells(r, c) + 1 << ' ';
+      w << (tags.empty() ? 0 : tags[c]) << '\n';
+    }
+  };
+  if (m.dimension == 3) {
+    if (write_facets(m) && m.facets.cols() > 0) block("Triangles", m.facets, m.facet_tags);
+    block("Tetrahedra", m.cells, m.cell_tags);
+  } else {
+    block("Triangles", m.cells, m.cell_tags);
+  }
+  w << "\nEnd\n";
+  w.save(path);
+}
+
+void write_tetgen(const std::string& base, const mesh::MeshData& m) {
+  check_mesh(m);
+  INCISE_CHECK(m.dimension == 3, "write_tetgen: tetrahedral meshes only");
+  TextWriter node;
+  const bool marks = !m.point_tags.empty();
+  node << static_cast<long long>(m.num_points()) << " 3 0 " << (marks ? 1 : 0) << '\n';
+  for (Index i = 0; i < m.num_points(); ++i) {
+    node << static_cast<long long>(i + 1) << ' ' << m.points(0, i) << ' ' << m.points(1, i) << ' '
+         << m.points(2, i);
+    if (marks) node << ' ' << m.point_tags[i];
+    node << '\n';
+  }
+  TextWriter ele;
+  const bool attr = !m.cell_tags.empty();
+  ele << static_cast<long long>(m.num_cells()) << " 4 " << (attr ? 1 : 0) << '\n';
+  for (Index c = 0; c < m.num_cells(); ++c) {
+    ele << static_cast<long long>(c + 1);
+    for (int r = 0; r < 4; ++r) ele << ' ' << m.cells(r, c) + 1;
+    if (attr) ele << ' ' << m.cell_tags[c];
+    ele << '\n';
+  }
+  node.save(base + ".node");
+  ele.save(base + ".ele");
+}
+
+void write_off(const std::string& path, const mesh::MeshData& m) {
+  check_mesh(m);
+  INCISE_CHECK(m.dimension == 2, "write_off: triangle meshes only");
+  TextWriter w;
+  w << "OFF\n"
+    << static_cast<long long>(m.num_points()) << ' ' << static_cast<long long>(m.num_cells())
+    << " 0\n";
+  for (Index i = 0; i < m.num_points(); ++i)
+    w << m.points(0, i) << ' ' << m.points(1, i) << ' ' << m.points(2, i) << '\n';
+  for (Index c = 0; c < m.num_cells(); ++c)
+    w << "3 " << m.cells(0, c) << ' ' << m.cells(1, c) << ' ' << m.cells(2, c) << '\n';
+  w.save(path);
+}
+
+}  // namespace incise::io
