@@ -1,0 +1,103 @@
+/// Thesis §3.3, Table 3.1: tip deflection of the cantilever by linear FEM + matrix-free CG
+/// (‖r‖ < 1e-8‖f_ex‖) on the five structured meshes, beside the published numbers.
+/// Default run: the three coarse meshes (425, 1225, 2673 nodes). INCISE_TABLE3_1_ALL=1 (set by
+/// the `slow`-labelled ctest entry) adds the 4961- and 8281-node meshes of the table and two
+/// finer ones (56×14×14, 64×16×16) for the asymptotic order and the Richardson limit.
+#include "cantilever.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+namespace incise::verify {
+namespace {
+
+struct Published {
+  int nx;
+  Index nodes;
+  long iterations;
+  double avg_error_pct, max_error_pct;
+};
+// Table 3.1 of the thesis (reference values, errors relative to Euler–Bernoulli 8.64e-3 m).
+constexpr Published kTable31[] = {{16, 425, 377, 29.0, 29.3}, {24, 1225, 561, 15.1, 15.3},
+                                  {32, 2673, 723, 8.6, 8.8},  {40, 4961, 882, 5.2, 5.3},
+                                  {48, 8181, 1044, 3.2, 3.3},  // 8181: sic, 49·13·13 = 8281
+                                  {56, 0, 0, 0.0, 0.0},        // beyond the table
+                                  {64, 0, 0, 0.0, 0.0}};
+
+bool all_meshes() {
+  const char* v = std::getenv("INCISE_TABLE3_1_ALL");
+  return v && std::string(v) == "1";
+}
+
+TEST(CantileverTable3_1, ConvergesToTimoshenkoFromBelow) {
+  const int count = all_meshes() ? 7 : 3;
+  std::vector<CantileverResult> res;
+  std::printf("Table 3.1 (thesis §3.3): l×h×d = 1.2×0.2×0.3 m, E = 1e6 Pa, nu = 0, F = 3 N\n");
+  std::printf("Euler-Bernoulli %.4e m, Timoshenko %.4e m; errors relative to Euler-Bernoulli\n",
+              kEulerBernoulli, kTimoshenko);
+  std::printf("%-12s %6s | %6s %8s %8s | %6s %8s %8s %8s | %8s\n", "elements", "nodes", "it(th)",
+              "avg%(th)", "max%(th)", "it", "avg%", "max%", "min%", "vsTimo%");
+  for (int i = 0; i < count; ++i) {
+    const Published& t = kTable31[i];
+    const CantileverResult r = solve_cantilever(t.nx, t.nx / 4, t.nx / 4);
+    ASSERT_EQ(r.reason, solver::StopReason::kConverged) << solver::to_string(r.reason);
+    // Same meshes as the thesis ((nx+1)(ny+1)(nz+1) nodes; the thesis prints 8181 for 48×12×12).
+    ASSERT_EQ(r.nodes, (t.nx + 1) * (t.nx / 4 + 1) * (t.nx / 4 + 1));
+    res.push_back(r);
+    const double avg = 100 * (kEulerBernoulli - r.avg_deflection) / kEulerBernoulli;
+    // Largest error = smallest deflection and vice versa.
+    const double mx = 100 * (kEulerBernoulli - r.min_deflection) / kEulerBernoulli;
+    const double mn = 100 * (kEulerBernoulli - r.max_deflection) / kEulerBernoulli;
+    if (t.nodes > 0)
+      std::printf("%3dx%2dx%2d   %6d | %6ld %8.1f %8.1f |", t.nx, t.nx / 4, t.nx / 4, r.nodes,
+                  t.iterations, t.avg_error_pct, t.max_error_pct);
+    else
+      std::printf("%3dx%2dx%2d   %6d | %6s %8s %8s |", t.nx, t.nx / 4, t.nx / 4, r.nodes, "-", "-",
+                  "-");
+    std::printf(" %6ld %8.2f %8.2f %8.2f | %8.2f\n", r.iterations, avg, mx, mn,
+                100 * (kTimoshenko - r.avg_deflection) / kTimoshenko);
+  }
+  for (std::size_t i = 0; i < res.size(); ++i) {
+    // FEM stiffer than the beam: every tip node deflects less than either beam theory
+    // (Table 3.1 caption: "always less than predicted").
+    EXPECT_LT(res[i].max_deflection, kEulerBernoulli);
+    if (i > 0) {
+      EXPECT_GT(res[i].avg_deflection, res[i - 1].avg_deflection);  // errors fall monotonically
+      EXPECT_GT(res[i].min_deflection, res[i - 1].min_deflection);
+    }
+  }
+  // Observed order and Richardson extrapolation from the three finest meshes run, with h ∝ 1/nx.
+  const std::size_t k = res.size();
+  const Richardson rich =
+      richardson(1.0 / res[k - 3].nx, res[k - 3].avg_deflection, 1.0 / res[k - 2].nx,
+                 res[k - 2].avg_deflection, 1.0 / res[k - 1].nx, res[k - 1].avg_deflection);
+  ASSERT_TRUE(rich.ok);
+  std::printf(
+      "observed order p = %.3f from nx = %d, %d, %d; Richardson limit %.5e m (%+.3f%% "
+      "from Timoshenko)\n",
+      rich.order, res[k - 3].nx, res[k - 2].nx, res[k - 1].nx, rich.limit,
+      100 * (rich.limit - kTimoshenko) / kTimoshenko);
+  if (!all_meshes()) {
+    // 16/24/32 are pre-asymptotic (linear tetrahedra in bending are far too stiff on coarse
+    // meshes): measured p ≈ 1.4 here, rising to ≈ 1.65 (24/32/40) and ≈ 1.9 (48/56/64). We only
+    // assert the order is positive and below the asymptotic 2 plus the slow case's margin.
+    EXPECT_GT(rich.order, 1.0);
+    EXPECT_LT(rich.order, 2.25);
+    return;
+  }
+  // Linear tetrahedra: displacement error O(h²) for a smooth solution. On 48/56/64 the measured
+  // order is ≈ 1.9, still creeping up (clamp corners are mildly singular); ±0.25 admits that and
+  // would reject a first-order (p ≈ 1) or broken (p ≫ 2) discretization.
+  constexpr double kOrderTol = 0.25;
+  EXPECT_NEAR(rich.order, 2.0, kOrderTol);
+  // Issue 4 acceptance: extrapolated deflection within 0.5 % of Timoshenko (3D elasticity and
+  // Timoshenko's κ = 5/6 beam differ by the clamp's restraint of warping, well below 0.5 %).
+  constexpr double kRichardsonTol = 0.005;
+  EXPECT_NEAR(rich.limit, kTimoshenko, kRichardsonTol * kTimoshenko);
+}
+
+}  // namespace
+}  // namespace incise::verify
