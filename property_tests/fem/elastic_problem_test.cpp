@@ -1,0 +1,279 @@
+/// Global properties of ElasticProblem (thesis §2.3–2.5, §3.1) for every registered material on
+/// small box meshes: assembled K ≡ matrix-free K·d ≡ central differences of the global
+/// gradient; gradient ≡ differences of Π; nodal forces sum to zero; Π invariant under rigid
+/// motions of the deformed shape; lumped mass and gravity totals; fixed-DOF treatment;
+/// inverted elements reported as kInverted with Π = +∞.
+
+#include "../material/derivative_check.hpp"
+
+#include <incise/core/error.hpp>
+#include <incise/fem/elastic_problem.hpp>
+#include <incise/mesh/generators.hpp>
+#include <incise_test/seed.hpp>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+namespace {
+
+using incise::EvalStatus;
+using incise::VecX;
+using incise::fem::ElasticProblem;
+using incise::fem::FixedDofTreatment;
+using incise::material::Material;
+
+// Best central difference of the 1e-2…1e-8 sweep: ~1e-9 relative on these smooth sums.
+constexpr double kFdTolerance = 1e-6;
+constexpr double kMinTaylorOrder = 1.9;  // issue 3
+
+incise::material::Parameters test_parameters() {
+  incise::material::Parameters p;
+  p.youngs_modulus = 5.0e3;
+  p.poisson_ratio = 0.35;
+  p.gamma = 0.3;
+  p.density = 1.1e3;
+  return p;
+}
+
+incise::mesh::MeshData small_box(incise::mesh::CubeSplit split = incise::mesh::CubeSplit::kSix) {
+  return incise::mesh::make_box(2, 2, 3, 0.2, 0.25, 0.3, split);
+}
+
+VecX random_vector(std::mt19937_64& rng, Eigen::Index n, double scale) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  VecX v(n);
+  for (Eigen::Index i = 0; i < n; ++i) v[i] = scale * u(rng);
+  return v;
+}
+
+/// Displacement of a homogeneous deformation F plus a small random field (stays non-inverted).
+VecX deformed_state(const ElasticProblem& p, std::mt19937_64& rng, double amplitude) {
+  Eigen::Matrix3d f;
+  f << 1.2, 0.15, -0.05, 0.1, 0.9, 0.2, -0.1, 0.05, 1.1;
+  VecX u(p.size());
+  for (incise::Index v = 0; v < p.num_nodes(); ++v)
+    u.segment<3>(3 * v) = (f - Eigen::Matrix3d::Identity()) * p.points().col(v);
+  return u + random_vector(rng, p.size(), amplitude);
+}
+
+class ProblemProperty : public ::testing::TestWithParam<std::string> {
+ protected:
+  Material material() const { return Material(GetParam(), test_parameters()); }
+};
+
+TEST_P(ProblemProperty, AssembledEqualsMatrixFreeEqualsFiniteDifferences) {
+  INCISE_SEEDED_RNG(rng, 601);
+  for (auto split : {incise::mesh::CubeSplit::kSix, incise::mesh::CubeSplit::kFive}) {
+    ElasticProblem p(small_box(split), material());
+    for (double amplitude : {0.0, 0.01}) {
+      const VecX u =
+          amplitude == 0.0 ? VecX(VecX::Zero(p.size())) : deformed_state(p, rng, amplitude);
+      const VecX d = random_vector(rng, p.size(), 1.0);
+      VecX kd, g0;
+      ASSERT_EQ(p.hessian_product(u, d, kd), EvalStatus::kOk);
+      ASSERT_EQ(p.gradient(u, g0), EvalStatus::kOk);
+      ASSERT_EQ(p.assemble_tangent(u, FixedDofTreatment::kKeep), EvalStatus::kOk);
+      const VecX kd_assembled = p.tangent_matrix() * d;
+      // Same element products summed in a different order: round-off of the matrix scale.
+      const double scale = p.tangent_matrix().norm() * d.norm();
+      EXPECT_LE((kd - kd_assembled).norm(), 1e-13 * scale);
+      // Assembled matrix symmetric.
+      const Eigen::SparseMatrix<double> kt = p.tangent_matrix().transpose();
+      EXPECT_LE((p.tangent_matrix() - kt).norm(), 1e-14 * p.tangent_matrix().norm());
+      // Hessian diagonal equals the assembled diagonal (no fixed DOFs here).
+      VecX diag;
+      ASSERT_TRUE(p.hessian_diagonal(u, diag));
+      EXPECT_LE((diag - VecX(p.tangent_matrix().diagonal())).norm(), 1e-13 * diag.norm());
+      // K·d vs differences of the gradient, contracted with a random weight.
+      const VecX w = random_vector(rng, p.size(), 1.0);
+      const auto phi = [&](double t) {
+        VecX g;
+        EXPECT_EQ(p.gradient(u + t * d, g), EvalStatus::kOk);
+        return g.dot(w);
+      };
+      const double step = 0.01 * 0.2 / d.lpNorm<Eigen::Infinity>();  // 1% of an edge
+      const auto r = incise::test::check_directional_derivative(
+          phi, kd.dot(w), step, scale * w.norm() * 1e-3, g0.norm() * w.norm());
+      EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
+      EXPECT_GE(r.taylor_order, kMinTaylorOrder) << r.report;
+    }
+  }
+}
+
+TEST_P(ProblemProperty, GradientIsEnergyDerivativeWithLoads) {
+  INCISE_SEEDED_RNG(rng, 602);
+  ElasticProblem p(small_box(), material());
+  p.add_gravity(Eigen::Vector3d(0.0, 0.0, -9.81));
+  p.add_point_load({5, Eigen::Vector3d(1.0, -2.0, 0.5)});
+  const VecX u = deformed_state(p, rng, 0.01);
+  const VecX d = random_vector(rng, p.size(), 1.0);
+  VecX g;
+  double e0 = 0.0;
+  ASSERT_EQ(p.gradient(u, g, &e0), EvalStatus::kOk);
+  double e1 = 0.0;
+  ASSERT_EQ(p.energy(u, e1), EvalStatus::kOk);
+  EXPECT_EQ(e0, e1);  // gradient's optional energy is the same evaluation
+  const auto phi = [&](double t) {
+    double e = 0.0;
+    EXPECT_EQ(p.energy(u + t * d, e), EvalStatus::kOk);
+    return e;
+  };
+  const double step = 0.01 * 0.2 / d.lpNorm<Eigen::Infinity>();
+  const auto r = incise::test::check_directional_derivative(
+      phi, g.dot(d), step, 1e-3 * g.norm() * d.norm(), std::abs(e0));
+  EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
+  EXPECT_GE(r.taylor_order, kMinTaylorOrder) << r.report;
+}
+
+TEST_P(ProblemProperty, InternalForcesSumToZero) {
+  INCISE_SEEDED_RNG(rng, 603);
+  ElasticProblem p(small_box(), material());
+  const VecX u = deformed_state(p, rng, 0.02);
+  VecX f;
+  ASSERT_EQ(p.internal_forces(u, f), EvalStatus::kOk);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (incise::Index v = 0; v < p.num_nodes(); ++v) sum += f.segment<3>(3 * v);
+  // Every element is in equilibrium (f4 = −f1 − f2 − f3): the total is round-off.
+  EXPECT_LE(sum.norm(), 1e-13 * f.lpNorm<1>());
+}
+
+TEST_P(ProblemProperty, EnergyInvariantUnderRigidMotionOfDeformedShape) {
+  const Material m = material();
+  if (m.linear_geometry())
+    GTEST_SKIP() << "linear geometry (2.22) is not invariant under finite rotations";
+  INCISE_SEEDED_RNG(rng, 604);
+  ElasticProblem p(small_box(), m);
+  const VecX u = deformed_state(p, rng, 0.01);
+  std::normal_distribution<double> n(0.0, 1.0);
+  Eigen::Quaterniond q(n(rng), n(rng), n(rng), n(rng));
+  q.normalize();
+  const Eigen::Matrix3d r = q.toRotationMatrix();
+  const Eigen::Vector3d t(0.3, -0.1, 0.2);
+  VecX ur(p.size());
+  for (incise::Index v = 0; v < p.num_nodes(); ++v) {
+    const Eigen::Vector3d x = p.points().col(v) + u.segment<3>(3 * v);
+    ur.segment<3>(3 * v) = r * x + t - p.points().col(v);
+  }
+  double e = 0.0, er = 0.0;
+  ASSERT_EQ(p.energy(u, e), EvalStatus::kOk);
+  ASSERT_EQ(p.energy(ur, er), EvalStatus::kOk);
+  // Sum of element energies each invariant to round-off (~1e-15 relative per term).
+  EXPECT_NEAR(er, e, 1e-12 * std::abs(e));
+}
+
+TEST_P(ProblemProperty, LumpedMassAndGravityTotals) {
+  ElasticProblem p(small_box(), material());
+  const double rho = test_parameters().density;
+  const double vol = 0.2 * 0.25 * 0.3;
+  EXPECT_NEAR(p.volume(), vol, 1e-15);  // sum of exact tetrahedra volumes
+  // §2.5: a quarter of each tet's mass on each of its nodes; per DOF, total 3·ρV.
+  EXPECT_NEAR(p.lumped_mass().sum(), 3.0 * rho * vol, 1e-12 * rho * vol);
+  const Eigen::Vector3d g(0.0, -9.81, 1.0);
+  p.add_gravity(g);
+  Eigen::Vector3d total = Eigen::Vector3d::Zero();
+  for (incise::Index v = 0; v < p.num_nodes(); ++v) total += p.external_force().segment<3>(3 * v);
+  EXPECT_LE((total - rho * vol * g).norm(), 1e-12 * rho * vol * g.norm());
+  p.clear_loads();
+  EXPECT_EQ(p.external_force().norm(), 0.0);
+}
+
+TEST_P(ProblemProperty, FixedDofsIdentityTreatment) {
+  INCISE_SEEDED_RNG(rng, 605);
+  ElasticProblem p(small_box(), material());
+  const auto fixed =
+      incise::fem::nodes_on_plane(incise::mesh::make_box(2, 2, 3, 0.2, 0.25, 0.3), 2, 0.0);
+  ASSERT_EQ(fixed.size(), 9u);
+  p.fix_nodes(fixed);
+  const VecX u = deformed_state(p, rng, 0.01);
+  ASSERT_EQ(p.assemble_tangent(u, FixedDofTreatment::kIdentity), EvalStatus::kOk);
+  const Eigen::SparseMatrix<double> kid = p.tangent_matrix();
+  ASSERT_EQ(p.assemble_tangent(u, FixedDofTreatment::kKeep), EvalStatus::kOk);
+  const Eigen::SparseMatrix<double>& kraw = p.tangent_matrix();
+  EXPECT_EQ(kid.nonZeros(), kraw.nonZeros());  // the pattern never changes
+  const VecX d = random_vector(rng, p.size(), 1.0);
+  VecX pd = d;
+  p.project(pd);
+  // K_id·d = P K P d + (I − P) d.
+  VecX expected = kraw * pd;
+  p.project(expected);
+  expected += d - pd;
+  EXPECT_LE((kid * d - expected).norm(), 1e-13 * kraw.norm() * d.norm());
+  for (auto v : fixed) EXPECT_TRUE(p.is_fixed(3 * v + 2));
+  EXPECT_EQ(p.free_dofs().size(), static_cast<std::size_t>(p.size() - 27));
+  VecX diag;
+  ASSERT_TRUE(p.hessian_diagonal(u, diag));
+  EXPECT_EQ(diag[3 * fixed[0]], 1.0);
+}
+
+TEST_P(ProblemProperty, InvertedElementGivesInfiniteEnergyNotNaN) {
+  const Material m = material();
+  ElasticProblem p(small_box(), m);
+  VecX u = VecX::Zero(p.size());
+  // Push one interior-ish node far through the opposite faces: some incident tet inverts.
+  const incise::Index node = 1 + 3 * (1 + 3 * 1);  // node (1,1,1)
+  u.segment<3>(3 * node) = Eigen::Vector3d(0.0, 0.0, -0.4);
+  double e = 0.0;
+  VecX g, kd;
+  const EvalStatus se = p.energy(u, e);
+  const EvalStatus sg = p.gradient(u, g);
+  const EvalStatus sk = p.hessian_product(u, VecX::Ones(p.size()), kd);
+  if (m.linear_geometry() || m.defined_when_inverted()) {
+    EXPECT_EQ(se, EvalStatus::kOk);
+    EXPECT_TRUE(std::isfinite(e));
+  } else {
+    EXPECT_EQ(se, EvalStatus::kInverted);
+    EXPECT_EQ(sg, EvalStatus::kInverted);
+    EXPECT_EQ(sk, EvalStatus::kInverted);
+    EXPECT_TRUE(std::isinf(e) && e > 0.0);
+    EXPECT_TRUE(g.allFinite());
+    EXPECT_TRUE(kd.allFinite());
+    EXPECT_EQ(p.assemble_tangent(u), EvalStatus::kInverted);
+  }
+}
+
+TEST_P(ProblemProperty, FlopsAccumulateCountedElementCosts) {
+  ElasticProblem p(small_box(), material());
+  const auto& c = p.element_flop_counts();
+  EXPECT_GT(c.force, 0u);
+  EXPECT_GT(c.force_and_product, c.product);
+  const std::uint64_t before = p.flops();
+  VecX g;
+  ASSERT_EQ(p.internal_forces(VecX::Zero(p.size()), g), EvalStatus::kOk);
+  // Counted element force plus the 12 scatter additions, per element.
+  EXPECT_EQ(p.flops() - before, (c.force + 12) * static_cast<std::uint64_t>(p.num_elements()));
+}
+
+INSTANTIATE_TEST_SUITE_P(AllRegistered, ProblemProperty,
+                         ::testing::ValuesIn(incise::material::registered_material_names()),
+                         [](const auto& param_info) {
+                           std::string s = param_info.param;
+                           for (char& ch : s)
+                             if (ch == '-') ch = '_';
+                           return s;
+                         });
+
+TEST(ElasticProblem, RejectsBadMeshes) {
+  const Material m("neohookean", test_parameters());
+  auto mesh = small_box();
+  std::swap(mesh.cells(0, 3), mesh.cells(1, 3));  // invert element 3
+  try {
+    ElasticProblem p(mesh, m);
+    FAIL() << "inverted reference element accepted";
+  } catch (const incise::ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("element 3"), std::string::npos) << e.what();
+  }
+  auto mesh2 = small_box();
+  mesh2.cells(2, 0) = mesh2.num_points() + 5;
+  EXPECT_THROW(ElasticProblem(mesh2, m), incise::ParameterError);
+}
+
+TEST(NodeSelection, PlaneAndBox) {
+  const auto mesh = incise::mesh::make_box(2, 2, 2, 1.0, 1.0, 1.0);
+  EXPECT_EQ(incise::fem::nodes_on_plane(mesh, 0, 1.0).size(), 9u);
+  EXPECT_EQ(incise::fem::nodes_in_box(mesh, Eigen::Vector3d(-0.1, -0.1, -0.1),
+                                      Eigen::Vector3d(0.6, 0.6, 0.6))
+                .size(),
+            8u);
+}
+
+}  // namespace
