@@ -143,11 +143,21 @@ double CutMesh::deformed_volume(const Tet& t) const {
 
 Index CutMesh::dissect(const std::vector<std::pair<Index, int>>& faces, std::vector<Index>& changed,
                        std::vector<Index>& new_nodes) {
-  std::vector<mesh::FaceHandle> cut;
-  cut.reserve(faces.size());
+  std::vector<mesh::FaceHandle> handles;
+  handles.reserve(faces.size());
   for (const auto& [e, j] : faces) {
     INCISE_CHECK(alive(e) && j >= 0 && j < 4, "dissect: bad face");
-    cut.push_back(conn_.opposite_face(conn_.element_at(e), element(e)[static_cast<size_t>(j)]));
+    handles.push_back(face_handle(e, j));
+  }
+  return dissect(handles, changed, new_nodes);
+}
+
+Index CutMesh::dissect(const std::vector<mesh::FaceHandle>& faces, std::vector<Index>& changed,
+                       std::vector<Index>& new_nodes) {
+  std::vector<mesh::FaceHandle> cut;
+  cut.reserve(faces.size());
+  for (const auto& f : faces) {
+    if (conn_.is_alive(f) && conn_.mate(f).valid()) cut.push_back(f);
   }
   const mesh::DissectResult result = mesh::dissect(conn_, cut);
   for (const auto& split : result.splits) {

@@ -22,6 +22,9 @@ constexpr double kHalfTie = 1e-12;
 constexpr double kInsideTol = 1e-9;
 /// Sweep triangles with area below this fraction of the squared longest side are degenerate.
 constexpr double kSweepAreaRelEps = 1e-12;
+/// A node within this fraction of the sweep triangle's longest side from the sweep plane is
+/// already on the sweep and is not moved (covers nodes snapped by an earlier, coplanar step).
+constexpr double kOnSweepRelEps = 1e-12;
 
 bool has(const Tet& t, Index v) {
   return t[0] == v || t[1] == v || t[2] == v || t[3] == v;
@@ -80,6 +83,8 @@ void CutTotals::add(const CutStepReport& r) {
   nodes_snapped += r.nodes_snapped;
   snaps_refused += r.snaps_refused;
   snaps_failed += r.snaps_failed;
+  snaps_outside_star += r.snaps_outside_star;
+  faces_pending = r.faces_pending;
   degenerate_found += r.degenerate_found;
   collapses += r.collapses;
   incollapsible += r.incollapsible;
@@ -112,6 +117,7 @@ Cutter::~Cutter() = default;
 void Cutter::end_incision() {
   marked_.clear();
   incomplete_.clear();
+  pending_.clear();
 }
 
 Cutter::EdgeKey Cutter::edge_key(Index a, Index b) const {
@@ -303,11 +309,15 @@ void Cutter::remark_snapped(const std::vector<Index>& snapped, std::vector<Index
   }
 }
 
-bool Cutter::snap_node(Index v, const Vec3& o, const Vec3& n, CutStepReport& r) {
+bool Cutter::snap_node(Index v, const Vec3& o, const Vec3& n, double scale, CutStepReport& r) {
   const Vec3 x = mesh_.deformed(v);
   if (mesh_.fixed(v)) {
-    ++r.snaps_failed;  // fixed nodes are never moved
+    ++r.snaps_fixed;  // fixed nodes are never moved
     return false;
+  }
+  if (std::abs(n.dot(x - o)) <= kOnSweepRelEps * scale) {
+    ++r.nodes_on_sweep;  // already on the sweep plane (e.g. snapped by an earlier step)
+    return true;
   }
   Vec3 w = x;
   bool found = false;
@@ -351,6 +361,7 @@ bool Cutter::snap_node(Index v, const Vec3& o, const Vec3& n, CutStepReport& r) 
   }
   if (!found) {
     ++r.snaps_failed;
+    ++r.snaps_no_projection;
     return false;
   }
   // Map w back to the reference configuration through the incident element containing it.
@@ -371,6 +382,7 @@ bool Cutter::snap_node(Index v, const Vec3& o, const Vec3& n, CutStepReport& r) 
   }
   if (!located) {
     ++r.snaps_failed;
+    ++r.snaps_outside_star;
     return false;
   }
   const Vec3 X_old = mesh_.reference(v);
@@ -399,7 +411,9 @@ void Cutter::snap(const Vec3 (&tri)[3], const std::vector<std::pair<Index, int>>
       nodes.push_back(mesh_.element(e)[static_cast<size_t>(kTetFace[j][k])]);
   std::sort(nodes.begin(), nodes.end());
   nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
-  for (Index v : nodes) (void)snap_node(v, tri[0], n, r);
+  const double scale =
+      std::max({(tri[1] - tri[0]).norm(), (tri[2] - tri[1]).norm(), (tri[0] - tri[2]).norm()});
+  for (Index v : nodes) (void)snap_node(v, tri[0], n, scale, r);
 }
 
 bool Cutter::is_degenerate(Index e) const {
@@ -787,7 +801,14 @@ CutStepReport Cutter::step(const Vec3& a, const Vec3& b, const Vec3& c) {
     }
     r.faces_selected = static_cast<Index>(faces.size());
     std::vector<Index> changed;
-    r.faces_dissected = mesh_.dissect(faces, changed, r.new_nodes);
+    std::vector<mesh::FaceHandle> cut = pending_;
+    for (const auto& [e, j] : faces) cut.push_back(mesh_.face_handle(e, j));
+    r.faces_dissected = mesh_.dissect(cut, changed, r.new_nodes);
+    pending_.clear();
+    for (const auto& f : cut) {
+      const auto& conn = mesh_.connectivity();
+      if (conn.is_alive(f) && conn.mate(f).valid()) pending_.push_back(f);
+    }
     r.changed_elements.insert(r.changed_elements.end(), changed.begin(), changed.end());
     if (options_.remove_degeneracies) {
       std::vector<Index> region;
@@ -817,6 +838,7 @@ CutStepReport Cutter::step(const Vec3& a, const Vec3& b, const Vec3& c) {
   r.removed_nodes.erase(std::unique(r.removed_nodes.begin(), r.removed_nodes.end()),
                         r.removed_nodes.end());
   r.incomplete_elements = static_cast<Index>(incomplete_.size());
+  r.faces_pending = static_cast<Index>(pending_.size());
   return r;
 }
 

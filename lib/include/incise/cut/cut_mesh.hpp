@@ -111,6 +111,13 @@ class CutMesh {
   /// returns the number of listed faces that ended on the boundary (Fig. 7.7: some may not).
   Index dissect(const std::vector<std::pair<Index, int>>& faces, std::vector<Index>& changed,
                 std::vector<Index>& new_nodes);
+  /// As above with connectivity face handles (dead handles and boundary faces are skipped).
+  Index dissect(const std::vector<mesh::FaceHandle>& faces, std::vector<Index>& changed,
+                std::vector<Index>& new_nodes);
+  /// Connectivity handle of local face j of element e.
+  mesh::FaceHandle face_handle(Index e, int j) const {
+    return conn_.opposite_face(conn_.element_at(e), element(e)[static_cast<size_t>(j)]);
+  }
 
   /// mesh::validate() of the connectivity — (7.1)–(7.5), mate symmetry, boundary map,
   /// connected stars, incidence, reference orientation — plus finite positions; counts

@@ -44,32 +44,38 @@ enum class CutStatus {
 /// Report of one step (one sweep triangle), for the caller and for warm-starting solvers.
 struct [[nodiscard]] CutStepReport {
   CutStatus status = CutStatus::kOk;
-  Index elements_tested = 0;            ///< elements visited by the outward search
-  Index edges_intersected = 0;          ///< new sweep/edge intersections recorded
-  Index faces_selected = 0;             ///< faces chosen by §3.2.1 this step
-  Index faces_dissected = 0;            ///< of those, faces that ended on the boundary
-  Index halved_choices = 0;             ///< tetrahedra with four marked nodes (seeded choice)
-  Index incomplete_elements = 0;        ///< remembered incomplete tetrahedra after the step
-  Index nodes_snapped = 0;              ///< nodes moved onto the sweep (§3.2.2)
-  Index snaps_refused = 0;              ///< snaps refused because an element would invert
-  Index snaps_failed = 0;               ///< no admissible projection or no containing element
-  Index degenerate_found = 0;           ///< flat elements found in the first removal pass
-  Index collapses = 0;                  ///< edge collapses performed (§3.2.3)
-  Index incollapsible = 0;              ///< degenerate elements cut free and removed
-  Index removal_passes = 0;             ///< removal passes made
-  Index free_components = 0;            ///< components found without a fixed node
-  Index components_fixed = 0;           ///< of those, fixed on a face (policy kFixOnFace)
-  std::vector<Index> new_nodes;         ///< nodes created (copies and split nodes)
-  std::vector<Index> moved_nodes;       ///< existing nodes whose positions changed
+  Index elements_tested = 0;    ///< elements visited by the outward search
+  Index edges_intersected = 0;  ///< new sweep/edge intersections recorded
+  Index faces_selected = 0;     ///< faces chosen by §3.2.1 this step
+  Index faces_dissected = 0;    ///< faces that ended on the boundary this step (new or pending)
+  Index faces_pending = 0;      ///< selected faces still joined (Fig. 7.7), retried in later steps
+  Index halved_choices = 0;     ///< tetrahedra with four marked nodes (seeded choice)
+  Index incomplete_elements = 0;   ///< remembered incomplete tetrahedra after the step
+  Index nodes_snapped = 0;         ///< nodes moved onto the sweep (§3.2.2)
+  Index snaps_refused = 0;         ///< snaps refused because an element would invert
+  Index snaps_failed = 0;          ///< snaps_no_projection + snaps_outside_star
+  Index snaps_no_projection = 0;   ///< boundary node: no incident boundary face admits one
+  Index snaps_outside_star = 0;    ///< the projection lies in no element incident with the node
+  Index nodes_on_sweep = 0;        ///< nodes already on the sweep plane, left in place
+  Index snaps_fixed = 0;           ///< nodes of selected faces left in place because fixed
+  Index degenerate_found = 0;      ///< flat elements found in the first removal pass
+  Index collapses = 0;             ///< edge collapses performed (§3.2.3)
+  Index incollapsible = 0;         ///< degenerate elements cut free and removed
+  Index removal_passes = 0;        ///< removal passes made
+  Index free_components = 0;       ///< components found without a fixed node
+  Index components_fixed = 0;      ///< of those, fixed on a face (policy kFixOnFace)
+  std::vector<Index> new_nodes;    ///< nodes created (copies and split nodes)
+  std::vector<Index> moved_nodes;  ///< existing nodes whose positions changed
   std::vector<Index> changed_elements;  ///< element handles changed, added or removed
   std::vector<Index> removed_nodes;     ///< nodes that became unused (collapses, cut-free)
 };
 
-/// Totals over several steps (sum of the counts of CutStepReport).
+/// Totals over several steps (sums of the counts of CutStepReport; faces_pending is the
+/// value after the last step).
 struct CutTotals {
   Index faces_selected = 0, faces_dissected = 0, nodes_snapped = 0, snaps_refused = 0,
-        snaps_failed = 0, degenerate_found = 0, collapses = 0, incollapsible = 0, new_nodes = 0,
-        free_components = 0;
+        snaps_failed = 0, snaps_outside_star = 0, faces_pending = 0, degenerate_found = 0,
+        collapses = 0, incollapsible = 0, new_nodes = 0, free_components = 0;
   void add(const CutStepReport& r);
 };
 
@@ -114,7 +120,7 @@ class Cutter {
   void remark_snapped(const std::vector<Index>& snapped, std::vector<Index>& affected);
   void snap(const Vec3 (&tri)[3], const std::vector<std::pair<Index, int>>& faces,
             CutStepReport& r);
-  bool snap_node(Index v, const Vec3& origin, const Vec3& normal, CutStepReport& r);
+  bool snap_node(Index v, const Vec3& origin, const Vec3& normal, double scale, CutStepReport& r);
   void remove_degeneracies(std::vector<Index> region, CutStepReport& r);
   bool try_recipe(Index e, CutStepReport& r);
   bool apply_local_op(const std::vector<Index>& old_elements, const std::vector<Tet>& new_tets,
@@ -132,6 +138,9 @@ class Cutter {
   /// First intersection of each edge (keyed by original nodes) → original of marked node.
   std::unordered_map<EdgeKey, Index> marked_;
   std::unordered_set<Index> incomplete_;
+  /// Selected faces not yet separated by dissection (their vertices' stars were not split,
+  /// Fig. 7.7); the cut surface C accumulates, so they are dissected again with later faces.
+  std::vector<mesh::FaceHandle> pending_;
   std::vector<char> done_;
   std::vector<std::uint32_t> stamp_;
   std::uint32_t stamp_value_ = 0;
