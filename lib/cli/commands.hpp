@@ -21,4 +21,7 @@ struct Command {
 /// `incise mesh check FILE [--vtu OUT] [--reorient] [--merge-duplicates]` (lib/cli/mesh.cpp).
 int run_mesh(const Args& args, std::ostream& out, std::ostream& err);
 
+/// `incise run SCENE [--summary-json PATH] [--progress MODE]` (lib/cli/run.cpp).
+int run_scene_command(const Args& args, std::ostream& out, std::ostream& err);
+
 }  // namespace incise::cli

@@ -19,6 +19,8 @@ int version(const Args&, std::ostream& out, std::ostream&) {
 const Command kCommands[] = {
     {"version", "print the version", &version},
     {"mesh", "mesh check FILE [--vtu OUT]: load, report quality, validate (7.1)-(7.5)", &run_mesh},
+    {"run", "run SCENE [--summary-json PATH]: run a scene file (docs/scenes.md)",
+     &run_scene_command},
 };
 
 void usage(std::ostream& os) {

@@ -210,7 +210,7 @@ TEST(SceneParserBad, GravityWithoutDensity) {
 
 TEST(SceneParserBad, LinearCgWithNonlinearMaterial) {
   Json j = valid_scene();
-  j["material"]["model"] = "neo-hookean";
+  j["material"]["model"] = "neohookean";
   EXPECT_NE(error_of(j).find("/solver/method: \"cg\" solves linear elasticity only"),
             std::string::npos);
 }

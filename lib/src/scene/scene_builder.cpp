@@ -2,6 +2,8 @@
 
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
+#include <incise/io/read_mesh.hpp>
+#include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
 
 #include <algorithm>
@@ -54,17 +56,13 @@ mesh::MeshData make_mesh(const MeshSpec& ms, std::string& what) {
       what = os.str();
       return mesh::make_cylinder(ms.length, ms.radius, ms.rings, ms.layers);
     }
-    case MeshSpec::Source::kFile: break;
+    case MeshSpec::Source::kFile: {
+      io::LoadedMesh loaded = io::read_mesh(ms.file);
+      what = "mesh: " + ms.file + " (" + loaded.report.format + ")";
+      return std::move(loaded.mesh);
+    }
   }
   throw UsageError("scene mesh source not handled");
-}
-
-double tet_volume(const mesh::MeshData& m, Index c) {
-  const Vec3 a = m.points.col(m.cells(0, c));
-  return (m.points.col(m.cells(1, c)) - a)
-             .cross(m.points.col(m.cells(2, c)) - a)
-             .dot(m.points.col(m.cells(3, c)) - a) /
-         6.0;
 }
 
 }  // namespace
@@ -182,23 +180,14 @@ BuiltScene build_scene(const SceneSpec& spec) {
   // Loads.
   t.restart();
   b.external_force = VecX::Zero(ndof);
-  std::vector<double> nodal_volume;  // built only when gravity or lumped mass needs it
-  auto need_volumes = [&]() {
-    if (!nodal_volume.empty()) return;
-    nodal_volume.assign(static_cast<std::size_t>(n), 0.0);
-    for (Index c = 0; c < b.mesh.num_cells(); ++c) {
-      const double v = tet_volume(b.mesh, c);
-      for (int k = 0; k < 4; ++k) nodal_volume[b.mesh.cells(k, c)] += v / 4.0;
-    }
-  };
   mesh::CellMatrix bfaces;
+  Vec3 gravity = Vec3::Zero();
   for (const LoadSpec& l : spec.loads) {
     switch (l.kind) {
       case LoadSpec::Kind::kGravity:
-        // Consistent load of linear tetrahedra: ∫ρ g N_i dV = ρ g V/4 per vertex.
-        need_volumes();
-        for (Index i = 0; i < n; ++i)
-          b.external_force.segment<3>(3 * i) += spec.material.rho * nodal_volume[i] * l.vector;
+        // Applied by fem::ElasticProblem::add_gravity below (ρ g V/4 per vertex: the consistent
+        // load of linear tetrahedra).
+        gravity += l.vector;
         break;
       case LoadSpec::Kind::kPoint: {
         Index best = 0;
@@ -244,23 +233,41 @@ BuiltScene build_scene(const SceneSpec& spec) {
       }
     }
   }
+  // The elastic problem: material, constraints, loads.
+  {
+    Timer tp;
+    material::Parameters mp;
+    mp.youngs_modulus = spec.material.E;
+    mp.poisson_ratio = spec.material.nu;
+    mp.gamma = spec.material.gamma;
+    mp.density = spec.material.rho;
+    const material::Material mat(spec.material.model, mp);
+    b.problem = std::make_unique<fem::ElasticProblem>(b.mesh, mat);
+    b.problem->fix_nodes(b.fixed_nodes);
+    for (Index i = 0; i < n; ++i) {
+      const Vec3 f = b.external_force.segment<3>(3 * i);
+      if (f.squaredNorm() > 0) b.problem->add_point_load(fem::PointLoad{i, f});
+    }
+    if (gravity.squaredNorm() > 0) b.problem->add_gravity(gravity);
+    b.external_force = b.problem->external_force();
+    const std::size_t m = static_cast<std::size_t>(b.mesh.num_cells());
+    const std::size_t bytes = m * (sizeof(fem::TetReference) + 4 * sizeof(Index)) +
+                              static_cast<std::size_t>(ndof) * (3 * sizeof(double) + 1);
+    const auto& ef = b.problem->element_flop_counts();
+    b.record("elastic problem: material \"" + spec.material.model + "\", " + std::to_string(m) +
+                 " element references; counted flops/element: force " + std::to_string(ef.force) +
+                 ", force+K.d " + std::to_string(ef.force_and_product),
+             tp.seconds(), bytes);
+  }
   b.record("external load vector f_ext: " + std::to_string(spec.loads.size()) +
                " load(s), |f_ext| = " + std::to_string(b.external_force.norm()) + " N",
            t.seconds(), static_cast<std::size_t>(ndof) * sizeof(double));
 
-  // Lumped mass: dynamic relaxation only (§2.5).
-  if (spec.solver.method == SolverSpec::Method::kDynamicSS22) {
-    t.restart();
-    need_volumes();
-    b.lumped_mass.resize(ndof);
-    for (Index i = 0; i < n; ++i)
-      b.lumped_mass.segment<3>(3 * i).setConstant(spec.material.rho * nodal_volume[i]);
-    b.record("lumped mass (row-sum, rho V/4 per vertex)", t.seconds(),
-             static_cast<std::size_t>(ndof) * sizeof(double));
-  } else {
-    b.not_built.push_back("lumped mass: the static solver \"" +
-                          std::string(to_string(spec.solver.method)) + "\" needs none");
-  }
+  if (spec.solver.method != SolverSpec::Method::kDynamicSS22)
+    b.not_built.push_back(
+        "time integrator state (velocities, step-size and damping estimates): "
+        "the solver \"" +
+        std::string(to_string(spec.solver.method)) + "\" is static");
   if (spec.solver.method != SolverSpec::Method::kAugmented)
     b.not_built.push_back("sparse stiffness factorization: only the \"augmented\" solver uses one");
   if (!spec.solver.spectral_tuning)

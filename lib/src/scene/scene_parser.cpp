@@ -1,6 +1,7 @@
 #include <incise/scene/scene_parser.hpp>
 
 #include <incise/core/error.hpp>
+#include <incise/material/material.hpp>
 
 #include <filesystem>
 #include <fstream>
@@ -53,11 +54,6 @@ using detail::Range;
 
 constexpr int kMaxCells = 1000;  // per-axis bound for generated meshes (1000³ cubes is 6e9 tets)
 constexpr int kMaxIterations = 100000000;
-
-/// Material model names the scene format accepts (thesis ch. 4: linear (§3.1), St. Venant–
-/// Kirchhoff (§4.3.1), neo-Hookean (§4.3.2), Veronda–Westmann (§4.3.4)).
-const std::vector<std::string> kMaterials = {"linear", "st-venant-kirchhoff", "neo-hookean",
-                                             "veronda-westmann"};
 
 const std::vector<std::string> kMeshExtensions = {".mesh", ".msh", ".node", ".off"};
 
@@ -140,7 +136,7 @@ MeshSpec parse_mesh(JsonObject o, const std::string& file, const std::string& ba
 
 MaterialSpec parse_material(JsonObject o, bool needs_rho, const std::string& rho_reason) {
   MaterialSpec m;
-  m.model = o.choice("model", kMaterials);
+  m.model = o.choice("model", material::registered_material_names());
   m.E = o.number("E", detail::positive());
   m.nu = o.number("nu", Range{-1.0, 0.5, true, true});
   if (m.model == "veronda-westmann") {
@@ -207,7 +203,7 @@ SolverSpec parse_solver(JsonObject o) {
   }
   if (dynamic) {
     s.time_step = o.number("time_step", detail::non_negative(), 0.0);
-    s.damping = o.number("damping", detail::non_negative(), 0.0);
+    s.damping = o.number("damping", detail::non_negative(), -1.0);
     s.spectral_tuning = o.boolean("spectral_tuning", false);
   } else {
     const std::string why = "only the \"dynamic-ss22\" method integrates in time";

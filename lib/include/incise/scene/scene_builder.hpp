@@ -1,16 +1,18 @@
 #pragma once
 /// \file scene_builder.hpp
 /// Builds the parts a scene names, and only those ("model only what a scene requires"): the
-/// mesh, the fixed node set, the external load vector, the lumped mass only for a dynamic solver,
+/// mesh, the fixed node set, the external loads, the elastic problem,
 /// sweep triangles only when a tool is named, probe node sets only when probes are named. Every
 /// part built is recorded with its wall time and the memory it holds; every part deliberately
 /// not built is recorded with the reason, so a run summary can show both.
 
+#include <incise/fem/elastic_problem.hpp>
 #include <incise/mesh/mesh_data.hpp>
 #include <incise/scene/scene_spec.hpp>
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -35,8 +37,11 @@ struct BuiltScene {
   SceneSpec spec;
   mesh::MeshData mesh;
   std::vector<Index> fixed_nodes;  ///< sorted, unique
-  VecX external_force;             ///< f_ext (N), length 3·n_points
-  VecX lumped_mass;                ///< per DOF (kg); empty unless the solver is dynamic (§2.5)
+  VecX external_force;             ///< f_ext (N), length 3·n_points (as held by `problem`)
+  /// The elastic body with fixed nodes and loads applied (thesis §2.3–2.4). Note that
+  /// fem::ElasticProblem always holds a lumped-mass vector (3n doubles) because its gravity
+  /// load is lumped; it is counted in the problem's memory estimate.
+  std::unique_ptr<fem::ElasticProblem> problem;
   std::vector<std::array<Vec3, 3>> sweep_triangles;  ///< scalpel sweep (§3.2); empty w/o tools
   std::vector<ResolvedProbe> probes;
   std::vector<BuildStep> steps;        ///< what was built, in order
@@ -46,9 +51,10 @@ struct BuiltScene {
   void record(std::string what, double seconds, std::size_t bytes, std::int64_t flops = -1);
 };
 
-/// Builds `spec`. Throws ParseError naming the JSON path when a region selects no node (or no
-/// boundary face for a surface load) or a probe location lies outside the mesh's bounding box;
-/// throws the mesh reader's errors for bad mesh files. Nothing is written anywhere.
+/// Builds `spec` (mesh, fixed nodes, loads, the elastic problem, and the optional parts). Throws
+/// ParseError naming the JSON path when a region selects no node (or no boundary face for a surface
+/// load) or a probe location lies outside the mesh's bounding box; throws the mesh reader's errors
+/// for bad mesh files. Nothing is written anywhere.
 BuiltScene build_scene(const SceneSpec& spec);
 
 /// Nodes of `mesh` in `region`, sorted. Plane tolerance 0 means 1e-9 × bounding-box diagonal.

@@ -1,0 +1,243 @@
+// `incise run SCENE [--summary-json PATH] [--progress auto|bar|lines|none]`: parse and build a
+// scene (docs/scenes.md), run its solver with progress, print a summary (iterations, flops,
+// time, final residual, probes, what was built and what it cost), write the scene's outputs.
+//
+// Nothing is written before the scene has been parsed and built completely; output files are
+// written to a temporary name and renamed into place.
+
+#include <incise/core/error.hpp>
+#include <incise/io/write_mesh.hpp>
+#include <incise/scene/scene_parser.hpp>
+#include <incise/scene/scene_runner.hpp>
+
+#include <unistd.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+
+namespace incise::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+io::DataArray displacement_array(const VecX& u) {
+  io::DataArray a;
+  a.name = "displacement";
+  a.components = 3;
+  a.values.assign(u.data(), u.data() + u.size());
+  return a;
+}
+
+std::string join_vec(const Vec3& v) {
+  std::ostringstream os;
+  os << std::setprecision(6) << "[" << v[0] << ", " << v[1] << ", " << v[2] << "]";
+  return os.str();
+}
+
+Json vec_json(const Vec3& v) {
+  return Json::array({v[0], v[1], v[2]});
+}
+
+}  // namespace
+
+int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
+  std::string scene_path, summary_json, progress = "auto";
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--summary-json") {
+      summary_json = option_value(args, i, "--summary-json");
+    } else if (a == "--progress") {
+      progress = option_value(args, i, "--progress");
+      if (progress != "auto" && progress != "bar" && progress != "lines" && progress != "none")
+        throw UsageError("--progress expects auto, bar, lines or none, got '" + progress + "'");
+    } else if (a == "--help" || a == "-h") {
+      out << "usage: incise run SCENE.json [--summary-json PATH] "
+             "[--progress auto|bar|lines|none]\n"
+             "Runs a scene (format: docs/scenes.md) and prints a summary.\n";
+      return 0;
+    } else if (!a.empty() && a[0] == '-') {
+      throw UsageError("unknown option '" + a + "' (see incise run --help)");
+    } else if (scene_path.empty()) {
+      scene_path = a;
+    } else {
+      throw UsageError("expected one scene file, got '" + scene_path + "' and '" + a + "'");
+    }
+  }
+  if (scene_path.empty()) throw UsageError("usage: incise run SCENE.json [--summary-json PATH]");
+  if (progress == "auto")
+    progress = (&out == &std::cout && isatty(STDOUT_FILENO)) ? "bar" : "lines";
+
+  // Parse and build everything first: errors stop the run before any file is written.
+  Timer total;
+  const scene::SceneSpec spec = scene::load_scene(scene_path);
+  scene::BuiltScene built = scene::build_scene(spec);
+  const scene::OutputSpec& outs = spec.outputs;
+
+  out << "scene: " << scene_path << (spec.name.empty() ? "" : "  (" + spec.name + ")") << "\n";
+  out << "solver: " << scene::to_string(spec.solver.method) << ", tolerance "
+      << spec.solver.tolerance << " (||r|| <= tol ||f_ext||), budget " << spec.solver.max_iterations
+      << " iterations\n";
+
+  // Progress: fraction of the way (in log10 of the residual) from ||r_0|| to the threshold.
+  const double threshold = spec.solver.tolerance * built.problem->external_force_norm();
+  double r0 = -1;
+  int last_decile = -1;
+  long frames = 0;
+  std::vector<std::string> frame_files;
+  auto observer = [&](const solver::IterationInfo& info) {
+    if (r0 < 0) r0 = info.residual_norm;
+    double frac = 0;
+    if (r0 > threshold && info.residual_norm > 0)
+      frac = std::log(r0 / info.residual_norm) / std::log(r0 / threshold);
+    frac = std::min(1.0, std::max(0.0, frac));
+    if (progress == "bar") {
+      const int width = 30, filled = static_cast<int>(frac * width);
+      out << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
+          << std::string(static_cast<std::size_t>(width - filled), '.') << "] it " << std::setw(6)
+          << info.iteration << "  |r|/|f| = " << std::scientific << std::setprecision(2)
+          << info.residual_norm / std::max(built.problem->external_force_norm(), 1e-300)
+          << std::defaultfloat << std::setprecision(6) << std::flush;
+    } else if (progress == "lines") {
+      const int decile = static_cast<int>(frac * 10);
+      if (decile > last_decile) {
+        last_decile = decile;
+        out << "progress " << std::setw(3) << decile * 10 << "%: iteration " << info.iteration
+            << ", |r| = " << info.residual_norm << " N (target " << threshold << " N)\n";
+      }
+    }
+    if (!outs.vtu.empty() && outs.vtu_every > 0 && info.iteration % outs.vtu_every == 0) {
+      const std::string f = outs.vtu + "_" + std::to_string(info.iteration) + ".vtu";
+      fs::path parent = fs::path(f).parent_path();
+      if (!parent.empty()) fs::create_directories(parent);
+      io::write_vtu(f, built.mesh, {displacement_array(*info.u)});
+      frame_files.push_back(f);
+      ++frames;
+    }
+  };
+  const scene::SceneRunResult res = scene::run_scene(built, observer);
+  if (progress == "bar") out << "\n";
+
+  const auto& rep = res.report;
+  const double fnorm = res.external_force_norm;
+  out << "\n== summary\n";
+  out << "method:          " << res.method_detail << "\n";
+  out << "result:          " << solver::to_string(rep.reason) << "\n";
+  out << "iterations:      " << rep.iterations;
+  if (rep.inner_iterations > 0) out << " (inner " << rep.inner_iterations << ")";
+  out << "\n";
+  out << "final residual:  ||r|| = " << rep.residual_norm
+      << " N, ||r||/||f_ext|| = " << rep.residual_norm / fnorm << " (tolerance "
+      << spec.solver.tolerance << ")\n";
+  out << "energy:          " << rep.energy << " J\n";
+  out << "flops:           " << static_cast<double>(rep.flops) / 1e6 << " MFLOP (counted)\n";
+  out << "solver time:     " << rep.seconds << " s";
+  if (rep.seconds > 0)
+    out << " (" << static_cast<double>(rep.flops) / rep.seconds / 1e6 << " MFLOP/s)";
+  out << "\n";
+  for (const auto& p : res.probes) {
+    out << "probe " << p.name << ":  displacement " << join_vec(p.value) << " m";
+    if (p.reference)
+      out << ", reference " << join_vec(*p.reference) << ", relative error "
+          << 100 * p.relative_error << " %";
+    out << "\n";
+  }
+  out << "\n== built (what the scene names)\n";
+  for (const auto& s : built.steps) {
+    out << "  " << s.what << "\n      " << s.seconds * 1e3 << " ms, "
+        << static_cast<double>(s.bytes) / 1024.0 << " KiB";
+    if (s.flops >= 0) out << ", " << static_cast<double>(s.flops) / 1e6 << " MFLOP";
+    out << "\n";
+  }
+  out << "== not built\n";
+  for (const auto& s : built.not_built) out << "  " << s << "\n";
+
+  // Outputs.
+  std::vector<std::string> written;
+  if (!outs.csv.empty()) {
+    std::ostringstream csv;
+    csv << std::setprecision(10)
+        << "iteration,residual_norm,relative_residual,energy,flops,seconds";
+    for (const auto& p : built.probes)
+      csv << "," << p.spec.name << "_x," << p.spec.name << "_y," << p.spec.name << "_z";
+    csv << "\n";
+    for (const auto& row : res.trace) {
+      csv << row.iteration << "," << row.residual_norm << "," << row.residual_norm / fnorm << ","
+          << row.energy << "," << row.flops << "," << row.seconds;
+      for (const auto& v : row.probes) csv << "," << v[0] << "," << v[1] << "," << v[2];
+      csv << "\n";
+    }
+    write_file_atomic(outs.csv, csv.str());
+    written.push_back(outs.csv);
+  }
+  if (!outs.vtu.empty()) {
+    const std::string f = outs.vtu + ".vtu";
+    fs::path parent = fs::path(f).parent_path();
+    if (!parent.empty()) fs::create_directories(parent);
+    const std::string tmp = f + ".tmp";
+    io::write_vtu(tmp, built.mesh, {displacement_array(res.u)});
+    fs::rename(tmp, f);
+    written.push_back(f);
+    if (frames > 0) written.push_back(std::to_string(frames) + " frames " + outs.vtu + "_<it>.vtu");
+  }
+  if (!summary_json.empty()) {
+    Json j;
+    j["scene"] = scene_path;
+    j["name"] = spec.name;
+    j["method"] = scene::to_string(spec.solver.method);
+    j["method_detail"] = res.method_detail;
+    j["result"] = solver::to_string(rep.reason);
+    j["converged"] = rep.converged();
+    j["iterations"] = rep.iterations;
+    j["inner_iterations"] = rep.inner_iterations;
+    j["residual_norm"] = rep.residual_norm;
+    j["relative_residual"] = rep.residual_norm / fnorm;
+    j["tolerance"] = spec.solver.tolerance;
+    j["energy"] = rep.energy;
+    j["flops"] = rep.flops;
+    j["solver_seconds"] = rep.seconds;
+    j["total_seconds"] = total.seconds();
+    j["mesh"] = {{"nodes", built.mesh.num_points()},
+                 {"tetrahedra", built.mesh.num_cells()},
+                 {"fixed_nodes", built.fixed_nodes.size()}};
+    for (const auto& p : res.probes) {
+      Json pj = {{"name", p.name}, {"displacement", vec_json(p.value)}};
+      if (p.reference) {
+        pj["reference"] = vec_json(*p.reference);
+        pj["relative_error"] = p.relative_error;
+      }
+      j["probes"].push_back(pj);
+    }
+    for (const auto& s : built.steps)
+      j["built"].push_back({{"what", s.what},
+                            {"seconds", s.seconds},
+                            {"bytes", s.bytes},
+                            {"flops", s.flops >= 0 ? Json(s.flops) : Json(nullptr)}});
+    j["not_built"] = built.not_built;
+    j["outputs"] = written;
+    write_file_atomic(summary_json, j.dump(2) + "\n");
+    written.push_back(summary_json);
+  }
+  if (!written.empty()) {
+    out << "== wrote\n";
+    for (const auto& w : written) out << "  " << w << "\n";
+  }
+  if (!rep.converged()) {
+    err << "incise run: solver stopped without converging: " << solver::to_string(rep.reason)
+        << "\n";
+    return 3;
+  }
+  return 0;
+}
+
+}  // namespace incise::cli
