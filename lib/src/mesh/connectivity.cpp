@@ -613,21 +613,67 @@ void Connectivity::change_elements(const std::vector<ElementChange>& changes) {
                      " is already a boundary face of an unchanged element (invariant 7.4)");
   }
 
-  // --- mutation: detach every face of the changed elements ---
-  for (const Plan& p : plan)
-    for (int i = 0; i < nf; ++i) {
-      const Index f = elements_[static_cast<std::size_t>(p.e)].faces[static_cast<std::size_t>(i)];
-      auto& fr = faces_[static_cast<std::size_t>(f)];
+  // --- mutation ---
+  // Improvement over the thesis' change-elements (which detaches every face and re-inserts it
+  // through the boundary map, "spurious updates", §7.5): a face keeps its mate when the mate's
+  // new simplex is still the opposite of its own (both unchanged, or both changed consistently,
+  // e.g. faces through v when substituting v := w over a whole class), and a boundary face whose
+  // simplex does not change stays in the boundary map. Only the remaining faces go through the
+  // boundary map.
+  for (std::size_t k = 0; k < plan.size(); ++k)
+    elements_[static_cast<std::size_t>(plan[k].e)].scratch = static_cast<Index>(k);
+  auto new_simplex_of = [&](Index f) {
+    const Plan& p = plan[static_cast<std::size_t>(
+        elements_[static_cast<std::size_t>(faces_[static_cast<std::size_t>(f)].element)].scratch)];
+    for (int j = 0; j < nf; ++j)
+      if (p.new_faces[static_cast<std::size_t>(j)] == f) return p.new_simplex.subn(j);
+    return Simplex();
+  };
+  enum Action : char { kKeep, kRelease, kUnmate, kLeaveBoundary };
+  std::vector<Action> action(plan.size() * static_cast<std::size_t>(nf), kKeep);
+  std::vector<Index> old_mate(action.size(), -1);
+  for (std::size_t k = 0; k < plan.size(); ++k)
+    for (int j = 0; j < nf; ++j) {
+      const std::size_t slot = k * static_cast<std::size_t>(nf) + static_cast<std::size_t>(j);
+      const Index f = plan[k].new_faces[static_cast<std::size_t>(j)];
+      const FaceRecord& fr = faces_[static_cast<std::size_t>(f)];
+      const Simplex sn = plan[k].new_simplex.subn(j);
       const Index g = fr.mate;
+      old_mate[slot] = g;
       if (g >= 0) {
-        auto& gr = faces_[static_cast<std::size_t>(g)];
-        fr.mate = -1;
-        gr.mate = -1;
-        if (elements_[static_cast<std::size_t>(gr.element)].stamp != stamp_)
-          boundary_insert(gr.simplex, g);
+        const bool g_changed =
+            elements_[static_cast<std::size_t>(faces_[static_cast<std::size_t>(g)].element)]
+                .stamp == stamp_;
+        if (g_changed)
+          action[slot] = new_simplex_of(g) == sn.mate() ? kKeep : kUnmate;
+        else
+          action[slot] = sn == fr.simplex ? kKeep : kRelease;
       } else {
-        const auto it = boundary_.find(fr.simplex);
-        if (it != boundary_.end() && it->second == f) boundary_erase(fr.simplex);
+        action[slot] = sn == fr.simplex ? kKeep : kLeaveBoundary;
+      }
+    }
+  for (std::size_t k = 0; k < plan.size(); ++k)
+    for (int j = 0; j < nf; ++j) {
+      const std::size_t slot = k * static_cast<std::size_t>(nf) + static_cast<std::size_t>(j);
+      const Index f = plan[k].new_faces[static_cast<std::size_t>(j)];
+      auto& fr = faces_[static_cast<std::size_t>(f)];
+      const Index g = old_mate[slot];
+      switch (action[slot]) {
+        case kKeep: break;
+        case kRelease:
+          fr.mate = -1;
+          faces_[static_cast<std::size_t>(g)].mate = -1;
+          boundary_insert(faces_[static_cast<std::size_t>(g)].simplex, g);
+          break;
+        case kUnmate:
+          fr.mate = -1;
+          faces_[static_cast<std::size_t>(g)].mate = -1;
+          break;
+        case kLeaveBoundary: {
+          const auto it = boundary_.find(fr.simplex);
+          if (it != boundary_.end() && it->second == f) boundary_erase(fr.simplex);
+          break;
+        }
       }
     }
   // Relabel elements and faces.
@@ -645,10 +691,12 @@ void Connectivity::change_elements(const std::vector<ElementChange>& changes) {
     incidence_add(p.e);
     changed.push_back({p.e, p.old_simplex});
   }
-  // Re-attach: mate with a boundary face −σ' or enter the boundary map.
-  for (const Plan& p : plan)
+  // Re-attach the detached faces: mate with a boundary face −σ' or enter the boundary map.
+  for (std::size_t k = 0; k < plan.size(); ++k)
     for (int j = 0; j < nf; ++j) {
-      const Index f = p.new_faces[static_cast<std::size_t>(j)];
+      const std::size_t slot = k * static_cast<std::size_t>(nf) + static_cast<std::size_t>(j);
+      if (action[slot] == kKeep) continue;
+      const Index f = plan[k].new_faces[static_cast<std::size_t>(j)];
       const Simplex s = faces_[static_cast<std::size_t>(f)].simplex;
       const auto it = boundary_.find(s.mate());
       if (it != boundary_.end()) {

@@ -97,14 +97,6 @@ Simplex Simplex::sup(Index v) const {
   return Simplex(seq.data(), count_ + 1, sign_);
 }
 
-bool Simplex::operator<(const Simplex& o) const {
-  if (count_ != o.count_) return count_ < o.count_;
-  for (int i = 0; i < count_; ++i)
-    if (v_[static_cast<std::size_t>(i)] != o.v_[static_cast<std::size_t>(i)])
-      return v_[static_cast<std::size_t>(i)] < o.v_[static_cast<std::size_t>(i)];
-  return sign_ < o.sign_;
-}
-
 std::size_t Simplex::hash() const {
   std::uint64_t h = static_cast<std::uint64_t>(count_) * 2 + (sign_ > 0 ? 1 : 0);
   for (int i = 0; i < kMaxCount; ++i)

@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <sstream>
-#include <unordered_map>
-#include <unordered_set>
 
 namespace incise::mesh {
 
@@ -144,47 +142,58 @@ class ValidatorAccess {
     }
   }
 
-  // (7.4), (7.5), boundary map.
+  // (7.4), (7.5), boundary map. Sorting instead of hashing: in the order of Simplex::operator<
+  // equal simplices are adjacent and σ, −σ are neighbours within the run of equal vertex sets.
   void duplicates_and_boundary() {
-    std::unordered_map<Simplex, Index> elements_by_simplex;
-    elements_by_simplex.reserve(static_cast<std::size_t>(c_.num_elements_));
-    for (Index e = 0; e < ne(); ++e) {
-      if (!er(e).alive) continue;
-      const auto ins = elements_by_simplex.emplace(er(e).simplex, e);
-      if (!ins.second)
+    std::vector<std::pair<Simplex, Index>> es;
+    es.reserve(static_cast<std::size_t>(c_.num_elements_));
+    for (Index e = 0; e < ne(); ++e)
+      if (er(e).alive) es.emplace_back(er(e).simplex, e);
+    std::sort(es.begin(), es.end());
+    for (std::size_t i = 1; i < es.size(); ++i)
+      if (es[i].first == es[i - 1].first)
         add("7.4",
-            "elements " + std::to_string(ins.first->second) + " and " + std::to_string(e) +
-                " both represent " + er(e).simplex.to_string(),
-            {ins.first->second, e}, {});
-    }
-    std::unordered_map<Simplex, Index> faces_by_simplex;
-    faces_by_simplex.reserve(static_cast<std::size_t>(c_.num_faces_));
-    for (Index f = 0; f < nfc(); ++f) {
-      if (!fr(f).alive) continue;
-      const auto ins = faces_by_simplex.emplace(fr(f).simplex, f);
-      if (!ins.second)
+            "elements " + std::to_string(es[i - 1].second) + " and " +
+                std::to_string(es[i].second) + " both represent " + es[i].first.to_string(),
+            {es[i - 1].second, es[i].second}, {});
+
+    std::vector<std::pair<Simplex, Index>> fs;
+    fs.reserve(static_cast<std::size_t>(c_.num_faces_));
+    for (Index f = 0; f < nfc(); ++f)
+      if (fr(f).alive) fs.emplace_back(fr(f).simplex, f);
+    std::sort(fs.begin(), fs.end());
+    for (std::size_t i = 1; i < fs.size(); ++i)
+      if (fs[i].first == fs[i - 1].first)
         add("7.4",
-            "faces " + std::to_string(ins.first->second) + " and " + std::to_string(f) +
-                " both represent " + fr(f).simplex.to_string(),
-            {}, {ins.first->second, f});
-    }
+            "faces " + std::to_string(fs[i - 1].second) + " and " + std::to_string(fs[i].second) +
+                " both represent " + fs[i].first.to_string(),
+            {}, {fs[i - 1].second, fs[i].second});
     // (7.5): keys of the map == { σ ∈ faces(T) : −σ ∉ faces(T) }.
-    for (const auto& kv : faces_by_simplex) {
-      const bool is_boundary = faces_by_simplex.count(kv.first.mate()) == 0;
-      const bool in_map = c_.boundary_.count(kv.first) != 0;
-      if (is_boundary && !in_map)
-        add("7.5",
-            fa(kv.second, kv.first) + " is on the boundary of T (" + kv.first.mate().to_string() +
-                " is no face) but not in the boundary map",
-            {}, {kv.second});
-      if (!is_boundary && in_map)
-        add("7.5",
-            "boundary map contains " + kv.first.to_string() + " although " +
-                kv.first.mate().to_string() + " is a face of the mesh",
-            {}, {kv.second});
+    for (std::size_t lo = 0; lo < fs.size();) {
+      std::size_t hi = lo + 1;
+      while (hi < fs.size() && fs[hi].first.same_vertices(fs[lo].first)) ++hi;
+      bool has_neg = false, has_pos = false;
+      for (std::size_t i = lo; i < hi; ++i) (fs[i].first.sign() > 0 ? has_pos : has_neg) = true;
+      for (std::size_t i = lo; i < hi; ++i) {
+        const Simplex& s = fs[i].first;
+        const bool is_boundary = s.sign() > 0 ? !has_neg : !has_pos;
+        const bool in_map = c_.boundary_.count(s) != 0;
+        if (is_boundary && !in_map)
+          add("7.5",
+              fa(fs[i].second, s) + " is on the boundary of T (" + s.mate().to_string() +
+                  " is no face) but not in the boundary map",
+              {}, {fs[i].second});
+        if (!is_boundary && in_map)
+          add("7.5",
+              "boundary map contains " + s.to_string() + " although " + s.mate().to_string() +
+                  " is a face of the mesh",
+              {}, {fs[i].second});
+      }
+      lo = hi;
     }
     for (const auto& kv : c_.boundary_) {
-      if (faces_by_simplex.count(kv.first) == 0)
+      const auto it = std::lower_bound(fs.begin(), fs.end(), std::make_pair(kv.first, Index(-1)));
+      if (it == fs.end() || !(it->first == kv.first))
         add("7.5", "boundary map key " + kv.first.to_string() + " is not a face of the mesh", {},
             {kv.second});
       // boundary-map: the entry's value is a live mateless face with that simplex.
@@ -250,31 +259,45 @@ class ValidatorAccess {
 
   // star(v) is (v, ∅)-connected: one breadth-first search per vertex over faces containing v.
   void connected_stars() {
-    // Gather stars from the records themselves (independent of the incidence lists).
+    // Gather stars from the records themselves (independent of the incidence lists), as CSR.
     const Index nv = static_cast<Index>(c_.vertex_elements_.size());
-    std::vector<std::vector<Index>> stars(static_cast<std::size_t>(nv));
+    std::vector<Index> start(static_cast<std::size_t>(nv) + 1, 0);
     for (Index e = 0; e < ne(); ++e) {
       if (!er(e).alive) continue;
       const Simplex& s = er(e).simplex;
       for (int i = 0; i < s.count(); ++i)
         if (s.vertex(i) >= 0 && s.vertex(i) < nv)
-          stars[static_cast<std::size_t>(s.vertex(i))].push_back(e);
+          ++start[static_cast<std::size_t>(s.vertex(i)) + 1];
+    }
+    for (Index v = 0; v < nv; ++v)
+      start[static_cast<std::size_t>(v) + 1] += start[static_cast<std::size_t>(v)];
+    std::vector<Index> fill(start.begin(), start.end() - 1);
+    std::vector<Index> members(static_cast<std::size_t>(start.back()));
+    for (Index e = 0; e < ne(); ++e) {
+      if (!er(e).alive) continue;
+      const Simplex& s = er(e).simplex;
+      for (int i = 0; i < s.count(); ++i)
+        if (s.vertex(i) >= 0 && s.vertex(i) < nv)
+          members[static_cast<std::size_t>(fill[static_cast<std::size_t>(s.vertex(i))]++)] = e;
     }
     std::vector<std::uint32_t> mark(static_cast<std::size_t>(ne()), 0);
     std::uint32_t stamp = 0;
     std::vector<Index> queue;
     for (Index v = 0; v < nv; ++v) {
-      const auto& st = stars[static_cast<std::size_t>(v)];
-      if (st.size() <= 1) continue;
+      const auto first = members.begin() + start[static_cast<std::size_t>(v)];
+      const auto last = members.begin() + start[static_cast<std::size_t>(v) + 1];
+      if (last - first <= 1) continue;
       ++stamp;
-      for (Index e : st) mark[static_cast<std::size_t>(e)] = stamp;  // member of star(v)
+      for (auto it = first; it != last; ++it)
+        mark[static_cast<std::size_t>(*it)] = stamp;  // member of star(v)
       const std::uint32_t seen = ++stamp;
       std::size_t components = 0;
-      for (Index start : st) {
-        if (mark[static_cast<std::size_t>(start)] == seen) continue;
+      for (auto it = first; it != last; ++it) {
+        const Index root = *it;
+        if (mark[static_cast<std::size_t>(root)] == seen) continue;
         ++components;
-        queue.assign(1, start);
-        mark[static_cast<std::size_t>(start)] = seen;
+        queue.assign(1, root);
+        mark[static_cast<std::size_t>(root)] = seen;
         while (!queue.empty()) {
           const Index e = queue.back();
           queue.pop_back();
@@ -291,9 +314,9 @@ class ValidatorAccess {
         }
       }
       if (components > 1) {
-        std::vector<Index> elems(st.begin(), st.end());
+        std::vector<Index> elems(first, last);
         add("connected-star",
-            "star of vertex " + std::to_string(v) + " (" + std::to_string(st.size()) +
+            "star of vertex " + std::to_string(v) + " (" + std::to_string(elems.size()) +
                 " elements) falls into " + std::to_string(components) +
                 " face-connected components",
             std::move(elems), {}, {v});

@@ -237,6 +237,7 @@ class Connectivity {
     std::array<Index, 4> faces{{-1, -1, -1, -1}};
     std::uint32_t generation = 0;
     std::uint32_t stamp = 0;
+    Index scratch = -1;  // per-edit work slot (change_elements: plan index)
     bool alive = false;
   };
   struct FaceRecord {

@@ -89,7 +89,12 @@ class Simplex {
   bool same_vertices(const Simplex& o) const { return count_ == o.count_ && v_ == o.v_; }
   /// Total order (`compare` of §7.2): by count, then lexicographically by vertices, then by
   /// sign (−1 before +1), so σ and −σ are adjacent in sorted sequences.
-  bool operator<(const Simplex& o) const;
+  bool operator<(const Simplex& o) const {
+    if (count_ != o.count_) return count_ < o.count_;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(kMaxCount); ++i)
+      if (v_[i] != o.v_[i]) return v_[i] < o.v_[i];  // unused entries are −1 in both
+    return sign_ < o.sign_;
+  }
 
   /// 64-bit hash of (vertices, sign); used by std::hash<Simplex>.
   std::size_t hash() const;
