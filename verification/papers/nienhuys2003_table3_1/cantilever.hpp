@@ -42,8 +42,9 @@ struct CantileverResult {
 /// to each of its nodes).
 inline CantileverResult solve_cantilever(
     int nx, int ny, int nz, double epsilon = 1e-8, double poisson = 0.0, double young = kYoung,
-    solver::Preconditioner pc = solver::Preconditioner::kNone) {
-  const mesh::MeshData m = mesh::make_box(nx, ny, nz, kLength, kHeight, kDepth);
+    solver::Preconditioner pc = solver::Preconditioner::kNone,
+    mesh::CubeSplit split = mesh::CubeSplit::kSix) {
+  const mesh::MeshData m = mesh::make_box(nx, ny, nz, kLength, kHeight, kDepth, split);
   material::Parameters par;
   par.youngs_modulus = young;
   par.poisson_ratio = poisson;
