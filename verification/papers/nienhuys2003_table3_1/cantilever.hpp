@@ -40,10 +40,10 @@ struct CantileverResult {
 /// CG to ‖r‖ ≤ epsilon‖f_ex‖ (§3.3 uses 1e-8). The 3 N load is the consistent nodal load of a
 /// uniform shear traction on the tip face (each tip boundary triangle gives a third of its share
 /// to each of its nodes).
-inline CantileverResult solve_cantilever(
-    int nx, int ny, int nz, double epsilon = 1e-8, double poisson = 0.0, double young = kYoung,
-    solver::Preconditioner pc = solver::Preconditioner::kNone,
-    mesh::CubeSplit split = mesh::CubeSplit::kSix) {
+inline CantileverResult solve_cantilever(int nx, int ny, int nz, double epsilon = 1e-8,
+                                         double poisson = 0.0, double young = kYoung,
+                                         solver::Preconditioner pc = solver::Preconditioner::kNone,
+                                         mesh::CubeSplit split = mesh::CubeSplit::kSix) {
   const mesh::MeshData m = mesh::make_box(nx, ny, nz, kLength, kHeight, kDepth, split);
   material::Parameters par;
   par.youngs_modulus = young;
