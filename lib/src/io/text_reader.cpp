@@ -49,10 +49,8 @@ bool TextReader::at_end() {
 
 std::string_view TextReader::token(const char* what) {
   skip_space();
-  if (pos_ >= text_.size()) {
-    token_line_ = line_;
+  if (pos_ >= text_.size())  // reported at the line of the last token read
     fail(std::string("unexpected end of file: expected ") + what);
-  }
   token_line_ = line_;
   const std::size_t start = pos_;
   const std::size_t n = text_.size();

@@ -171,26 +171,34 @@ void write_gmsh(const std::string& path, const mesh::MeshData& m, int version) {
   for (Index i = 0; i < m.num_points(); ++i)
     w << m.points(0, i) << ' ' << m.points(1, i) << ' ' << m.points(2, i) << '\n';
   w << "$EndNodes\n$Elements\n";
-  // Blocks: facets by tag, then cells by tag.
-  std::map<int, std::vector<Index>> facet_blocks, cell_blocks;
-  for (Index f = 0; f < nf; ++f) facet_blocks[facet_tag(f)].push_back(f);
-  for (Index c = 0; c < m.num_cells(); ++c) cell_blocks[cell_tag(c)].push_back(c);
-  const long long total = nf + m.num_cells();
-  w << static_cast<long long>(facet_blocks.size() + cell_blocks.size()) << ' ' << total << " 1 "
-    << total << '\n';
-  long long id = 1;
-  for (const auto& [tag, list] : facet_blocks) {
-    w << "2 " << facet_entity[tag] << " 2 " << static_cast<long long>(list.size()) << '\n';
-    for (Index f : list)
-      w << id++ << ' ' << m.facets(0, f) + 1 << ' ' << m.facets(1, f) + 1 << ' '
-        << m.facets(2, f) + 1 << '\n';
+  // Blocks: maximal runs of equal tag (facets, then cells), so that the order is preserved.
+  struct Block {
+    int dim, entity, type;
+    Index first, count;
+  };
+  std::vector<Block> blocks;
+  for (Index f = 0; f < nf; ++f) {
+    if (f == 0 || facet_tag(f) != facet_tag(f - 1))
+      blocks.push_back({2, facet_entity[facet_tag(f)], 2, f, 0});
+    ++blocks.back().count;
   }
-  for (const auto& [tag, list] : cell_blocks) {
-    w << m.dimension << ' ' << cell_entity[tag] << ' ' << cell_type << ' '
-      << static_cast<long long>(list.size()) << '\n';
-    for (Index c : list) {
+  const std::size_t first_cell_block = blocks.size();
+  for (Index c = 0; c < m.num_cells(); ++c) {
+    if (c == 0 || cell_tag(c) != cell_tag(c - 1))
+      blocks.push_back({m.dimension, cell_entity[cell_tag(c)], cell_type, c, 0});
+    ++blocks.back().count;
+  }
+  const long long total = nf + m.num_cells();
+  w << static_cast<long long>(blocks.size()) << ' ' << total << " 1 " << total << '\n';
+  long long id = 1;
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    const Block& bl = blocks[b];
+    const bool cells = b >= first_cell_block;
+    w << bl.dim << ' ' << bl.entity << ' ' << bl.type << ' ' << bl.count << '\n';
+    for (Index i = bl.first; i < bl.first + bl.count; ++i) {
       w << id++;
-      for (int r = 0; r < k; ++r) w << ' ' << m.cells(r, c) + 1;
+      for (int r = 0; r < (cells ? k : 3); ++r)
+        w << ' ' << (cells ? m.cells(r, i) : m.facets(r, i)) + 1;
       w << '\n';
     }
   }

@@ -1,0 +1,20 @@
+# ctest helper: run CMD (a ;-list) and require exit status EXIT (0 or "nonzero") and that
+# stderr matches STDERR_REGEX (if given).
+#   cmake -DCMD=... -DEXIT=nonzero -DSTDERR_REGEX=... -P cli_expect.cmake
+execute_process(COMMAND ${CMD} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message(STATUS "exit ${rc}\n${out}\nstderr: ${err}")
+if(EXIT STREQUAL "nonzero")
+  if(rc EQUAL 0)
+    message(FATAL_ERROR "expected a non-zero exit status")
+  endif()
+elseif(NOT rc EQUAL EXIT)
+  message(FATAL_ERROR "expected exit status ${EXIT}, got ${rc}")
+endif()
+if(DEFINED STDERR_REGEX AND NOT err MATCHES "${STDERR_REGEX}")
+  message(FATAL_ERROR "stderr does not match '${STDERR_REGEX}'")
+endif()
+string(REGEX MATCHALL "\n" lines "${err}")
+list(LENGTH lines n)
+if(n GREATER 1)
+  message(FATAL_ERROR "stderr has ${n} lines; expected at most one")
+endif()
