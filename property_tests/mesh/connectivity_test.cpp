@@ -754,6 +754,29 @@ TEST(ConnectivityProperty, ReplaceElementsReusesFacesAndMatchedPairs_Sec73) {
   EXPECT_EQ(c.element(c.mate(ac)), added[1]);
 }
 
+// change-elements over the whole star of an interior vertex changes no boundary face: the
+// watcher hears exactly |star(v)| element changes, and every face keeps its handle and mate.
+TEST(ConnectivityProperty, ChangeElementsOnInteriorStarHasNoBoundaryEvents_Sec74) {
+  Connectivity c = Connectivity::from_mesh_data(make_box(3, 3, 3, 1, 1, 1));
+  const Index v = 1 + 4 * (1 + 4 * 1);  // node (1,1,1): interior
+  const std::vector<ElementHandle> st = c.star(v);
+  ASSERT_EQ(st.size(), 24u);  // 6-split: 24 tetrahedra around an interior node
+  std::map<FaceHandle, FaceHandle> mates;
+  for (ElementHandle e : st)
+    for (int i = 0; i < 4; ++i) mates[c.face(e, i)] = c.mate(c.face(e, i));
+  MirrorWatcher w;
+  c.add_watcher(&w);
+  const Index nw = c.add_vertex();
+  c.substitute_vertex(st, v, nw);
+  EXPECT_EQ(w.events, 24);
+  expect_mirror_matches(w, c);
+  for (const auto& kv : mates) {
+    EXPECT_TRUE(c.is_alive(kv.first));
+    EXPECT_EQ(c.mate(kv.first), kv.second);
+  }
+  EXPECT_TRUE(validate(c).ok());
+}
+
 TEST(ConnectivityProperty, PreconditionViolationsThrowAndLeaveMeshIntact) {
   Connectivity c = Connectivity::from_mesh_data(make_box(2, 2, 2, 1, 1, 1));
   const Snapshot before = snapshot(c);
