@@ -4,6 +4,8 @@
 
 #include <incise/core/error.hpp>
 
+#include <array>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -38,6 +40,50 @@ inline std::string executable_dir() {
   std::error_code ec;
   const auto p = std::filesystem::read_symlink("/proc/self/exe", ec);
   return ec ? std::string() : p.parent_path().string();
+}
+
+/// Output of a shell command (stdout, trailing newline removed), or "" when it fails.
+inline std::string command_output(const std::string& command) {
+  std::string result;
+  FILE* pipe = popen((command + " 2>/dev/null").c_str(), "r");
+  if (!pipe) return result;
+  std::array<char, 256> buf{};
+  while (fgets(buf.data(), static_cast<int>(buf.size()), pipe)) result += buf.data();
+  if (pclose(pipe) != 0) return "";
+  while (!result.empty() && (result.back() == '\n' || result.back() == '\r')) result.pop_back();
+  return result;
+}
+
+/// The source tree: the current directory when it holds reference_data/, else the tree this
+/// program was configured from (INCISE_SOURCE_DIR, compile definition).
+inline std::string source_root() {
+  std::error_code ec;
+  if (std::filesystem::is_directory("reference_data", ec)) return ".";
+#ifdef INCISE_SOURCE_DIR
+  return INCISE_SOURCE_DIR;
+#else
+  return ".";
+#endif
+}
+
+/// reference_data folder (see source_root); UsageError when it is not found.
+inline std::string find_reference_data() {
+  const std::string d = source_root() + "/reference_data";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(d, ec))
+    throw UsageError("cannot find reference_data/ (run from the source tree or pass --data DIR)");
+  return d;
+}
+
+/// Short commit of the source tree, with "-dirty" when it has uncommitted changes to tracked
+/// files; "unknown" outside a git checkout.
+inline std::string git_commit() {
+  const std::string root = source_root();
+  std::string c = command_output("git -C '" + root + "' rev-parse --short=10 HEAD");
+  if (c.empty()) return "unknown";
+  if (!command_output("git -C '" + root + "' status --porcelain --untracked-files=no").empty())
+    c += "-dirty";
+  return c;
 }
 
 }  // namespace incise::cli

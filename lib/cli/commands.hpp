@@ -24,4 +24,7 @@ int run_mesh(const Args& args, std::ostream& out, std::ostream& err);
 /// `incise run SCENE [--summary-json PATH] [--progress MODE]` (lib/cli/run.cpp).
 int run_scene_command(const Args& args, std::ostream& out, std::ostream& err);
 
+/// `incise certify [--quick] [--out DIR] [--filter RE]` (lib/cli/certify.cpp).
+int run_certify_command(const Args& args, std::ostream& out, std::ostream& err);
+
 }  // namespace incise::cli

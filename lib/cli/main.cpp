@@ -21,6 +21,8 @@ const Command kCommands[] = {
     {"mesh", "mesh check FILE [--vtu OUT]: load, report quality, validate (7.1)-(7.5)", &run_mesh},
     {"run", "run SCENE [--summary-json PATH]: run a scene file (docs/scenes.md)",
      &run_scene_command},
+    {"certify", "certify [--quick] [--out DIR]: run the verification catalogue, write a report",
+     &run_certify_command},
 };
 
 void usage(std::ostream& os) {

@@ -1,0 +1,64 @@
+// `incise certify [--quick] [--out DIR] [--filter RE] [--data DIR]`: runs the verification
+// catalogue (lib/scene certify.hpp) against reference_data/certify/tolerances.json, writes
+// DIR/index.html and DIR/summary.json, and exits non-zero when any check fails.
+
+#include <incise/core/error.hpp>
+#include <incise/scene/certify.hpp>
+
+#include <filesystem>
+#include <iostream>
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+
+namespace incise::cli {
+
+int run_certify_command(const Args& args, std::ostream& out, std::ostream& err) {
+  bool quick = false;
+  std::string out_dir = "out/certify", filter, data_dir;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--quick") {
+      quick = true;
+    } else if (a == "--out") {
+      out_dir = option_value(args, i, "--out");
+    } else if (a == "--filter") {
+      filter = option_value(args, i, "--filter");
+    } else if (a == "--data") {
+      data_dir = option_value(args, i, "--data");
+    } else if (a == "--help" || a == "-h") {
+      out << "usage: incise certify [--quick] [--out DIR] [--filter RE] [--data DIR]\n"
+             "Runs the verification catalogue; writes DIR/index.html and DIR/summary.json\n"
+             "(default DIR: out/certify). --data: the reference_data folder (default: found\n"
+             "from the current directory or the source tree). Exit 1 when a check fails.\n";
+      return 0;
+    } else {
+      throw UsageError("unknown argument '" + a + "' (see incise certify --help)");
+    }
+  }
+  if (data_dir.empty()) data_dir = find_reference_data();
+  const std::string commit = git_commit();
+  out << "certify: " << (quick ? "quick" : "full") << " catalogue, reference data " << data_dir
+      << "\n";
+  const scene::CertifySummary s = scene::run_certify(
+      data_dir, quick, filter,
+      [&out](const std::string& id) { out << "  running " << id << " ..." << std::endl; });
+  for (const auto& r : s.results) {
+    out << (r.passed ? "  PASS  " : "  FAIL  ") << r.id << "  value "
+        << scene::format_number(r.value) << " (tolerance " << scene::format_number(r.tolerance)
+        << "), " << scene::format_number(r.seconds) << " s\n";
+    if (!r.passed) out << "        " << r.detail << "\n";
+  }
+  write_file_atomic(out_dir + "/index.html", scene::certify_html(s, commit));
+  write_file_atomic(out_dir + "/summary.json", scene::certify_json(s, commit).dump(2) + "\n");
+  out << "certify: " << s.passed << " passed, " << s.failed << " failed in "
+      << scene::format_number(s.seconds) << " s\n";
+  out << "certify: report " << out_dir << "/index.html, summary " << out_dir << "/summary.json\n";
+  if (s.results.empty()) {
+    err << "incise certify: no check matches the filter\n";
+    return 1;
+  }
+  return s.failed == 0 ? 0 : 1;
+}
+
+}  // namespace incise::cli
