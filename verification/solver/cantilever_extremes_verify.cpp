@@ -1,0 +1,141 @@
+/// Cantilever extremes (issue 4 verification items 2 and 6; DESIGN §3 "Extremes"): own weight vs
+/// beam theory, E over seven decades (iteration counts scale-invariant), ν → 0.5 (locking made
+/// visible, not hidden), loads large enough to invert elements (status, no NaN). Geometry and
+/// clamp as Table 3.1 (verification/papers/nienhuys2003_table3_1/cantilever.hpp).
+#include "cantilever.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace incise::verify {
+namespace {
+
+bool slow_run() {
+  const char* v = std::getenv("INCISE_CANTILEVER_SLOW");
+  return v && std::string(v) == "1";
+}
+
+// Own weight: uniform load q = ρ g h d per length. Euler–Bernoulli q l⁴/(8EI) = 3ρgl⁴/(2Eh²);
+// Timoshenko adds q l²/(2κGA) = ρ g l²/(2κG), κ = 5/6, G = E/2 (ν = 0).
+constexpr double kRho = 10.0, kG = 9.8;
+constexpr double kWeightEb =
+    3.0 * kRho * kG * kLength * kLength * kLength * kLength / (2.0 * kYoung * kHeight * kHeight);
+constexpr double kWeightTimoshenko =
+    kWeightEb + kRho * kG * kLength * kLength / (2.0 * 5.0 / 6.0 * kYoung / 2.0);
+
+TEST(CantileverOwnWeight, ConvergesFromBelowToTimoshenko) {
+  const std::vector<int> meshes =
+      slow_run() ? std::vector<int>{16, 24, 32, 48, 56, 64} : std::vector<int>{16, 24, 32};
+  std::vector<CantileverResult> res;
+  std::printf("own weight rho = %g, g = %g: Euler-Bernoulli %.4e m, Timoshenko %.4e m\n", kRho, kG,
+              kWeightEb, kWeightTimoshenko);
+  for (int nx : meshes) {
+    CantileverSetup s;
+    s.nx = nx;
+    s.ny = s.nz = nx / 4;
+    s.tip_load = 0.0;
+    s.density = kRho;
+    s.gravity = kG;
+    const CantileverResult r = solve_cantilever(s);
+    ASSERT_EQ(r.reason, solver::StopReason::kConverged);
+    std::printf("%3dx%2dx%2d: %5ld it, avg tip %.5e m (%.2f%% below Timoshenko)\n", nx, nx / 4,
+                nx / 4, r.iterations, r.avg_deflection,
+                100 * (kWeightTimoshenko - r.avg_deflection) / kWeightTimoshenko);
+    EXPECT_LT(r.max_deflection, kWeightEb);  // FEM stiffer than either beam theory
+    if (!res.empty()) {
+      EXPECT_GT(r.avg_deflection, res.back().avg_deflection);
+    }
+    res.push_back(r);
+  }
+  if (!slow_run()) return;
+  const std::size_t k = res.size();
+  const Richardson rich =
+      richardson(1.0 / res[k - 3].nx, res[k - 3].avg_deflection, 1.0 / res[k - 2].nx,
+                 res[k - 2].avg_deflection, 1.0 / res[k - 1].nx, res[k - 1].avg_deflection);
+  ASSERT_TRUE(rich.ok);
+  std::printf("order %.3f, Richardson limit %.5e m (%+.3f%% from Timoshenko)\n", rich.order,
+              rich.limit, 100 * (rich.limit - kWeightTimoshenko) / kWeightTimoshenko);
+  // Same tolerances and reasons as Table 3.1's slow run.
+  constexpr double kOrderTol = 0.25, kRichardsonTol = 0.005;
+  EXPECT_NEAR(rich.order, 2.0, kOrderTol);
+  EXPECT_NEAR(rich.limit, kWeightTimoshenko, kRichardsonTol * kWeightTimoshenko);
+}
+
+TEST(CantileverExtremes, IterationCountsScaleInvariantInE) {
+  // K scales with E, so CG's iterates scale by 1/E and the iteration count is the same in exact
+  // arithmetic; E·deflection must be constant.
+  long it0 = -1;
+  double ey0 = 0.0;
+  for (double e : {1e2, 1e4, 1e6, 1e9}) {
+    CantileverSetup s;
+    s.young = e;
+    const CantileverResult r = solve_cantilever(s);
+    std::printf("E = %.0e: %-10s %ld iterations, E*deflection = %.8e, true |r|/threshold %.2f\n", e,
+                solver::to_string(r.reason), r.iterations, e * r.avg_deflection,
+                r.residual_norm / r.threshold);
+    // At E = 1e9 the strains are ~1e-8 and the fem gradient (which forms F = I + G and then
+    // C − I) loses about 8 digits, so the true residual can exceed ε‖f‖ = 1e-8‖f‖ by a small
+    // factor although the recursive one met it: CG then reports `stagnated` (honestly). Allow
+    // that, but never more than 10× the threshold.
+    ASSERT_TRUE(r.reason == solver::StopReason::kConverged ||
+                r.reason == solver::StopReason::kStagnated)
+        << "E = " << e;
+    EXPECT_LE(r.residual_norm, 10.0 * r.threshold);
+    if (it0 < 0) {
+      it0 = r.iterations;
+      ey0 = e * r.avg_deflection;
+      continue;
+    }
+    // Round-off differs between scales; a couple of iterations of slack at ε = 1e-8.
+    EXPECT_NEAR(double(r.iterations), double(it0), 3.0);
+    // Relative solution accuracy ~ ε·κ-ish ≪ 1e-6 here.
+    EXPECT_NEAR(e * r.avg_deflection, ey0, 1e-6 * ey0);
+  }
+}
+
+TEST(CantileverExtremes, NearIncompressibleLockingIsVisible) {
+  // Linear tetrahedra lock as ν → 0.5: the tip deflection ratio to Timoshenko (G = E/(2(1+ν)))
+  // must fall with ν and is printed, not hidden. CG either converges or reports its budget.
+  double prev_ratio = 2.0;
+  for (double nu : {0.0, 0.3, 0.45, 0.49, 0.499}) {
+    CantileverSetup s;
+    s.poisson = nu;
+    s.max_iterations = 30000;
+    const CantileverResult r = solve_cantilever(s);
+    const double g = kYoung / (2.0 * (1.0 + nu));
+    const double timo = kEulerBernoulli + kLoad * kLength / (5.0 / 6.0 * g * kHeight * kDepth);
+    const double ratio = r.avg_deflection / timo;
+    std::printf("nu = %.3f: %-14s %6ld it, tip/Timoshenko = %.4f\n", nu,
+                solver::to_string(r.reason), r.iterations, ratio);
+    EXPECT_TRUE(r.reason == solver::StopReason::kConverged ||
+                r.reason == solver::StopReason::kMaxIterations);
+    EXPECT_TRUE(r.finite);
+    EXPECT_LT(ratio, prev_ratio);
+    prev_ratio = ratio;
+  }
+}
+
+TEST(CantileverExtremes, HugeLoadsReportStatusNoNaN) {
+  // 3e4 N on a 1e6 Pa beam: far beyond small strain. Neo-Hookean resists inversion (log term);
+  // StVK may go indefinite or invert elements. Either converges or returns a status; the state
+  // returned is finite and admissible (Π < ∞).
+  for (const char* m : {"neohookean", "stvk", "veronda-westmann"}) {
+    CantileverSetup s;
+    s.material = m;
+    s.tip_load = 3e4;
+    s.poisson = 0.3;
+    s.epsilon = 1e-6;
+    s.max_iterations = 1500;
+    const CantileverResult r = solve_cantilever(s);
+    std::printf("%-17s tip load 3e4 N: %-18s after %5ld it, tip deflection %.4g m, final Pi %s\n",
+                m, solver::to_string(r.reason), r.iterations, r.avg_deflection,
+                to_string(r.final_status));
+    EXPECT_TRUE(r.finite) << m;
+    EXPECT_EQ(r.final_status, EvalStatus::kOk) << m;
+  }
+}
+
+}  // namespace
+}  // namespace incise::verify
