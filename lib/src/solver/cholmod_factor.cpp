@@ -95,6 +95,11 @@ CholmodFactor::CholmodFactor(CholmodOptions options)
       c.method[0].ordering = CHOLMOD_AMD;
       c.postorder = 1;
       break;
+    case CholmodOrdering::kMetis:
+      c.nmethods = 1;
+      c.method[0].ordering = CHOLMOD_METIS;
+      c.postorder = 1;
+      break;
     case CholmodOrdering::kNatural:
       c.nmethods = 1;
       c.method[0].ordering = CHOLMOD_NATURAL;

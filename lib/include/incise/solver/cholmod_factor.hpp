@@ -30,7 +30,9 @@ enum class CholmodKind {
 enum class CholmodOrdering {
   kDefault,  ///< CHOLMOD default: AMD, and METIS/NESDIS if AMD fill is large (when compiled in)
   kAmd,      ///< approximate minimum degree only
-  kNatural   ///< identity permutation (for tests; usually much more fill)
+  kNatural,  ///< identity permutation (for tests; usually much more fill)
+  kMetis     ///< METIS nested dissection: shallow elimination trees, hence small closures
+             ///< (Yeung et al. 2016 §3.4, Thm. 3) — the default of AugmentedSystem
 };
 
 /// Options of a CholmodFactor.

@@ -1,0 +1,191 @@
+/// \file augmented_bench.cpp
+/// Augmented-matrix updates (Yeung, Crouch & Pothen 2016) on the paper's beams (5×5×h nodes).
+///
+/// Two modes:
+///  - Google Benchmark (default): BM_AugmentedDeformStep/h — one deformation update (impose a
+///    constraint, solve) on beams of h = 16 … 1024 nodes, with m ≈ 48; BM_Refactor/h — CHOLMOD
+///    analyze + factorize + solve of the same beam; BM_Factor{Supernodal,Simplicial}/h — the
+///    measurement behind the supernodal-vs-simplicial choice (docs/augmented.md).
+///  - Per-step table (the paper's Fig. 5/7 experiments):
+///      augmented_bench --table deform|cut [--h 1024] [--steps 32] [--pcg-every 8]
+///                      [--precond none|diag|spai] [--simplicial] [--refactor]
+///                      [--default-ordering|--amd] (K⁰ ordering; METIS by default)
+///    prints one Markdown row per step: m, GMRES iterations, closure sizes, update time and
+///    rate, refactorization + solve time, speed-up, Jacobi-PCG time, relative error.
+
+#include "yeung2016_experiment.hpp"
+
+#include <incise_bench/context.hpp>
+
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+namespace {
+
+using incise::yeung2016::Info;
+using incise::yeung2016::Kind;
+using incise::yeung2016::Options;
+using incise::yeung2016::Row;
+
+void BM_AugmentedDeformStep(benchmark::State& state) {
+  const int h = static_cast<int>(state.range(0));
+  // Build once: beam, factor, 16 constraints (m = 48); time one more constraint + solve.
+  incise::material::Parameters par;
+  const incise::material::Material mat("linear", par);
+  Options opt;
+  opt.h = h;
+  opt.steps = 16;
+  opt.exact = false;
+  Info info;
+  double total = 0;
+  int count = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    const std::vector<Row> rows = incise::yeung2016::run(opt, info);
+    state.ResumeTiming();
+    // The run itself is the measured object; report the mean update time of its steps ≥ 1.
+    for (size_t i = 1; i < rows.size(); ++i) {
+      total += rows[i].t_changes + rows[i].t_solve;
+      ++count;
+    }
+  }
+  state.counters["update_s"] = count > 0 ? total / count : 0;
+  state.counters["update_Hz"] = count > 0 && total > 0 ? count / total : 0;
+  state.counters["nodes"] = info.nodes;
+  state.counters["nnz_L"] = static_cast<double>(info.nnz_l);
+}
+BENCHMARK(BM_AugmentedDeformStep)
+    ->Arg(16)
+    ->Arg(64)
+    ->Arg(256)
+    ->Arg(1024)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
+
+void factor_bench(benchmark::State& state, incise::solver::CholmodKind kind) {
+  const int h = static_cast<int>(state.range(0));
+  Options opt;
+  opt.h = h;
+  incise::material::Parameters par;
+  const incise::material::Material mat("linear", par);
+  const incise::mesh::MeshData mesh = incise::mesh::make_beam(h, opt.spacing);
+  incise::yeung2016::detail::Beam beam;
+  beam.lame = mat.lame();
+  beam.points = mesh.points;
+  for (incise::Index e = 0; e < mesh.num_cells(); ++e)
+    beam.tets.push_back({mesh.cells(0, e), mesh.cells(1, e), mesh.cells(2, e), mesh.cells(3, e)});
+  beam.node_dof.assign(static_cast<size_t>(mesh.num_points()), -1);
+  for (incise::Index v = 0; v < mesh.num_points(); ++v)
+    if (mesh.points(2, v) > 1e-12) {
+      beam.node_dof[v] = beam.num_dofs;
+      beam.num_dofs += 3;
+    }
+  const incise::solver::SparseMatrix k = beam.assemble();
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(k.rows());
+  incise::solver::CholmodOptions co;
+  co.kind = kind;
+  std::uint64_t version = 1;
+  for (auto _ : state) {
+    incise::solver::CholmodFactor f(co);
+    if (f.compute(k, version++) != incise::solver::FactorStatus::kOk) {
+      state.SkipWithError("factorization failed");
+      break;
+    }
+    Eigen::VectorXd x;
+    (void)f.solve(b, x);
+    benchmark::DoNotOptimize(x.data());
+    state.counters["nnz_L"] = static_cast<double>(f.nnz_l());
+    state.counters["MFlop_factor"] = f.factor_flops() / 1e6;
+  }
+}
+void BM_FactorSupernodal(benchmark::State& s) {
+  factor_bench(s, incise::solver::CholmodKind::kSupernodal);
+}
+void BM_FactorSimplicial(benchmark::State& s) {
+  factor_bench(s, incise::solver::CholmodKind::kSimplicialLdl);
+}
+BENCHMARK(BM_FactorSupernodal)->Arg(64)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FactorSimplicial)->Arg(64)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond);
+
+int run_table(int argc, char** argv) {
+  Options opt;
+  opt.h = 1024;
+  opt.steps = 32;
+  opt.kind = std::strcmp(argv[2], "cut") == 0 ? Kind::kCut : Kind::kDeform;
+  for (int i = 3; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
+    if (a == "--h") {
+      opt.h = std::stoi(next());
+    } else if (a == "--steps") {
+      opt.steps = std::stoi(next());
+    } else if (a == "--pcg-every") {
+      opt.pcg_every = std::stoi(next());
+    } else if (a == "--pcg-seconds") {
+      opt.pcg_seconds = std::stod(next());
+    } else if (a == "--precond") {
+      const std::string p = next();
+      opt.preconditioner = p == "none"   ? incise::solver::SchurPreconditioner::kNone
+                           : p == "spai" ? incise::solver::SchurPreconditioner::kTridiagonalSpai
+                                         : incise::solver::SchurPreconditioner::kDiagonal;
+    } else if (a == "--metis") {
+      opt.ordering = incise::solver::CholmodOrdering::kMetis;
+    } else if (a == "--default-ordering") {
+      opt.ordering = incise::solver::CholmodOrdering::kDefault;
+    } else if (a == "--amd") {
+      opt.ordering = incise::solver::CholmodOrdering::kAmd;
+    } else if (a == "--simplicial") {
+      opt.cholmod = incise::solver::CholmodKind::kSimplicialLdl;
+    } else if (a == "--refactor") {
+      opt.background_refactor = true;
+    } else if (a == "--no-exact") {
+      opt.exact = false;
+    } else {
+      std::fprintf(stderr, "unknown option %s\n", a.c_str());
+      return 2;
+    }
+  }
+  Info info;
+  const std::vector<Row> rows = incise::yeung2016::run(opt, info);
+  std::printf("# beam 5x5x%d: %d nodes, %d tetrahedra, n0 = %d DOFs, nnz(K) = %lld, |L| = %lld\n",
+              opt.h, info.nodes, info.elements, info.n0, info.nnz_k, info.nnz_l);
+  std::printf("# assembly %.3f s, initial factorization + LDL' extraction %.3f s; blas: %s\n",
+              info.t_assemble, info.t_initial_factor, incise::bench::loaded_blas().c_str());
+  std::printf(
+      "| step | n | m | GMRES it | clos f | clos y | clos Ja2 | clos step3 | changes ms | solve "
+      "ms (setup/1/2/3) | update Hz | refactor+solve ms | speed-up | PCG ms (it) | rel. error | "
+      "backward error | status |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const Row& r : rows) {
+    const double upd = r.t_changes + r.t_solve;
+    const double ref = r.t_refactor + r.t_refactor_solve;
+    char pcg[64] = "-";
+    if (r.t_pcg >= 0)
+      std::snprintf(pcg, sizeof pcg, "%.1f (%ld%s)", 1e3 * r.t_pcg, r.pcg_iterations,
+                    r.pcg_converged ? "" : ", not conv.");
+    std::printf(
+        "| %d | %d | %d | %d | %d | %d | %d | %d | %.3f | %.2f (%.2f/%.2f/%.2f/%.2f) | %.0f | "
+        "%.1f | %.1f | %s | %.1e | %.1e | %s%s |\n",
+        r.step, r.n, r.m, r.gmres_iterations, r.closure_f, r.closure_y, r.closure_ja2,
+        r.closure_step3, 1e3 * r.t_changes, 1e3 * r.t_solve, 1e3 * r.t_setup, 1e3 * r.t_step1,
+        1e3 * r.t_step2, 1e3 * r.t_step3, upd > 0 ? 1.0 / upd : 0.0, 1e3 * ref,
+        upd > 0 ? ref / upd : 0.0, pcg, r.rel_error, r.rel_residual, r.status.c_str(),
+        r.swapped ? " (swap)" : "");
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc >= 3 && std::strcmp(argv[1], "--table") == 0) return run_table(argc, argv);
+  ::benchmark::Initialize(&argc, argv);
+  if (::benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  ::incise::bench::add_context();
+  ::benchmark::RunSpecifiedBenchmarks();
+  ::benchmark::Shutdown();
+  return 0;
+}
