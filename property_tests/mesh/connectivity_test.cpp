@@ -689,6 +689,12 @@ TEST(ConnectivityProperty, BuildAndExportRoundTrip) {
     EXPECT_TRUE(snapshot(c) == snapshot(c2));
     opt.positions = &out.points;
     EXPECT_TRUE(validate(c2, opt).ok());
+    for (ElementHandle e : c.elements()) {
+      EXPECT_EQ(c.find_element(c.simplex(e)), e);
+      EXPECT_FALSE(c.find_element(c.simplex(e).mate()).valid());
+      for (int i = 0; i <= c.dimension(); ++i)
+        EXPECT_EQ(c.find_face(c.simplex(e).subn(i)), c.face(e, i));
+    }
     // Euler-type count: every face is interior (paired) or on the boundary.
     EXPECT_EQ((c.num_faces() - c.num_boundary_faces()) % 2, 0);
   }

@@ -199,6 +199,25 @@ std::vector<ElementHandle> Connectivity::star(Index v) const {
   return out;
 }
 
+ElementHandle Connectivity::find_element(const Simplex& t) const {
+  if (t.count() != dim_ + 1 || t.vertex(0) >= num_vertices()) return {};
+  for (Index e : vertex_elements_[static_cast<std::size_t>(t.vertex(0))])
+    if (elements_[static_cast<std::size_t>(e)].simplex == t) return element_handle(e);
+  return {};
+}
+
+FaceHandle Connectivity::find_face(const Simplex& s) const {
+  if (s.count() != dim_ || s.vertex(0) >= num_vertices()) return {};
+  for (Index e : vertex_elements_[static_cast<std::size_t>(s.vertex(0))]) {
+    const auto& er = elements_[static_cast<std::size_t>(e)];
+    for (int i = 0; i <= dim_; ++i) {
+      const Index f = er.faces[static_cast<std::size_t>(i)];
+      if (faces_[static_cast<std::size_t>(f)].simplex == s) return face_handle(f);
+    }
+  }
+  return {};
+}
+
 Index Connectivity::star_size(Index v) const {
   if (v < 0 || v >= num_vertices()) return 0;
   return static_cast<Index>(vertex_elements_[static_cast<std::size_t>(v)].size());

@@ -174,6 +174,13 @@ class Connectivity {
   /// All boundary faces (the values of the boundary map), in unspecified order.
   std::vector<FaceHandle> boundary() const;
 
+  /// The element representing the d-simplex t (orientation must match), or none. Scans
+  /// star(t.vertex(0)): O(|star|).
+  ElementHandle find_element(const Simplex& t) const;
+  /// The face representing the (d−1)-simplex s (orientation must match), or none. Scans
+  /// star(s.vertex(0)): O(|star|·(d+1)).
+  FaceHandle find_face(const Simplex& s) const;
+
   /// star(v) = elements containing vertex v (§7.3), from the vertex→element incidence lists
   /// that every edit maintains (cost O(|star(v)|)). Order unspecified. Empty for unknown v.
   std::vector<ElementHandle> star(Index v) const;
