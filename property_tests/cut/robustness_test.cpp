@@ -37,6 +37,32 @@ Index count_components(const CutMesh& m) {
   return comps;
 }
 
+/// Whether every face-connected component holds a fixed node (O(n), the reference for the
+/// cutter's local component check).
+bool every_component_fixed(const CutMesh& m) {
+  std::vector<char> seen(static_cast<size_t>(m.element_capacity()), 0);
+  for (Index s = 0; s < m.element_capacity(); ++s) {
+    if (!m.alive(s) || seen[static_cast<size_t>(s)]) continue;
+    bool fixed = false;
+    std::vector<Index> stack{s};
+    seen[static_cast<size_t>(s)] = 1;
+    while (!stack.empty()) {
+      const Index e = stack.back();
+      stack.pop_back();
+      for (Index v : m.element(e)) fixed = fixed || m.fixed(v);
+      for (int j = 0; j < 4; ++j) {
+        const Index n = m.neighbor(e, j);
+        if (n >= 0 && !seen[static_cast<size_t>(n)]) {
+          seen[static_cast<size_t>(n)] = 1;
+          stack.push_back(n);
+        }
+      }
+    }
+    if (!fixed) return false;
+  }
+  return true;
+}
+
 void expect_valid(const CutMesh& m, const std::string& where) {
   const CutMeshValidation v = m.validate();
   EXPECT_TRUE(v.ok()) << where << ": " << v.violation_count
@@ -121,6 +147,22 @@ TEST(CutRobustness, ObliquePlaneSplitsTheCubeAndFixesTheFreePart) {
   EXPECT_GT(tot.faces_dissected, 0);
   EXPECT_EQ(count_components(m), 2);
   EXPECT_EQ(tot.free_components, 1);
+}
+
+TEST(CutRobustness, CornerChoppedOffIsReportedAsFreeComponent) {
+  // A plane x + y + z = 0.8 cuts off the corner at the origin; the far face z = 1 is fixed.
+  CutMesh m(mesh::make_box(5, 5, 5, 1, 1, 1));
+  for (Index v = 0; v < m.num_nodes(); ++v)
+    if (m.reference(v).z() == 1.0) m.set_fixed(v, true);
+  Cutter cutter(m, report_only());
+  CutTotals tot;
+  for (const auto& tri : square(Vec3::Constant(0.8 / 3), Vec3(1, 1, 1), 1.5)) {
+    tot.add(cutter.step(tri[0], tri[1], tri[2]));
+    expect_valid(m, "corner");
+  }
+  EXPECT_EQ(count_components(m), 2);
+  EXPECT_EQ(tot.free_components, 1);  // the corner piece, found by the local search
+  EXPECT_FALSE(every_component_fixed(m));
 }
 
 TEST(CutRobustness, SweepThroughAnEdgeAndAFaceOnly) {
@@ -214,6 +256,8 @@ void random_sequences(const mesh::MeshData& data, int sequences, std::mt19937_64
       const auto v2 = m.validate();
       ASSERT_TRUE(v2.ok()) << "sequence " << s << " step " << k << "b: " << v2.violations[0];
       ASSERT_EQ(v2.inverted_reference, 0) << "sequence " << s;
+      // Policy kFixOnFace (default): the local component search must leave no free part.
+      ASSERT_TRUE(every_component_fixed(m)) << "sequence " << s << " step " << k;
       a = a2;
       b = b2;
     }

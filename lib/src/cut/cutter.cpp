@@ -498,7 +498,17 @@ bool Cutter::apply_local_op(const std::vector<Index>& old_elements,
   }
   // Apply through replace-elements (§7.3).
   for (Index e : old_sorted) r.changed_elements.push_back(e);
-  for (Index e : mesh_.replace(old_sorted, new_tets)) r.changed_elements.push_back(e);
+  const std::vector<Index> added = mesh_.replace(old_sorted, new_tets);
+  for (Index e : added) r.changed_elements.push_back(e);
+  // Representatives for the component check: a removed element is replaced by a new one in
+  // the same place (or by a surviving neighbour when the operation only removed elements).
+  Index stand_in = added.empty() ? -1 : added[0];
+  for (Index e : around) {
+    if (stand_in < 0 && mesh_.alive(e)) stand_in = e;
+  }
+  for (Index e : old_sorted) {
+    if (!mesh_.alive(e) && stand_in >= 0) replaced_[e] = stand_in;
+  }
   for (Index v : nodes) {
     if (mesh_.unused(v)) r.removed_nodes.push_back(v);
   }
@@ -660,9 +670,17 @@ bool Cutter::try_recipe(Index e, CutStepReport& r) {
 
 void Cutter::cut_free(Index e, CutStepReport& r) {
   std::vector<std::pair<Index, int>> faces;
+  std::vector<Index> around;
   for (int j = 0; j < 4; ++j) {
-    if (mesh_.neighbor(e, j) >= 0) faces.emplace_back(e, j);
+    const Index nb = mesh_.neighbor(e, j);
+    if (nb >= 0) {
+      faces.emplace_back(e, j);
+      around.push_back(nb);
+    }
   }
+  // Removing e may disconnect its neighbours from each other: check them afterwards.
+  for (size_t k = 1; k < around.size(); ++k) separated_pairs_.emplace_back(around[0], around[k]);
+  if (!around.empty()) replaced_[e] = around[0];
   if (!faces.empty()) {
     std::vector<Index> changed;
     (void)mesh_.dissect(faces, changed, r.new_nodes);
@@ -729,6 +747,118 @@ void Cutter::remove_degeneracies_everywhere(CutStepReport& report) {
     if (mesh_.alive(e)) all.push_back(e);
   }
   remove_degeneracies(std::move(all), report);
+}
+
+bool Cutter::local_component_check(const std::vector<std::pair<Index, Index>>& sides,
+                                   CutStepReport& r) {
+  // Seeds: the elements on both sides of every face separated in this step (and the
+  // neighbours of removed elements). Each seed starts a breadth-first group; the open groups
+  // are expanded one element each in turn, and groups that touch are merged. Expansion stops
+  // when at most one open group is left. A group whose frontier empties is a whole component
+  // S: without fixed nodes it is a new free component (the fixed nodes of the old component
+  // all lie elsewhere); with fixed nodes the rest may have lost them, so the caller falls
+  // back to the O(n) search (return false). Groups near one cut front merge after exploring
+  // a neighbourhood of the front, so the usual cost does not depend on the mesh size.
+  struct Group {
+    std::deque<Index> frontier;
+    std::vector<Index> members;
+    bool closed = false;
+  };
+  std::vector<Group> groups;
+  std::vector<int> parent;
+  std::unordered_map<Index, int> owner;
+  auto find = [&parent](int g) {
+    while (parent[static_cast<size_t>(g)] != g) g = parent[static_cast<size_t>(g)];
+    return g;
+  };
+  auto resolve = [this](Index e) {
+    for (int hops = 0; hops < 64 && !mesh_.alive(e); ++hops) {
+      auto it = replaced_.find(e);
+      if (it == replaced_.end()) return Index{-1};
+      e = it->second;
+    }
+    return mesh_.alive(e) ? e : Index{-1};
+  };
+  for (const auto& pair : sides) {
+    for (Index raw : {pair.first, pair.second}) {
+      const Index e = resolve(raw);
+      if (e < 0) return false;
+      if (owner.count(e)) continue;
+      owner.emplace(e, static_cast<int>(groups.size()));
+      parent.push_back(static_cast<int>(groups.size()));
+      groups.emplace_back();
+      groups.back().frontier.push_back(e);
+      groups.back().members.push_back(e);
+    }
+  }
+  std::vector<std::vector<Index>> free_parts;
+  auto open_roots = [&]() {
+    std::vector<int> roots;
+    for (int g = 0; g < static_cast<int>(groups.size()); ++g) {
+      if (find(g) == g && !groups[static_cast<size_t>(g)].closed) roots.push_back(g);
+    }
+    return roots;
+  };
+  for (std::vector<int> roots = open_roots(); roots.size() > 1; roots = open_roots()) {
+    for (int g0 : roots) {
+      const int g = find(g0);
+      Group& grp = groups[static_cast<size_t>(g)];
+      if (g != g0 || grp.closed) continue;
+      if (grp.frontier.empty()) {
+        bool has_fixed = false;
+        for (Index e : grp.members)
+          for (Index v : mesh_.element(e)) has_fixed = has_fixed || mesh_.fixed(v);
+        if (has_fixed) return false;
+        grp.closed = true;
+        free_parts.push_back(grp.members);
+        continue;
+      }
+      const Index e = grp.frontier.front();
+      grp.frontier.pop_front();
+      for (int j = 0; j < 4; ++j) {
+        const Index nb = mesh_.neighbor(e, j);
+        if (nb < 0) continue;
+        auto it = owner.find(nb);
+        if (it == owner.end()) {
+          owner.emplace(nb, g);
+          Group& mine = groups[static_cast<size_t>(find(g))];
+          mine.members.push_back(nb);
+          mine.frontier.push_back(nb);
+          continue;
+        }
+        const int h = find(it->second), mine_root = find(g);
+        if (h == mine_root) continue;
+        if (groups[static_cast<size_t>(h)].closed) return false;  // impossible when valid
+        // Merge the smaller group into the larger.
+        int big = h, small = mine_root;
+        if (groups[static_cast<size_t>(big)].members.size() <
+            groups[static_cast<size_t>(small)].members.size())
+          std::swap(big, small);
+        Group& B = groups[static_cast<size_t>(big)];
+        Group& S = groups[static_cast<size_t>(small)];
+        B.members.insert(B.members.end(), S.members.begin(), S.members.end());
+        B.frontier.insert(B.frontier.end(), S.frontier.begin(), S.frontier.end());
+        S.members.clear();
+        S.frontier.clear();
+        parent[static_cast<size_t>(small)] = big;
+      }
+    }
+  }
+  for (auto& part : free_parts) {
+    ++r.free_components;
+    if (options_.free_components != FreeComponentPolicy::kFixOnFace) continue;
+    std::sort(part.begin(), part.end());
+    for (Index e : part) {
+      int j = 0;
+      while (j < 4 && mesh_.neighbor(e, j) >= 0) ++j;
+      if (j == 4) continue;
+      for (int k = 0; k < 3; ++k)
+        mesh_.set_fixed(mesh_.element(e)[static_cast<size_t>(kTetFace[j][k])], true);
+      ++r.components_fixed;
+      break;
+    }
+  }
+  return true;
 }
 
 void Cutter::check_components(CutStepReport& r) {
@@ -803,6 +933,16 @@ CutStepReport Cutter::step(const Vec3& a, const Vec3& b, const Vec3& c) {
     std::vector<Index> changed;
     std::vector<mesh::FaceHandle> cut = pending_;
     for (const auto& [e, j] : faces) cut.push_back(mesh_.face_handle(e, j));
+    std::vector<std::pair<Index, Index>>& sides = separated_pairs_;
+    sides.clear();  // element pairs across the cut faces (+ neighbours of cut-free elements)
+    replaced_.clear();
+    {
+      const auto& conn = mesh_.connectivity();
+      for (const auto& f : cut) {
+        if (conn.is_alive(f) && conn.mate(f).valid())
+          sides.emplace_back(conn.element(f).index, conn.element(conn.mate(f)).index);
+      }
+    }
     r.faces_dissected = mesh_.dissect(cut, changed, r.new_nodes);
     pending_.clear();
     for (const auto& f : cut) {
@@ -822,7 +962,15 @@ CutStepReport Cutter::step(const Vec3& a, const Vec3& b, const Vec3& c) {
       region.erase(std::unique(region.begin(), region.end()), region.end());
       remove_degeneracies(std::move(region), r);
     }
-    if (options_.check_components) check_components(r);
+    if (options_.check_components && (r.faces_dissected > 0 || r.incollapsible > 0)) {
+      // Only a separated face pair or a cut-free element can disconnect the mesh; if both
+      // sides of every separated pair (the neighbours of every removed element) still reach
+      // each other, the components are unchanged.
+      if (!local_component_check(sides, r)) {
+        r.full_component_check = true;
+        check_components(r);
+      }
+    }
   }
   // Keep the search grid current around the edit.
   std::vector<Index> regrid = r.changed_elements;

@@ -50,22 +50,26 @@ struct [[nodiscard]] CutStepReport {
   Index faces_dissected = 0;    ///< faces that ended on the boundary this step (new or pending)
   Index faces_pending = 0;      ///< selected faces still joined (Fig. 7.7), retried in later steps
   Index halved_choices = 0;     ///< tetrahedra with four marked nodes (seeded choice)
-  Index incomplete_elements = 0;   ///< remembered incomplete tetrahedra after the step
-  Index nodes_snapped = 0;         ///< nodes moved onto the sweep (§3.2.2)
-  Index snaps_refused = 0;         ///< snaps refused because an element would invert
-  Index snaps_failed = 0;          ///< snaps_no_projection + snaps_outside_star
-  Index snaps_no_projection = 0;   ///< boundary node: no incident boundary face admits one
-  Index snaps_outside_star = 0;    ///< the projection lies in no element incident with the node
-  Index nodes_on_sweep = 0;        ///< nodes already on the sweep plane, left in place
-  Index snaps_fixed = 0;           ///< nodes of selected faces left in place because fixed
-  Index degenerate_found = 0;      ///< flat elements found in the first removal pass
-  Index collapses = 0;             ///< edge collapses performed (§3.2.3)
-  Index incollapsible = 0;         ///< degenerate elements cut free and removed
-  Index removal_passes = 0;        ///< removal passes made
-  Index free_components = 0;       ///< components found without a fixed node
-  Index components_fixed = 0;      ///< of those, fixed on a face (policy kFixOnFace)
-  std::vector<Index> new_nodes;    ///< nodes created (copies and split nodes)
-  std::vector<Index> moved_nodes;  ///< existing nodes whose positions changed
+  Index incomplete_elements = 0;  ///< remembered incomplete tetrahedra after the step
+  Index nodes_snapped = 0;        ///< nodes moved onto the sweep (§3.2.2)
+  Index snaps_refused = 0;        ///< snaps refused because an element would invert
+  Index snaps_failed = 0;         ///< snaps_no_projection + snaps_outside_star
+  Index snaps_no_projection = 0;  ///< boundary node: no incident boundary face admits one
+  Index snaps_outside_star = 0;   ///< the projection lies in no element incident with the node
+  Index nodes_on_sweep = 0;       ///< nodes already on the sweep plane, left in place
+  Index snaps_fixed = 0;          ///< nodes of selected faces left in place because fixed
+  Index degenerate_found = 0;     ///< flat elements found in the first removal pass
+  Index collapses = 0;            ///< edge collapses performed (§3.2.3)
+  Index incollapsible = 0;        ///< degenerate elements cut free and removed
+  Index removal_passes = 0;       ///< removal passes made
+  Index free_components = 0;      ///< components found without a fixed node
+  Index components_fixed = 0;     ///< of those, fixed on a face (policy kFixOnFace)
+  /// True when the O(n) component search ran (the two sides of a separated face, or the
+  /// neighbours of a cut-free element, did not meet in the local search); otherwise the
+  /// local search proved that nothing was split.
+  bool full_component_check = false;
+  std::vector<Index> new_nodes;         ///< nodes created (copies and split nodes)
+  std::vector<Index> moved_nodes;       ///< existing nodes whose positions changed
   std::vector<Index> changed_elements;  ///< element handles changed, added or removed
   std::vector<Index> removed_nodes;     ///< nodes that became unused (collapses, cut-free)
 };
@@ -127,6 +131,7 @@ class Cutter {
                       CutStepReport& r);
   void cut_free(Index e, CutStepReport& r);
   void check_components(CutStepReport& r);
+  bool local_component_check(const std::vector<std::pair<Index, Index>>& sides, CutStepReport& r);
   bool is_degenerate(Index e) const;
   EdgeKey edge_key(Index a, Index b) const;
 
@@ -141,6 +146,10 @@ class Cutter {
   /// Selected faces not yet separated by dissection (their vertices' stars were not split,
   /// Fig. 7.7); the cut surface C accumulates, so they are dissected again with later faces.
   std::vector<mesh::FaceHandle> pending_;
+  /// Element pairs that were adjacent before this step's separations (component check).
+  std::vector<std::pair<Index, Index>> separated_pairs_;
+  /// Removed element → an element now occupying its place (this step only).
+  std::unordered_map<Index, Index> replaced_;
   std::vector<char> done_;
   std::vector<std::uint32_t> stamp_;
   std::uint32_t stamp_value_ = 0;

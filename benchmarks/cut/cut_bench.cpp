@@ -1,0 +1,78 @@
+/// Time per sweep-triangle step (thesis §3.2) on ~10k- and ~100k-tetrahedron boxes with the
+/// *same element size* h, so that every step meets the same number of elements: the cost of a
+/// step must depend on the cut, not on the mesh (target: 100k/10k time ratio ≤ 1.5).
+///
+/// A vertical blade entering through the top face, 2.63h deep, moves along a serpentine path in the
+/// middle of the box, h/2 per move, two sweep triangles per move; each benchmark iteration is one
+/// sweep triangle (selection, snapping, dissection, degeneracy removal). The search grid is built
+/// before the timed loop (it is rebuilt only when deformed positions change in bulk, i.e. once per
+/// solver update). Arg 1 = 1 adds the O(n) free-component check after every dissecting step, to
+/// show its cost separately (the interactive loop can run it less often).
+#include <benchmark/benchmark.h>
+#include <incise/cut/cutter.hpp>
+#include <incise/mesh/generators.hpp>
+#include <incise_bench/context.hpp>
+
+namespace {
+
+using incise::Index;
+using incise::Vec3;
+
+constexpr double kH = 1.0 / 12.0;  // element (cube) size, m
+constexpr int kTriangles = 200;    // sweep triangles per run (fits in the 10k box)
+
+void BM_CutStep(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const bool components = state.range(1) != 0;
+  const double side = n * kH;
+  incise::cut::CutMesh mesh(incise::mesh::make_box(n, n, n, side, side, side));
+  incise::cut::CutOptions opt;
+  opt.check_components = components;
+  opt.free_components = incise::cut::FreeComponentPolicy::kReport;
+  incise::cut::Cutter cutter(mesh, opt);
+  // Warm-up step far away builds the search grid.
+  (void)cutter.step(Vec3(10, 10, 10), Vec3(11, 10, 10), Vec3(10, 11, 10));
+  const Vec3 centre = Vec3::Constant(side / 2);
+  // The blade reaches from above the top face to 2.63 h below it (a scalpel enters from the
+  // surface; the search starts from boundary hits and incomplete elements, §3.3).
+  const double z0 = side + 0.37 * kH, z1 = side - 2.63 * kH;
+  Vec3 a(centre.x() - 4.9 * kH, centre.y() - 3.9 * kH, z0);
+  int dir = 1, moves_in_row = 0, tri = 0;
+  Index tested = 0, faces = 0, full_checks = 0;
+  for (auto _ : state) {
+    const Vec3 step =
+        moves_in_row < 16 ? Vec3(dir * 0.5 * kH, 0.013 * kH, 0) : Vec3(0.02 * kH, 0.5 * kH, 0);
+    const Vec3 a2 = a + step;
+    const Vec3 b(a.x(), a.y(), z1), b2(a2.x(), a2.y(), z1);
+    const incise::cut::CutStepReport r =
+        (tri % 2 == 0) ? cutter.step(a, b, b2) : cutter.step(a, b2, a2);
+    tested += r.elements_tested;
+    faces += r.faces_dissected;
+    full_checks += r.full_component_check ? 1 : 0;
+    if (tri % 2 == 1) {
+      a = a2;
+      if (++moves_in_row == 20) {
+        moves_in_row = 0;
+        dir = -dir;
+      }
+    }
+    ++tri;
+  }
+  state.counters["tets"] = static_cast<double>(mesh.num_elements());
+  state.counters["tested_per_step"] = static_cast<double>(tested) / static_cast<double>(tri);
+  state.counters["full_component_checks"] = static_cast<double>(full_checks);
+  state.counters["faces_per_step"] = static_cast<double>(faces) / static_cast<double>(tri);
+}
+
+// 6·12³ = 10 368 and 6·26³ = 105 456 tetrahedra.
+BENCHMARK(BM_CutStep)
+    ->Args({12, 0})
+    ->Args({26, 0})
+    ->Args({12, 1})
+    ->Args({26, 1})
+    ->Iterations(kTriangles)
+    ->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
+INCISE_BENCHMARK_MAIN();
