@@ -27,4 +27,7 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err);
 /// `incise certify [--quick] [--out DIR] [--filter RE]` (lib/cli/certify.cpp).
 int run_certify_command(const Args& args, std::ostream& out, std::ostream& err);
 
+/// `incise bench [--filter RE] [--out DIR] [--bin-dir DIR]` (lib/cli/bench.cpp).
+int run_bench_command(const Args& args, std::ostream& out, std::ostream& err);
+
 }  // namespace incise::cli

@@ -23,6 +23,8 @@ const Command kCommands[] = {
      &run_scene_command},
     {"certify", "certify [--quick] [--out DIR]: run the verification catalogue, write a report",
      &run_certify_command},
+    {"bench", "bench [--filter RE] [--out DIR]: run benchmarks, update the dashboard",
+     &run_bench_command},
 };
 
 void usage(std::ostream& os) {

@@ -193,9 +193,11 @@ std::vector<BenchComparison> compare_last_two(const std::vector<BenchRun>& runs,
     const double scale = std::abs(va.value);
     c.relative_change = scale > 0 ? (vb.value - va.value) / scale : 0.0;
     c.measured_noise = va.stddev >= 0 && vb.stddev >= 0;
-    c.threshold = c.measured_noise && scale > 0
-                      ? 3.0 * std::sqrt(va.stddev * va.stddev + vb.stddev * vb.stddev) / scale
-                      : options.default_noise;
+    c.threshold =
+        c.measured_noise && scale > 0
+            ? std::max(options.min_threshold,
+                       3.0 * std::sqrt(va.stddev * va.stddev + vb.stddev * vb.stddev) / scale)
+            : options.default_noise;
     c.flagged = std::abs(c.relative_change) > c.threshold;
     c.higher_is_better = direction(key) >= 0;
     out.push_back(c);
@@ -209,7 +211,8 @@ std::string dashboard_html(const std::vector<BenchRun>& runs, const DashboardOpt
   os << "<h1>" << html_escape(options.title) << "</h1>\n";
   os << "<p>" << runs.size() << " stored run(s). Values are means over repetitions; error bars "
      << "are ±1 sample standard deviation where repetitions were run. Changes between the last "
-     << "two runs are flagged when they exceed 3&sigma; of the combined repetition noise, or "
+     << "two runs are flagged when they exceed 3&sigma; of the combined repetition noise (at "
+     << "least " << format_number(100 * options.min_threshold) << " %), or "
      << format_number(100 * options.default_noise)
      << " % when a run has no repetitions (stated default).</p>\n";
   if (runs.empty()) {

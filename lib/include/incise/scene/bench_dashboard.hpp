@@ -13,6 +13,8 @@
 /// the "stddev" aggregate when only aggregates were reported). A change between the last two runs
 /// is flagged when |Δ| > 3·σ_Δ with σ_Δ = √(σ_prev² + σ_last²); when either run has no measured
 /// noise, a stated default relative noise (DashboardOptions::default_noise) replaces 3σ_Δ/|prev|.
+/// Measured thresholds are floored at DashboardOptions::min_threshold, because repetitions in
+/// one process underestimate run-to-run variation (frequency scaling, other load).
 
 #include <map>
 #include <string>
@@ -57,6 +59,9 @@ struct DashboardOptions {
   /// Relative noise assumed when a run has no repetitions (5 %: typical run-to-run variation of
   /// single-repetition microbenchmarks on a shared machine).
   double default_noise = 0.05;
+  /// Lower bound on a measured relative threshold (2 %: below the run-to-run variation we see
+  /// between identical runs of the element benchmarks on the shared 2-core machine).
+  double min_threshold = 0.02;
   std::string title = "incise benchmark dashboard";
 };
 
