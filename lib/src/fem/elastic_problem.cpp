@@ -347,15 +347,17 @@ void ElasticProblem::build_pattern() {
     const int* hi = inner + outer[c + 1];
     return static_cast<int>(std::lower_bound(lo, hi, r) - inner);
   };
-  scatter_.resize(static_cast<std::size_t>(num_elements()) * 144);
+  // Per element and node pair (a, b) and column j of the 3×3 block: the value index of entry
+  // (3a, 3b + j). Rows 3a+1 and 3a+2 follow contiguously (CSC, sorted rows, and every element
+  // couples all three DOFs of its nodes), so one index serves three values.
+  scatter_.resize(static_cast<std::size_t>(num_elements()) * kScatterPerElement);
   for (Index e = 0; e < num_elements(); ++e)
-    for (int a = 0; a < 4; ++a)
-      for (int i = 0; i < 3; ++i)
-        for (int b = 0; b < 4; ++b)
-          for (int j = 0; j < 3; ++j)
-            scatter_[static_cast<std::size_t>(e) * 144 +
-                     static_cast<std::size_t>((3 * a + i) * 12 + 3 * b + j)] =
-                find(3 * cells_(a, e) + i, 3 * cells_(b, e) + j);
+    for (int b = 0; b < 4; ++b)
+      for (int j = 0; j < 3; ++j)
+        for (int a = 0; a < 4; ++a)
+          scatter_[static_cast<std::size_t>(e) * kScatterPerElement +
+                   static_cast<std::size_t>((3 * b + j) * 4 + a)] =
+              find(3 * cells_(a, e), 3 * cells_(b, e) + j);
   diag_.resize(static_cast<std::size_t>(n));
   for (Eigen::Index c = 0; c < n; ++c)
     diag_[static_cast<std::size_t>(c)] = find(static_cast<int>(c), static_cast<int>(c));
@@ -372,19 +374,24 @@ EvalStatus ElasticProblem::assemble_tangent(const VecX& u, FixedDofTreatment tre
   material::visit_model(material_.model_index(), [&](auto m) {
     using K = TetKernel<decltype(m), double>;
     Mat34 x, q;
-    Eigen::Matrix<double, 12, 12, Eigen::RowMajor> k;
-    Mat12 kc;
+    Mat12 k;
     for (Index e = 0; e < num_elements(); ++e) {
       gather(u, e, x);
       const TetReference& r = refs_[static_cast<std::size_t>(e)];
-      if (!K::forces_and_tangent(p, r.z_inv, r.b, r.volume, x, q, kc)) {
+      if (!K::forces_and_tangent(p, r.z_inv, r.b, r.volume, x, q, k)) {
         inverted = true;
         break;
       }
-      k = kc;
-      const int* s = scatter_.data() + static_cast<std::size_t>(e) * 144;
-      const double* kv = k.data();
-      for (int t = 0; t < 144; ++t) val[s[t]] += kv[t];
+      const int* s = scatter_.data() + static_cast<std::size_t>(e) * kScatterPerElement;
+      const double* kv = k.data();  // column-major: column c holds rows 0..11 contiguously
+      for (int c = 0; c < 12; ++c)
+        for (int a = 0; a < 4; ++a) {
+          double* dst = val + s[4 * c + a];
+          const double* src = kv + 12 * c + 3 * a;
+          dst[0] += src[0];
+          dst[1] += src[1];
+          dst[2] += src[2];
+        }
     }
   });
   flops_ += (element_flops_.force_and_tangent + 144) * static_cast<std::uint64_t>(num_elements());

@@ -152,7 +152,8 @@ class ElasticProblem : public Problem {
   ElementFlops element_flops_;
   std::uint64_t flops_ = 0;
   Eigen::SparseMatrix<double> k_;
-  std::vector<int> scatter_;  ///< 144 value indices per element (row-major 12×12 block)
+  static constexpr int kScatterPerElement = 48;
+  std::vector<int> scatter_;  ///< per element, (column 3b+j, node a): value index of (3a, 3b+j)
   std::vector<int> diag_;     ///< value index of each diagonal entry
 };
 

@@ -1,0 +1,105 @@
+// Material-point benchmarks for every registered model (material/models.hpp): S(C) and
+// S(C) + ∂S/∂C : H over a batch of 1024 random right Cauchy-Green tensors. Counters: evaluations
+// per second, counted MFLOP/s (per-evaluation flops from the counting scalar), % of the
+// vector-add baseline measured in this run and % of the nominal FMA peak.
+#include <benchmark/benchmark.h>
+#include <incise/core/flop_count.hpp>
+#include <incise/material/material.hpp>
+#include <incise_bench/context.hpp>
+
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace incise;
+using material::Mat3T;
+
+constexpr std::size_t kBatch = 1024;
+
+struct Batch {
+  std::vector<Mat3> c, h;
+};
+
+const Batch& batch() {
+  static const Batch b = [] {
+    Batch out;
+    std::mt19937_64 rng(99);
+    std::uniform_real_distribution<double> u(-0.3, 0.3);
+    while (out.c.size() < kBatch) {
+      Mat3 f = Mat3::Identity(), h;
+      for (int i = 0; i < 9; ++i) {
+        f(i) += u(rng);
+        h(i) = u(rng);
+      }
+      if (f.determinant() < 0.2) continue;
+      out.c.push_back(f.transpose() * f);
+      out.h.push_back(h + h.transpose());
+    }
+    return out;
+  }();
+  return b;
+}
+
+void material_benchmark(benchmark::State& state, const std::string& name, bool derivative) {
+  material::Parameters par;
+  par.gamma = 1.0;
+  const material::Material m(name, par);
+  const material::Lame p = m.lame();
+  const Batch& b = batch();
+  std::vector<Mat3> s(kBatch), ds(kBatch);
+  const std::uint64_t flops = material::visit_model(m.model_index(), [&](auto model) {
+    using M = decltype(model);
+    // Count once with the counting scalar.
+    std::uint64_t counted = 0;
+    {
+      FlopScope scope;
+      material::MaterialState<Counted> st;
+      const Mat3T<Counted> c = b.c[0].cast<Counted>();
+      const Mat3T<Counted> sc = M::stress(p, c, st);
+      if (derivative) (void)M::stress_derivative(p, st, Mat3T<Counted>(b.h[0].cast<Counted>()));
+      benchmark::DoNotOptimize(sc(0, 0).value());
+      counted = scope.flops();
+    }
+    for (auto _ : state) {
+      for (std::size_t i = 0; i < kBatch; ++i) {
+        material::MaterialState<double> st;
+        s[i] = M::stress(p, b.c[i], st);
+        if (derivative) ds[i] = M::stress_derivative(p, st, b.h[i]);
+      }
+      benchmark::DoNotOptimize(s.data());
+      benchmark::DoNotOptimize(ds.data());
+      benchmark::ClobberMemory();
+    }
+    return counted;
+  });
+  const double evals = static_cast<double>(state.iterations()) * static_cast<double>(kBatch);
+  const double fl = evals * static_cast<double>(flops);
+  state.SetItemsProcessed(static_cast<std::int64_t>(evals));
+  state.counters["flops_per_eval"] = static_cast<double>(flops);
+  state.counters["MFLOP_per_s"] = benchmark::Counter(fl * 1e-6, benchmark::Counter::kIsRate);
+  const double base = bench::vector_add_mflops();
+  if (base > 0.0)
+    state.counters["pct_vector_add"] =
+        benchmark::Counter(fl * 1e-6 / base * 100.0, benchmark::Counter::kIsRate);
+  const double peak = bench::fma_peak_mflops();
+  if (peak > 0.0)
+    state.counters["pct_fma_peak"] =
+        benchmark::Counter(fl * 1e-6 / peak * 100.0, benchmark::Counter::kIsRate);
+}
+
+// Every registered material is enrolled automatically.
+const bool kRegistered = [] {
+  for (const std::string& name : material::registered_material_names()) {
+    benchmark::RegisterBenchmark(("Material/" + name + "/stress").c_str(), material_benchmark, name,
+                                 false);
+    benchmark::RegisterBenchmark(("Material/" + name + "/stress+derivative").c_str(),
+                                 material_benchmark, name, true);
+  }
+  return true;
+}();
+
+}  // namespace
+
+INCISE_BENCHMARK_MAIN();
