@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <incise/cut/cutter.hpp>
+#include <incise/io/read_mesh.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise_test/seed.hpp>
 
@@ -287,6 +288,73 @@ TEST(CutRobustness, RandomSweepSequencesOnAFiveSplitBrick) {
   INCISE_SEEDED_RNG(rng, 3002);
   random_sequences(mesh::make_box(4, 3, 2, 2, 1.5, 1, mesh::CubeSplit::kFive),
                    incise::test::scaled(300), rng, Vec3(0, 0, 0), Vec3(2, 1.5, 1));
+}
+
+/// Elements touched by a step: changed ones and the stars of moved and new nodes.
+std::vector<Index> touched_by(const CutMesh& m, const CutStepReport& r) {
+  std::vector<Index> out = r.changed_elements;
+  for (const auto* list : {&r.moved_nodes, &r.new_nodes})
+    for (Index v : *list)
+      for (Index e : m.star(v)) out.push_back(e);
+  return out;
+}
+
+TEST(CutRobustness, RandomSweepSequencesOnTheLiver) {
+  // 1000 sequences on the liver (16 597 tets), 20 blocks of 50 sequences that keep cutting
+  // the same copy (cuts across earlier cuts). After every sweep triangle the invariants are
+  // checked on the touched elements (CutMesh::validate_local); after every block the whole
+  // mesh is validated (CutMesh::validate, i.e. mesh::validate).
+  INCISE_SEEDED_RNG(rng, 3003);
+  const mesh::MeshData liver =
+      io::read_mesh(incise::test::source_path("reference_data/meshes/liver_coarse.mesh")).mesh;
+  Vec3 lo = liver.points.rowwise().minCoeff(), hi = liver.points.rowwise().maxCoeff();
+  const Vec3 size = hi - lo;
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const int sequences = incise::test::scaled(1000);
+  const int block = 50;
+  CutTotals tot;
+  for (int first = 0; first < sequences; first += block) {
+    CutMesh m(liver);
+    for (Index v = 0; v < m.num_nodes(); ++v)
+      if (m.reference(v).x() < lo.x() + 0.1 * size.x()) m.set_fixed(v, true);
+    CutOptions opt;
+    opt.seed = rng();
+    opt.remove_degeneracies = (first / block) % 4 != 3;  // every fourth block without
+    Cutter cutter(m, opt);  // one cutter per block: its search grid is built once
+    for (int s = first; s < std::min(sequences, first + block); ++s) {
+      cutter.end_incision();  // a new incision: forget intersections of the previous one
+      auto rnd_point = [&] {
+        return Vec3(lo.x() + u(rng) * size.x(), lo.y() + u(rng) * size.y(),
+                    lo.z() + u(rng) * size.z());
+      };
+      // A blade 0.3·|size| long through a random interior point, moved in 1–4 steps.
+      const Vec3 c = rnd_point();
+      const Vec3 d = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
+      Vec3 a = c - 0.15 * size.norm() * d, b = c + 0.15 * size.norm() * d;
+      const int steps = 1 + static_cast<int>(u(rng) * 4);
+      for (int k = 0; k < steps; ++k) {
+        const Vec3 move = 0.1 * size.norm() * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
+        const Vec3 a2 = a + move, b2 = b + move;
+        for (const auto& tri : {std::array<Vec3, 3>{a, b, b2}, std::array<Vec3, 3>{a, b2, a2}}) {
+          const CutStepReport r = cutter.step(tri[0], tri[1], tri[2]);
+          tot.add(r);
+          const CutMeshValidation v = m.validate_local(touched_by(m, r));
+          ASSERT_TRUE(v.ok()) << "sequence " << s << ": " << v.violations[0];
+          ASSERT_EQ(v.inverted_reference, 0) << "sequence " << s;
+        }
+        a = a2;
+        b = b2;
+      }
+    }
+    const CutMeshValidation v = m.validate();
+    ASSERT_TRUE(v.ok()) << "block at " << first << ": " << v.violations[0];
+    EXPECT_TRUE(every_component_fixed(m)) << "block at " << first;
+  }
+  EXPECT_GT(tot.faces_dissected, sequences / 4);  // loose floor: the test must cut
+  std::cout << "liver, " << sequences << " sequences: faces dissected " << tot.faces_dissected
+            << ", snapped " << tot.nodes_snapped << ", refused " << tot.snaps_refused
+            << ", degenerate " << tot.degenerate_found << ", collapses " << tot.collapses
+            << ", incollapsible " << tot.incollapsible << "\n";
 }
 
 }  // namespace

@@ -209,6 +209,73 @@ CutMeshValidation CutMesh::validate() const {
   return r;
 }
 
+CutMeshValidation CutMesh::validate_local(const std::vector<Index>& elements) const {
+  CutMeshValidation r;
+  auto violate = [&r](std::string msg) {
+    if (r.violations.size() < 50) r.violations.push_back(std::move(msg));
+    ++r.violation_count;
+  };
+  std::vector<Index> nodes;
+  for (Index e : elements) {
+    if (!alive(e)) continue;
+    const mesh::ElementHandle h = conn_.element_at(e);
+    const Tet& t = element(e);
+    const std::string name = "element " + std::to_string(e);
+    if (to_simplex(t) != conn_.simplex(h)) violate("[cache] " + name + ": node cache differs");
+    if (!(reference_volume(t) > 0)) ++r.inverted_reference;
+    if (!(deformed_volume(t) > 0)) ++r.inverted_deformed;
+    for (int i = 0; i < 4; ++i) {
+      const mesh::FaceHandle f = conn_.face(h, i);
+      if (!conn_.is_alive(f) || conn_.simplex(f) != conn_.simplex(h).subn(i)) {
+        violate("[7.1] " + name + " face " + std::to_string(i));
+        continue;
+      }
+      const mesh::FaceHandle m = conn_.mate(f);
+      if (m.valid()) {
+        if (!conn_.is_alive(m) || conn_.simplex(m) != conn_.simplex(f).mate() || conn_.mate(m) != f)
+          violate("[7.3] " + name + " face " + std::to_string(i) + ": bad mate");
+      } else if (conn_.boundary_face(conn_.simplex(f)) != f) {
+        violate("[7.5] " + name + " face " + std::to_string(i) + ": not in the boundary map");
+      }
+    }
+    for (Index v : t) {
+      nodes.push_back(v);
+      if (!reference(v).allFinite() || !deformed(v).allFinite())
+        violate("[positions] node " + std::to_string(v) + ": non-finite position");
+    }
+  }
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  for (Index v : nodes) {
+    const std::vector<Index> s = star(v);
+    if (s.empty()) continue;
+    // Face-connectedness of star(v) through faces containing v (§7.3).
+    std::vector<Index> stack{s[0]};
+    std::vector<Index> seen{s[0]};
+    while (!stack.empty()) {
+      const Index e = stack.back();
+      stack.pop_back();
+      const int lv = local_index(e, v);
+      if (lv < 0) {
+        violate("[incidence] star(" + std::to_string(v) + ") lists element " + std::to_string(e) +
+                " without it");
+        break;
+      }
+      for (int j = 0; j < 4; ++j) {
+        if (j == lv) continue;
+        const Index nb = neighbor(e, j);
+        if (nb >= 0 && std::find(seen.begin(), seen.end(), nb) == seen.end()) {
+          seen.push_back(nb);
+          stack.push_back(nb);
+        }
+      }
+    }
+    if (seen.size() != s.size())
+      violate("[connected-star] star(" + std::to_string(v) + ") is not face-connected");
+  }
+  return r;
+}
+
 mesh::MeshData CutMesh::to_mesh_data(bool deformed_positions, bool compact,
                                      std::vector<Index>* node_map) const {
   mesh::MeshData d;

@@ -124,6 +124,14 @@ class CutMesh {
   /// inverted elements in both configurations. O(n).
   CutMeshValidation validate() const;
 
+  /// The invariants of validate() restricted to `elements` (live ones; dead handles are
+  /// skipped) and their faces and nodes: (7.1) face simplices, (7.3) mates with opposite
+  /// simplices and symmetric, boundary faces present in the boundary map (7.5), connected
+  /// stars of their nodes (§7.3), node cache, finite positions; inverted elements counted.
+  /// Cost O(Σ|star|) over the listed elements' nodes — for checking after every edit of a
+  /// large mesh.
+  CutMeshValidation validate_local(const std::vector<Index>& elements) const;
+
   /// The connectivity (register watchers here to follow cuts, §7.4).
   const mesh::Connectivity& connectivity() const { return conn_; }
   /// Mutable access for registering watchers; edits must go through CutMesh.
