@@ -43,7 +43,9 @@ TEST(CantileverOwnWeight, ConvergesFromBelowToTimoshenko) {
     std::printf("%3dx%2dx%2d: %5ld it, avg tip %.5e m (%.2f%% below Timoshenko)\n", nx, nx / 4,
                 nx / 4, r.iterations, r.avg_deflection,
                 100 * (kWeightTimoshenko - r.avg_deflection) / kWeightTimoshenko);
-    EXPECT_LT(r.max_deflection, kWeightEb);  // FEM stiffer than either beam theory
+    // FEM stiffer than the beam: below Timoshenko on every mesh (on the finest ones it passes
+    // Euler–Bernoulli, which ignores the 2.2 % shear deflection).
+    EXPECT_LT(r.max_deflection, kWeightTimoshenko);
     if (!res.empty()) {
       EXPECT_GT(r.avg_deflection, res.back().avg_deflection);
     }

@@ -61,9 +61,13 @@ TEST(CantileverTable3_1, ConvergesToTimoshenkoFromBelow) {
                 100 * (kTimoshenko - r.avg_deflection) / kTimoshenko);
   }
   for (std::size_t i = 0; i < res.size(); ++i) {
-    // FEM stiffer than the beam: every tip node deflects less than either beam theory
-    // (Table 3.1 caption: "always less than predicted").
-    EXPECT_LT(res[i].max_deflection, kEulerBernoulli);
+    // FEM stiffer than the beam: every tip node deflects less than Timoshenko, and on the
+    // thesis' five meshes less than Euler–Bernoulli too (Table 3.1 caption: "always less than
+    // predicted"; on finer meshes the FEM passes EB, which ignores the 1.7 % shear deflection).
+    EXPECT_LT(res[i].max_deflection, kTimoshenko);
+    if (res[i].nx <= 48) {
+      EXPECT_LT(res[i].max_deflection, kEulerBernoulli);
+    }
     if (i > 0) {
       EXPECT_GT(res[i].avg_deflection, res[i - 1].avg_deflection);  // errors fall monotonically
       EXPECT_GT(res[i].min_deflection, res[i - 1].min_deflection);
