@@ -59,6 +59,10 @@ mesh::MeshData make_mesh(const MeshSpec& ms, std::string& what) {
     case MeshSpec::Source::kFile: {
       io::LoadedMesh loaded = io::read_mesh(ms.file);
       what = "mesh: " + ms.file + " (" + loaded.report.format + ")";
+      if (ms.scale != 1.0) {
+        loaded.mesh.points *= ms.scale;
+        what += ", coordinates scaled by " + std::to_string(ms.scale);
+      }
       return std::move(loaded.mesh);
     }
   }

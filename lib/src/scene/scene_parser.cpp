@@ -114,6 +114,7 @@ MeshSpec parse_mesh(JsonObject o, const std::string& file, const std::string& ba
     if (!std::filesystem::is_regular_file(fp, ec))
       fail(file, p, "mesh file not found: " + fp.lexically_normal().string());
     m.file = fp.lexically_normal().string();
+    m.scale = o.number("scale", detail::positive(), 1.0);
   } else if (type == "box") {
     m.source = MeshSpec::Source::kBox;
     m.nx = o.integer("nx", 1, kMaxCells);

@@ -46,9 +46,10 @@ struct MeshSpec {
     kCylinder  ///< mesh::make_cylinder (structured O-grid along x)
   };
   Source source = Source::kBox;
-  std::string file;               ///< kFile: path, resolved relative to the scene file's folder
-  int nx = 1, ny = 1, nz = 1;     ///< kBox: cubes per axis
-  double lx = 1, ly = 1, lz = 1;  ///< kBox: box sizes (m)
+  std::string file;    ///< kFile: path, resolved relative to the scene file's folder
+  double scale = 1.0;  ///< kFile: factor applied to the file's coordinates (e.g. 0.001 for mm)
+  int nx = 1, ny = 1, nz = 1;                     ///< kBox: cubes per axis
+  double lx = 1, ly = 1, lz = 1;                  ///< kBox: box sizes (m)
   mesh::CubeSplit split = mesh::CubeSplit::kSix;  ///< kBox: cube split
   double radius = 0, length = 0;  ///< kCylinder: radius and length (m); axis along x
   int rings = 1, layers = 1;      ///< kCylinder: rings across the disk, layers along x
