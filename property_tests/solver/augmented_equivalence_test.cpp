@@ -127,6 +127,7 @@ struct Family {
   const char* name;
   mesh::MeshData (*make)();
   SchurPreconditioner preconditioner;
+  bool elastic = false;  ///< fem linear-elastic tangent (else the stand-in vector Laplacian)
 };
 
 mesh::MeshData small_beam() {
@@ -139,7 +140,7 @@ mesh::MeshData small_brick() {
 class AugmentedEquivalence : public ::testing::TestWithParam<Family> {};
 
 // Yeung et al. 2016 eqs. 4–17: ≥ 200 random steps per default run across the parameter sets
-// (4 families × 2 seeds × 30 steps), each compared with a fresh factorization.
+// (6 families × 2 seeds × 30 steps), each compared with a fresh factorization.
 TEST_P(AugmentedEquivalence, RandomCutsRemovalsConstraintsEq4to17) {
   const Family fam = GetParam();
   INCISE_SEEDED_RNG(rng, 5);
@@ -156,7 +157,9 @@ TEST_P(AugmentedEquivalence, RandomCutsRemovalsConstraintsEq4to17) {
     opt.preconditioner = fam.preconditioner;
     opt.cholmod.kind =
         (s % 2 == 0) ? solver::CholmodKind::kSupernodal : solver::CholmodKind::kSimplicialLdl;
-    Sequence seq(CutModel::from_mesh(fam.make(), 1e-9), opt);
+    CutModel start = CutModel::from_mesh(fam.make(), 1e-9);
+    if (fam.elastic) start.use_linear_elastic(1e4, 0.3);
+    Sequence seq(start, opt);
     // Initial load: pull on the far end.
     for (int v = 0; v < static_cast<int>(seq.model.node_dof.size()); ++v) {
       if (seq.model.node_dof[v] >= 0 &&
@@ -294,7 +297,10 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(Family{"beam_diag", &small_beam, SchurPreconditioner::kDiagonal},
                       Family{"brick_spai", &small_brick, SchurPreconditioner::kTridiagonalSpai},
                       Family{"beam_none", &small_beam, SchurPreconditioner::kNone},
-                      Family{"brick_diag", &small_brick, SchurPreconditioner::kDiagonal}),
+                      Family{"brick_diag", &small_brick, SchurPreconditioner::kDiagonal},
+                      Family{"beam_elastic", &small_beam, SchurPreconditioner::kDiagonal, true},
+                      Family{"brick_elastic_spai", &small_brick,
+                             SchurPreconditioner::kTridiagonalSpai, true}),
     [](const ::testing::TestParamInfo<Family>& p) { return std::string(p.param.name); });
 
 // Eq. 1: replacing one column (and, by symmetry, its row) by an explicit example.

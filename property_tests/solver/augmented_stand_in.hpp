@@ -10,10 +10,15 @@
 /// which is all the augmented-system algebra (Yeung et al. 2016 §3) relies on. It is not an
 /// elasticity model.
 ///
+/// REAL FAMILY: with `CutModel::elastic` set, element matrices are the fem module's linear
+/// elastic tetrahedron tangent (fem::TetKernel<material::LinearElastic>, thesis (2.22), §3.1).
+///
 /// `CutModel` is a tiny mesh state for randomized sequences: active/removed tetrahedra, node
 /// duplication by a plane as in Yeung et al. 2016 §4.3.2, and a DOF numbering in which fixed
 /// nodes (z = 0 face) are removed and duplicated nodes get new DOFs at the end.
 
+#include <incise/fem/tet_kernels.hpp>
+#include <incise/material/material.hpp>
 #include <incise/mesh/mesh_data.hpp>
 #include <incise/solver/augmented_system.hpp>
 
@@ -50,6 +55,17 @@ struct CutModel {
   std::vector<char> active;
   std::vector<int> node_dof;  ///< first of 3 DOFs, −1 for fixed nodes
   int num_dofs = 0;
+  bool elastic = false;  ///< fem linear-elastic tangent instead of the stand-in
+  material::Lame lame;   ///< used when elastic
+
+  /// Switches to the linear-elastic family with E (Pa) and ν.
+  void use_linear_elastic(double youngs, double poisson) {
+    material::Parameters p;
+    p.youngs_modulus = youngs;
+    p.poisson_ratio = poisson;
+    lame = material::Material("linear", p).lame();
+    elastic = true;
+  }
 
   /// From a tetrahedral mesh; nodes with z ≤ fixed_z are fixed (removed from K⁰).
   static CutModel from_mesh(const mesh::MeshData& m, double fixed_z = 1e-12) {
@@ -81,7 +97,14 @@ struct CutModel {
   Eigen::MatrixXd element_matrix(int e) const {
     Eigen::Matrix<double, 3, 4> x;
     for (int a = 0; a < 4; ++a) x.col(a) = points.col(tets[e][a]);
-    return vector_laplacian_tet(x);
+    if (!elastic) return vector_laplacian_tet(x);
+    const fem::TetReference ref = fem::make_tet_reference(x);
+    const Eigen::Matrix<double, 3, 4> u = Eigen::Matrix<double, 3, 4>::Zero();
+    Eigen::Matrix<double, 3, 4> q;
+    Eigen::Matrix<double, 12, 12> k;
+    (void)fem::TetKernel<material::LinearElastic, double>::forces_and_tangent(
+        lame, ref.z_inv, ref.b, ref.volume, u, q, k);
+    return 0.5 * (k + k.transpose());  // symmetric to round-off; remove the round-off part
   }
 
   /// Assembles K over active elements (num_dofs × num_dofs, both triangles).
