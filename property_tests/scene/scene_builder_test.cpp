@@ -9,6 +9,8 @@
 
 #include <string>
 
+#include "incise_test/seed.hpp"
+
 namespace {
 
 using incise::scene::build_scene;
@@ -111,6 +113,26 @@ TEST(SceneBuilder, ScalpelSweepTriangles) {
                  {"blade", {0, 0, -0.2}}}};
   const auto b = build(j);
   EXPECT_EQ(b.sweep_triangles.size(), 4u);
+}
+
+// The shipped cube-cut scene: the scalpel dissects faces (thesis §3.2), adding nodes; the mesh
+// stays a valid set of positively oriented tetrahedra and the fixed bottom face stays fixed.
+TEST(SceneBuilder, ScalpelCutsTheCube) {
+  const auto b = build_scene(
+      incise::scene::load_scene(incise::test::source_path("reference_data/scenes/cube_cut.json")));
+  EXPECT_GT(b.mesh.num_points(), 9 * 9 * 9);
+  EXPECT_EQ(b.mesh.num_cells(), 8 * 8 * 8 * 6);  // no collapses expected away from the cut
+  EXPECT_GE(b.fixed_nodes.size(), 81u);
+  for (Eigen::Index c = 0; c < b.mesh.cells.cols(); ++c) {
+    const Eigen::Vector3d a = b.mesh.points.col(b.mesh.cells(0, c));
+    const double v = (b.mesh.points.col(b.mesh.cells(1, c)) - a)
+                         .cross(b.mesh.points.col(b.mesh.cells(2, c)) - a)
+                         .dot(b.mesh.points.col(b.mesh.cells(3, c)) - a);
+    ASSERT_GT(v, 0.0) << "tet " << c;
+  }
+  bool cut_recorded = false;
+  for (const auto& s : b.steps) cut_recorded |= s.what.rfind("cut: ", 0) == 0;
+  EXPECT_TRUE(cut_recorded);
 }
 
 TEST(SceneBuilderBad, RegionSelectingNoNode) {

@@ -2,6 +2,7 @@
 
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
+#include <incise/cut/cutter.hpp>
 #include <incise/io/read_mesh.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
@@ -164,9 +165,6 @@ BuiltScene build_scene(const SceneSpec& spec) {
   what += " -> " + std::to_string(b.mesh.num_cells()) + " tets, " +
           std::to_string(b.mesh.num_points()) + " nodes";
   b.record(what, t.seconds(), matrix_bytes(b.mesh));
-  const Index n = b.mesh.num_points();
-  const Eigen::Index ndof = 3 * static_cast<Eigen::Index>(n);
-
   // Fixed nodes.
   t.restart();
   for (const Region& r : spec.fixed) {
@@ -177,9 +175,62 @@ BuiltScene build_scene(const SceneSpec& spec) {
   std::sort(b.fixed_nodes.begin(), b.fixed_nodes.end());
   b.fixed_nodes.erase(std::unique(b.fixed_nodes.begin(), b.fixed_nodes.end()), b.fixed_nodes.end());
   if (!spec.fixed.empty())
-    b.record("fixed nodes: " + std::to_string(b.fixed_nodes.size()) + " of " + std::to_string(n) +
-                 " from " + std::to_string(spec.fixed.size()) + " region(s)",
+    b.record("fixed nodes: " + std::to_string(b.fixed_nodes.size()) + " of " +
+                 std::to_string(b.mesh.num_points()) + " from " +
+                 std::to_string(spec.fixed.size()) + " region(s)",
              t.seconds(), b.fixed_nodes.size() * sizeof(Index));
+
+  // Tools: the scalpel cuts the mesh (thesis §3.2) before the problem is built, so loads,
+  // probes and the elastic problem see the cut mesh. Fixed flags travel with dissection copies.
+  if (!spec.tools.empty()) {
+    t.restart();
+    cut::CutMesh cm(b.mesh);
+    for (Index v : b.fixed_nodes) cm.set_fixed(v, true);
+    cut::Cutter cutter(cm);
+    cut::CutTotals totals;
+    int degenerate_sweeps = 0;
+    for (const ToolSpec& tool : spec.tools) {
+      const auto tris = sweep_triangles(tool);
+      for (const auto& tri : tris) {
+        const cut::CutStepReport r = cutter.step(tri[0], tri[1], tri[2]);
+        degenerate_sweeps += r.status == cut::CutStatus::kDegenerateSweep;
+        totals.add(r);
+      }
+      cutter.end_incision();
+      b.sweep_triangles.insert(b.sweep_triangles.end(), tris.begin(), tris.end());
+    }
+    mesh::MeshData cut_mesh;
+    cut_mesh.dimension = 3;
+    cut_mesh.points = cm.reference_matrix();
+    std::vector<cut::Tet> live;
+    for (Index e = 0; e < cm.element_capacity(); ++e)
+      if (cm.alive(e)) live.push_back(cm.element(e));
+    cut_mesh.cells.resize(4, static_cast<Eigen::Index>(live.size()));
+    for (std::size_t e = 0; e < live.size(); ++e)
+      for (int k = 0; k < 4; ++k) cut_mesh.cells(k, static_cast<Eigen::Index>(e)) = live[e][k];
+    b.fixed_nodes.clear();
+    Index unused = 0;
+    for (Index v = 0; v < cm.num_nodes(); ++v) {
+      // Nodes left without elements (collapses, cut-free elements) are fixed so that they
+      // carry no free DOF without stiffness.
+      if (cm.unused(v)) ++unused;
+      if (cm.fixed(v) || cm.unused(v)) b.fixed_nodes.push_back(v);
+    }
+    b.mesh = std::move(cut_mesh);
+    b.record("cut: " + std::to_string(b.sweep_triangles.size()) + " sweep triangles (" +
+                 std::to_string(degenerate_sweeps) + " degenerate), " +
+                 std::to_string(totals.faces_dissected) + " faces dissected, " +
+                 std::to_string(totals.nodes_snapped) + " nodes snapped, " +
+                 std::to_string(totals.collapses) + " collapses, " +
+                 std::to_string(totals.new_nodes) + " new nodes, " + std::to_string(unused) +
+                 " unused nodes -> " + std::to_string(b.mesh.num_cells()) + " tets, " +
+                 std::to_string(b.mesh.num_points()) + " nodes (cell tags dropped)",
+             t.seconds(), matrix_bytes(b.mesh));
+  } else {
+    b.not_built.push_back("cut mesh and sweep triangles: no tool named");
+  }
+  const Index n = b.mesh.num_points();
+  const Eigen::Index ndof = 3 * static_cast<Eigen::Index>(n);
 
   // Loads.
   t.restart();
@@ -276,19 +327,6 @@ BuiltScene build_scene(const SceneSpec& spec) {
     b.not_built.push_back("sparse stiffness factorization: only the \"augmented\" solver uses one");
   if (!spec.solver.spectral_tuning)
     b.not_built.push_back("FFTW plan: spectral damping tuning not requested");
-
-  // Tools.
-  if (!spec.tools.empty()) {
-    t.restart();
-    for (const ToolSpec& tool : spec.tools) {
-      const auto tris = sweep_triangles(tool);
-      b.sweep_triangles.insert(b.sweep_triangles.end(), tris.begin(), tris.end());
-    }
-    b.record("scalpel sweep triangles: " + std::to_string(b.sweep_triangles.size()), t.seconds(),
-             b.sweep_triangles.size() * sizeof(std::array<Vec3, 3>));
-  } else {
-    b.not_built.push_back("sweep triangles: no tool named");
-  }
 
   // Probes.
   if (!spec.outputs.probes.empty()) {
