@@ -398,7 +398,29 @@ void Connectivity::finish_edit(const std::vector<std::pair<ElementHandle, Simple
   ++version_;
 #if defined(INCISE_PARANOID)
   {
-    const ValidationReport report = validate(*this, paranoid_validate_options());
+    ValidationReport report;
+    if (num_elements_ <= kParanoidFullValidationLimit) {
+      report = validate(*this, paranoid_validate_options());
+    } else {
+      // Large mesh: check the stars of every vertex of a removed, added or changed simplex.
+      std::vector<Index> verts;
+      auto take = [&](const Simplex& t) {
+        for (int i = 0; i < t.count(); ++i) verts.push_back(t.vertex(i));
+      };
+      for (const auto& r : removed) take(r.second);
+      for (Index e : added) take(elements_[static_cast<std::size_t>(e)].simplex);
+      for (const auto& c : changed) {
+        take(c.second);
+        take(elements_[static_cast<std::size_t>(c.first)].simplex);
+      }
+      std::sort(verts.begin(), verts.end());
+      verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+      std::vector<ElementHandle> around;
+      for (Index v : verts)
+        for (Index e : vertex_elements_[static_cast<std::size_t>(v)])
+          around.push_back(element_handle(e));
+      report = validate_local(*this, around, verts, paranoid_validate_options());
+    }
     if (!report.ok())
       throw UsageError("mesh connectivity invalid after edit " + std::to_string(version_) + ":\n" +
                        report.summary());

@@ -27,13 +27,165 @@ class ValidatorAccess {
   ValidatorAccess(const Connectivity& c, const ValidateOptions& o, ValidationReport& r)
       : c_(c), o_(o), r_(r) {}
 
+  // validate_local(): see validate.hpp.
+  void run_local(std::vector<Index> elems, std::vector<Index> verts) {
+    const int nf = c_.dim_ + 1;
+    const Index nv = static_cast<Index>(c_.vertex_elements_.size());
+    std::sort(elems.begin(), elems.end());
+    elems.erase(std::unique(elems.begin(), elems.end()), elems.end());
+    // Faces with simplex s found by scanning star(s.vertex(0)).
+    auto faces_with = [&](const Simplex& s, std::vector<Index>& out) {
+      out.clear();
+      const Index v = s.vertex(0);
+      if (v < 0 || v >= nv) return;
+      for (Index e : c_.vertex_elements_[static_cast<std::size_t>(v)]) {
+        if (!live_e(e)) continue;
+        for (int i = 0; i < nf; ++i) {
+          const Index g = er(e).faces[static_cast<std::size_t>(i)];
+          if (live_f(g) && fr(g).simplex == s) out.push_back(g);
+        }
+      }
+    };
+    std::vector<Index> found;
+    for (Index e : elems) {
+      if (!live_e(e)) continue;
+      const ER& t = er(e);
+      if (t.simplex.count() != nf) {
+        add("simplex", el(e, t.simplex) + " does not have d+1 vertices", {e}, {});
+        continue;
+      }
+      for (int i = 0; i < nf; ++i) {
+        const Index v = t.simplex.vertex(i);
+        verts.push_back(v);
+        const bool listed =
+            v < nv && std::find(c_.vertex_elements_[static_cast<std::size_t>(v)].begin(),
+                                c_.vertex_elements_[static_cast<std::size_t>(v)].end(),
+                                e) != c_.vertex_elements_[static_cast<std::size_t>(v)].end();
+        if (!listed)
+          add("incidence",
+              el(e, t.simplex) + " missing from star list of vertex " + std::to_string(v), {e}, {},
+              {v});
+      }
+      if (t.simplex.vertex(0) < nv)
+        for (Index e2 : c_.vertex_elements_[static_cast<std::size_t>(t.simplex.vertex(0))])
+          if (e2 != e && live_e(e2) && er(e2).simplex == t.simplex)
+            add("7.4",
+                "elements " + std::to_string(e) + " and " + std::to_string(e2) +
+                    " both represent " + t.simplex.to_string(),
+                {e, e2}, {});
+      for (int i = 0; i < nf; ++i) {
+        const Index f = t.faces[static_cast<std::size_t>(i)];
+        if (!live_f(f)) {
+          add("7.1",
+              el(e, t.simplex) + ": faces[" + std::to_string(i) + "] = " + std::to_string(f) +
+                  " is not a live face",
+              {e}, {f});
+          continue;
+        }
+        const FR& x = fr(f);
+        if (!(x.simplex == t.simplex.subn(i)))
+          add("7.1",
+              el(e, t.simplex) + ": faces[" + std::to_string(i) + "] is " + fa(f, x.simplex) +
+                  ", expected " + t.simplex.subn(i).to_string(),
+              {e}, {f});
+        if (x.element != e)
+          add("7.2",
+              el(e, t.simplex) + " lists " + fa(f, x.simplex) + " whose element is " +
+                  std::to_string(x.element),
+              {e, x.element}, {f});
+        faces_with(x.simplex, found);
+        for (Index g : found)
+          if (g != f)
+            add("7.4",
+                "faces " + std::to_string(f) + " and " + std::to_string(g) + " both represent " +
+                    x.simplex.to_string(),
+                {e}, {f, g});
+        const bool in_map = c_.boundary_.count(x.simplex) != 0;
+        if (x.mate >= 0) {
+          if (!live_f(x.mate)) {
+            add("7.3", fa(f, x.simplex) + ": mate " + std::to_string(x.mate) + " is not live", {e},
+                {f, x.mate});
+            continue;
+          }
+          const FR& m = fr(x.mate);
+          if (!(m.simplex == x.simplex.mate()))
+            add("7.3", fa(f, x.simplex) + ": mate is " + fa(x.mate, m.simplex), {e}, {f, x.mate});
+          if (m.mate != f)
+            add("mate-symmetry",
+                fa(f, x.simplex) + " has mate " + std::to_string(x.mate) + " whose mate is " +
+                    std::to_string(m.mate),
+                {e}, {f, x.mate});
+          if (!live_e(m.element))
+            add("7.2",
+                fa(x.mate, m.simplex) + ": element " + std::to_string(m.element) + " is not live",
+                {m.element}, {x.mate});
+          if (in_map)
+            add("boundary-map", "boundary map contains mated " + fa(f, x.simplex), {e}, {f});
+        } else {
+          const auto it = c_.boundary_.find(x.simplex);
+          if (it == c_.boundary_.end() || it->second != f)
+            add("boundary-map",
+                "mateless " + fa(f, x.simplex) + " is not the boundary map's entry for its simplex",
+                {e}, {f});
+          faces_with(x.simplex.mate(), found);
+          if (!found.empty())
+            add("7.5",
+                fa(f, x.simplex) + " is mateless although " + fa(found[0], fr(found[0]).simplex) +
+                    " exists",
+                {e}, {f, found[0]});
+        }
+      }
+    }
+    std::sort(verts.begin(), verts.end());
+    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    std::vector<Index> star;
+    for (Index v : verts) {
+      if (v < 0 || v >= nv) continue;
+      const auto& list = c_.vertex_elements_[static_cast<std::size_t>(v)];
+      star.clear();
+      for (Index e : list) {
+        if (!live_e(e) || !er(e).simplex.contains(v))
+          add("incidence",
+              "star list of vertex " + std::to_string(v) + " holds element " + std::to_string(e) +
+                  " which is dead or lacks the vertex",
+              {e}, {}, {v});
+        else
+          star.push_back(e);
+      }
+      if (o_.check_connected_stars && star.size() > 1) {
+        std::vector<Index> seen{star[0]}, stack{star[0]};
+        while (!stack.empty()) {
+          const Index e = stack.back();
+          stack.pop_back();
+          for (int i = 0; i < nf; ++i) {
+            if (er(e).simplex.vertex(i) == v) continue;
+            const Index f = er(e).faces[static_cast<std::size_t>(i)];
+            if (!live_f(f) || !live_f(fr(f).mate)) continue;
+            const Index n = fr(fr(f).mate).element;
+            if (std::find(star.begin(), star.end(), n) == star.end() ||
+                std::find(seen.begin(), seen.end(), n) != seen.end())
+              continue;
+            seen.push_back(n);
+            stack.push_back(n);
+          }
+        }
+        if (seen.size() != star.size())
+          add("connected-star",
+              "star of vertex " + std::to_string(v) + " (" + std::to_string(star.size()) +
+                  " elements) is not face-connected",
+              std::vector<Index>(star), {}, {v});
+      }
+    }
+    if (o_.positions != nullptr) orientation(&elems);
+  }
+
   void run() {
     elements();
     faces();
     duplicates_and_boundary();
     if (o_.check_incidence) incidence();
     if (o_.check_connected_stars) connected_stars();
-    if (o_.positions != nullptr) orientation();
+    if (o_.positions != nullptr) orientation(nullptr);
     counts();
   }
 
@@ -324,10 +476,13 @@ class ValidatorAccess {
     }
   }
 
-  void orientation() {
+  // Orientation of all elements (only == nullptr) or of the listed ones.
+  void orientation(const std::vector<Index>* only) {
     const Eigen::Matrix3Xd& x = *o_.positions;
-    for (Index e = 0; e < ne(); ++e) {
-      if (!er(e).alive) continue;
+    const std::size_t n = only ? only->size() : static_cast<std::size_t>(ne());
+    for (std::size_t k = 0; k < n; ++k) {
+      const Index e = only ? (*only)[k] : static_cast<Index>(k);
+      if (!live_e(e)) continue;
       const Simplex& s = er(e).simplex;
       bool in_range = s.count() == c_.dim_ + 1;
       for (int i = 0; i < s.count(); ++i) in_range = in_range && s.vertex(i) < x.cols();
@@ -374,6 +529,19 @@ class ValidatorAccess {
 ValidationReport validate(const Connectivity& conn, const ValidateOptions& options) {
   ValidationReport report;
   ValidatorAccess(conn, options, report).run();
+  return report;
+}
+
+ValidationReport validate_local(const Connectivity& conn,
+                                const std::vector<ElementHandle>& elements,
+                                const std::vector<Index>& vertices,
+                                const ValidateOptions& options) {
+  ValidationReport report;
+  std::vector<Index> elems;
+  elems.reserve(elements.size());
+  for (const ElementHandle& h : elements)
+    if (conn.is_alive(h)) elems.push_back(h.index);
+  ValidatorAccess(conn, options, report).run_local(std::move(elems), vertices);
   return report;
 }
 

@@ -82,11 +82,15 @@ class Simplex {
 
   /// Equality of oriented simplices (same vertices and same sign).
   bool operator==(const Simplex& o) const {
-    return count_ == o.count_ && sign_ == o.sign_ && v_ == o.v_;
+    return count_ == o.count_ && sign_ == o.sign_ && v_[0] == o.v_[0] && v_[1] == o.v_[1] &&
+           v_[2] == o.v_[2] && v_[3] == o.v_[3];
   }
   bool operator!=(const Simplex& o) const { return !(*this == o); }
   /// True when both have the same vertex set (orientation ignored).
-  bool same_vertices(const Simplex& o) const { return count_ == o.count_ && v_ == o.v_; }
+  bool same_vertices(const Simplex& o) const {
+    return count_ == o.count_ && v_[0] == o.v_[0] && v_[1] == o.v_[1] && v_[2] == o.v_[2] &&
+           v_[3] == o.v_[3];
+  }
   /// Total order (`compare` of §7.2): by count, then lexicographically by vertices, then by
   /// sign (−1 before +1), so σ and −σ are adjacent in sorted sequences.
   bool operator<(const Simplex& o) const {

@@ -75,4 +75,19 @@ inline ValidateOptions paranoid_validate_options() {
 /// Checks every invariant listed in the file comment; never throws on a corrupt structure.
 ValidationReport validate(const Connectivity& conn, const ValidateOptions& options = {});
 
+/// Local validation around an edit: the checks of validate() restricted to `elements` (dead
+/// handles are skipped), their faces and those faces' mates, and to the vertices of `elements`
+/// plus `vertices` (incidence lists, connected stars). Duplicates (7.4) and the "−σ is a face"
+/// test of (7.5) are found by scanning the star of a face's first vertex, so they rely on the
+/// incidence lists. Cost O(Σ_v |star(v)|·(d+1)²) over the involved vertices — independent of the
+/// mesh size. It cannot see violations away from the given objects; validate() can.
+ValidationReport validate_local(const Connectivity& conn,
+                                const std::vector<ElementHandle>& elements,
+                                const std::vector<Index>& vertices = {},
+                                const ValidateOptions& options = {});
+
+/// Paranoid builds run the full validate() after an edit while the mesh has at most this many
+/// elements, and validate_local() over the stars of every vertex the edit touched above it.
+constexpr Index kParanoidFullValidationLimit = 20000;
+
 }  // namespace incise::mesh
