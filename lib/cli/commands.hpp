@@ -30,4 +30,7 @@ int run_certify_command(const Args& args, std::ostream& out, std::ostream& err);
 /// `incise bench [--filter RE] [--out DIR] [--bin-dir DIR]` (lib/cli/bench.cpp).
 int run_bench_command(const Args& args, std::ostream& out, std::ostream& err);
 
+/// `incise cut MESH SWEEPS [--out OUT.vtu] [...]` (lib/cli/cut.cpp): cut along sweep triangles.
+int run_cut(const Args& args, std::ostream& out, std::ostream& err);
+
 }  // namespace incise::cli

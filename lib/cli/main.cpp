@@ -25,6 +25,8 @@ const Command kCommands[] = {
      &run_certify_command},
     {"bench", "bench [--filter RE] [--out DIR]: run benchmarks, update the dashboard",
      &run_bench_command},
+    {"cut", "cut MESH SWEEPS [--out OUT.vtu]: cut along sweep triangles (docs/cutting.md)",
+     &run_cut},
 };
 
 void usage(std::ostream& os) {
