@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <numeric>
 
 namespace incise::mesh {
@@ -42,7 +43,8 @@ PinchSplit split_pinched_vertices(MeshData& m) {
   }
   PinchSplit out;
   out.first_new = np;
-  std::vector<std::pair<std::array<Index, 2>, Index>> keys;  // (facet minus v, local cell)
+  // (facet minus v packed in 64 bits, local cell index in star(v)).
+  std::vector<std::pair<std::uint64_t, Index>> keys;
   std::vector<Index> parent;
   std::vector<std::pair<Index, Index>> substitutions;  // (cell, new vertex) per split class
   std::vector<Index> new_of_cell_local;
@@ -63,7 +65,10 @@ PinchSplit split_pinched_vertices(MeshData& m) {
         for (int j = 0; j < no; ++j)
           if (j != drop) key[nk++] = others[j];
         if (nk == 2 && key[0] > key[1]) std::swap(key[0], key[1]);
-        keys.push_back({key, i});
+        const std::uint64_t packed =
+            (static_cast<std::uint64_t>(static_cast<std::uint32_t>(key[0])) << 32) |
+            static_cast<std::uint32_t>(key[1]);
+        keys.push_back({packed, i});
       }
     }
     std::sort(keys.begin(), keys.end());
