@@ -1,7 +1,9 @@
 // Element-kernel and global-assembly benchmarks (issue 3), for every registered material:
 // - Element/<model>/force, /force+product, /force+tangent: the tet kernels of
 //   fem/tet_kernels.hpp over a batch of 1024 random elements (precomputed Z⁻¹ and B, as in
-//   ElasticProblem), single thread;
+//   ElasticProblem), single thread, one element per call (scalar double);
+// - ElementSimd4/<model>/...: the same kernels instantiated with incise::Lanes4, four elements
+//   per call (what ElasticProblem uses);
 // - Assembly/<model>: ElasticProblem::assemble_tangent into the fixed pattern on a 48,000-tet
 //   box (tangent kernels + scatter map);
 // - MatrixFree/<model>: ElasticProblem::hessian_product (K(u)·d) on the same box;
@@ -62,6 +64,10 @@ struct Batch {
   std::vector<fem::TetReference> refs;
   std::vector<Mat34> x;
   std::vector<Mat34> d;
+  // The same elements four at a time in SIMD lanes (as ElasticProblem stores them).
+  std::vector<fem::Mat3T<Lanes4>> z_inv4, b4;
+  std::vector<Lanes4> volume4;
+  std::vector<fem::Mat34T<Lanes4>> x4, d4;
 };
 
 const Batch& batch() {
@@ -83,6 +89,28 @@ const Batch& batch() {
       out.refs.push_back(r);
       out.x.push_back(x);
       out.d.push_back(d);
+    }
+    for (std::size_t k = 0; k < kBatch / 4; ++k) {
+      fem::Mat3T<Lanes4> zi, bt;
+      fem::Mat34T<Lanes4> x, d;
+      Lanes4 v;
+      for (int l = 0; l < 4; ++l) {
+        const std::size_t e = 4 * k + static_cast<std::size_t>(l);
+        for (int i = 0; i < 9; ++i) {
+          zi(i).set(l, out.refs[e].z_inv(i));
+          bt(i).set(l, out.refs[e].b(i));
+        }
+        for (int i = 0; i < 12; ++i) {
+          x(i).set(l, out.x[e](i));
+          d(i).set(l, out.d[e](i));
+        }
+        v.set(l, out.refs[e].volume);
+      }
+      out.z_inv4.push_back(zi);
+      out.b4.push_back(bt);
+      out.volume4.push_back(v);
+      out.x4.push_back(x);
+      out.d4.push_back(d);
     }
     return out;
   }();
@@ -125,6 +153,42 @@ void element_benchmark(benchmark::State& state, const std::string& name, Kernel 
                             : kernel == Kernel::kForceProduct ? fl.force_and_product
                                                               : fl.force_and_tangent;
   set_counters(state, static_cast<std::int64_t>(n), per);
+}
+
+/// The same kernels instantiated with Lanes4: four elements per call (SoA data, no gather).
+void element_benchmark_simd(benchmark::State& state, const std::string& name, Kernel kernel) {
+  const material::Material m(name, bench_parameters());
+  const fem::ElementFlops fl = fem::element_flops(m);
+  const Batch& b = batch();
+  const material::Lame p = m.lame();
+  const std::size_t nb = b.x4.size();
+  std::vector<fem::Mat34T<Lanes4>> q(nb), dq(nb);
+  fem::Mat12T<Lanes4> k;
+  material::visit_model(m.model_index(), [&](auto model) {
+    using K = fem::TetKernel<decltype(model), Lanes4>;
+    for (auto _ : state) {
+      for (std::size_t e = 0; e < nb; ++e) {
+        bool ok = false;
+        switch (kernel) {
+          case Kernel::kForce: ok = K::forces(p, b.z_inv4[e], b.b4[e], b.x4[e], q[e]); break;
+          case Kernel::kForceProduct:
+            ok = K::forces_and_product(p, b.z_inv4[e], b.b4[e], b.x4[e], b.d4[e], q[e], dq[e]);
+            break;
+          case Kernel::kForceTangent:
+            ok = K::forces_and_tangent(p, b.z_inv4[e], b.b4[e], b.volume4[e], b.x4[e], q[e], k);
+            benchmark::DoNotOptimize(k.data());
+            break;
+        }
+        benchmark::DoNotOptimize(ok);
+      }
+      benchmark::ClobberMemory();
+    }
+    return 0;
+  });
+  const std::uint64_t per = kernel == Kernel::kForce          ? fl.force
+                            : kernel == Kernel::kForceProduct ? fl.force_and_product
+                                                              : fl.force_and_tangent;
+  set_counters(state, static_cast<std::int64_t>(4 * nb), per);
 }
 
 const mesh::MeshData& box() {
@@ -207,6 +271,12 @@ const bool kRegistered = [] {
                                  name, Kernel::kForceProduct);
     benchmark::RegisterBenchmark(("Element/" + name + "/force+tangent").c_str(), element_benchmark,
                                  name, Kernel::kForceTangent);
+    benchmark::RegisterBenchmark(("ElementSimd4/" + name + "/force").c_str(),
+                                 element_benchmark_simd, name, Kernel::kForce);
+    benchmark::RegisterBenchmark(("ElementSimd4/" + name + "/force+product").c_str(),
+                                 element_benchmark_simd, name, Kernel::kForceProduct);
+    benchmark::RegisterBenchmark(("ElementSimd4/" + name + "/force+tangent").c_str(),
+                                 element_benchmark_simd, name, Kernel::kForceTangent);
     benchmark::RegisterBenchmark(("Gradient/" + name).c_str(), gradient_benchmark, name)
         ->Unit(benchmark::kMillisecond);
     benchmark::RegisterBenchmark(("MatrixFree/" + name).c_str(), matrix_free_benchmark, name)

@@ -16,7 +16,6 @@
 #include <Eigen/SparseCholesky>
 #include <cmath>
 #include <cstdio>
-#include <set>
 
 namespace {
 
@@ -139,28 +138,6 @@ TEST(PatchTest, AffineFieldIsExactEquilibriumForEveryMaterial) {
   }
 }
 
-/// Nodal dead loads of a uniform traction t (N/m²) on the boundary faces in the plane
-/// x_axis = value: each triangle gives area·t/3 to each vertex.
-void add_face_traction(ElasticProblem& p, int axis, double value, const Eigen::Vector3d& t) {
-  std::set<std::array<incise::Index, 3>> faces;
-  const int faces_of_tet[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
-  for (incise::Index e = 0; e < p.num_elements(); ++e)
-    for (const auto& f : faces_of_tet) {
-      std::array<incise::Index, 3> tri{p.cells()(f[0], e), p.cells()(f[1], e), p.cells()(f[2], e)};
-      bool on = true;
-      for (auto v : tri) on = on && std::abs(p.points()(axis, v) - value) < 1e-12;
-      if (!on) continue;
-      std::sort(tri.begin(), tri.end());
-      faces.insert(tri);
-    }
-  for (const auto& tri : faces) {
-    const Eigen::Vector3d x0 = p.points().col(tri[0]), x1 = p.points().col(tri[1]),
-                          x2 = p.points().col(tri[2]);
-    const double area = 0.5 * (x1 - x0).cross(x2 - x0).norm();
-    for (auto v : tri) p.add_point_load({v, area * t / 3.0});
-  }
-}
-
 /// Bar [0,L]×[0,w]×[0,w] with the minimal constraints of uniaxial tension: u_x = 0 on x = 0,
 /// u_y = u_z = 0 at the origin, u_z = 0 at (0, w, 0).
 ElasticProblem make_bar(const Material& m, double length, double width) {
@@ -182,7 +159,8 @@ TEST(UniaxialTension, LinearBarIsExact) {
   const auto par = parameters();
   const double length = 1.0, width = 0.2, sigma = 150.0;  // Pa
   ElasticProblem p = make_bar(Material("linear", par), length, width);
-  add_face_traction(p, 0, length, Eigen::Vector3d(sigma, 0, 0));
+  ASSERT_NEAR(p.add_traction_on_plane(0, length, Eigen::Vector3d(sigma, 0, 0)), width * width,
+              1e-15);  // the end face area
   ASSERT_EQ(p.assemble_tangent(VecX::Zero(p.size()), FixedDofTreatment::kIdentity),
             EvalStatus::kOk);
   VecX rhs = p.external_force();
@@ -236,7 +214,8 @@ TEST(UniaxialTension, NonlinearBarsMatchHomogeneousStateByNewton) {
     if (m.linear_geometry()) continue;  // covered exactly above
     SCOPED_TRACE(name);
     ElasticProblem p = make_bar(m, length, width);
-    add_face_traction(p, 0, length, Eigen::Vector3d(sigma, 0, 0));
+    ASSERT_NEAR(p.add_traction_on_plane(0, length, Eigen::Vector3d(sigma, 0, 0)), width * width,
+                1e-15);  // the end face area
     VecX u = VecX::Zero(p.size());
     double gnorm = 0.0;
     int it = 0;

@@ -3,8 +3,10 @@
 #include <incise/fem/elastic_problem.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <sstream>
 
 namespace incise::fem {
@@ -15,6 +17,23 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 using Mat34 = Eigen::Matrix<double, 3, 4>;
 using Mat12 = Eigen::Matrix<double, 12, 12>;
+using L4 = Lanes4;
+
+/// Visits the m elements: blocks of four through `block(k)` (SIMD lanes), falling back to
+/// `element(e)` for the four elements of a block that reports failure (some lane inverted), and
+/// `element(e)` for the tail. Both return false for an inverted element; a block must not
+/// produce side effects before it knows it succeeds. Returns false when an element is inverted.
+template <class BlockFn, class ElementFn>
+bool for_each_element(Index m, BlockFn&& block, ElementFn&& element) {
+  const Index nb = m / 4;
+  for (Index k = 0; k < nb; ++k)
+    if (!block(k))
+      for (Index e = 4 * k; e < 4 * k + 4; ++e)
+        if (!element(e)) return false;
+  for (Index e = 4 * nb; e < m; ++e)
+    if (!element(e)) return false;
+  return true;
+}
 
 }  // namespace
 
@@ -43,7 +62,7 @@ ElementFlops element_flops(const material::Material& material) {
     bool ok = true;
     {
       FlopScope s;
-      ok = K::energy(p, zi, ref.volume, x, w) && ok;
+      ok = K::energy(p, zi, Counted(ref.volume), x, w) && ok;
       out.energy = s.flops();
     }
     {
@@ -63,7 +82,7 @@ ElementFlops element_flops(const material::Material& material) {
     }
     {
       FlopScope s;
-      ok = K::forces_and_tangent(p, zi, b, ref.volume, x, q, k) && ok;
+      ok = K::forces_and_tangent(p, zi, b, Counted(ref.volume), x, q, k) && ok;
       out.force_and_tangent = s.flops();
     }
     INCISE_CHECK(ok, "flop-count deformation unexpectedly inverted");
@@ -114,6 +133,18 @@ ElasticProblem::ElasticProblem(const mesh::MeshData& mesh, const material::Mater
       throw ParameterError(os.str());
     }
   }
+  blocks_.resize(static_cast<std::size_t>(num_full_blocks()));
+  for (Index k = 0; k < num_full_blocks(); ++k) {
+    RefBlock& blk = blocks_[static_cast<std::size_t>(k)];
+    for (int l = 0; l < 4; ++l) {
+      const TetReference& r = refs_[static_cast<std::size_t>(4 * k + l)];
+      for (int i = 0; i < 9; ++i) {
+        blk.z_inv(i).set(l, r.z_inv(i));
+        blk.b(i).set(l, r.b(i));
+      }
+      blk.volume.set(l, r.volume);
+    }
+  }
   fixed_.assign(static_cast<std::size_t>(size()), 0);
   f_ext_ = VecX::Zero(size());
   rebuild_mass();
@@ -159,6 +190,32 @@ void ElasticProblem::add_gravity(const Vec3& g) {
     f_ext_.segment<3>(3 * v) += mass_.segment<3>(3 * v).cwiseProduct(g);
 }
 
+double ElasticProblem::add_traction_on_plane(int axis, double value, const Vec3& traction,
+                                             double tolerance) {
+  INCISE_CHECK(axis >= 0 && axis < 3, "add_traction_on_plane: axis must be 0, 1 or 2");
+  INCISE_CHECK(traction.allFinite(), "add_traction_on_plane: traction must be finite");
+  // Faces with all three vertices on the plane; a face shared by two tetrahedra is interior.
+  std::map<std::array<Index, 3>, int> faces;
+  static constexpr int kFaceOfTet[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  auto on_plane = [&](Index v) { return std::abs(points_(axis, v) - value) <= tolerance; };
+  for (Index e = 0; e < num_elements(); ++e)
+    for (const auto& f : kFaceOfTet) {
+      std::array<Index, 3> tri{cells_(f[0], e), cells_(f[1], e), cells_(f[2], e)};
+      if (!on_plane(tri[0]) || !on_plane(tri[1]) || !on_plane(tri[2])) continue;
+      std::sort(tri.begin(), tri.end());
+      ++faces[tri];
+    }
+  double total = 0.0;
+  for (const auto& [tri, count] : faces) {
+    if (count != 1) continue;
+    const Vec3 x0 = points_.col(tri[0]);
+    const double area = 0.5 * (points_.col(tri[1]) - x0).cross(points_.col(tri[2]) - x0).norm();
+    total += area;
+    for (Index v : tri) f_ext_.segment<3>(3 * v) += (area / 3.0) * traction;
+  }
+  return total;
+}
+
 void ElasticProblem::clear_loads() {
   point_loads_.clear();
   gravity_.setZero();
@@ -194,6 +251,15 @@ void ElasticProblem::gather(const VecX& u, Index e, Mat34& x) const {
   for (int a = 0; a < 4; ++a) x.col(a) = u.segment<3>(3 * cells_(a, e));
 }
 
+void ElasticProblem::gather_block(const VecX& u, Index block, Mat34T<L4>& x) const {
+  const Index e = 4 * block;
+  for (int a = 0; a < 4; ++a) {
+    const Index n0 = 3 * cells_(a, e), n1 = 3 * cells_(a, e + 1), n2 = 3 * cells_(a, e + 2),
+                n3 = 3 * cells_(a, e + 3);
+    for (int i = 0; i < 3; ++i) x(i, a) = L4(u[n0 + i], u[n1 + i], u[n2 + i], u[n3 + i]);
+  }
+}
+
 EvalStatus ElasticProblem::energy(const VecX& u, double& energy) {
   INCISE_CHECK(u.size() == size(), "energy: u has the wrong size");
   const material::Lame p = material_.lame();
@@ -201,14 +267,27 @@ EvalStatus ElasticProblem::energy(const VecX& u, double& energy) {
   bool inverted = false;
   material::visit_model(material_.model_index(), [&](auto m) {
     using K = TetKernel<decltype(m), double>;
-    Mat34 x;
-    for (Index e = 0; e < num_elements() && !inverted; ++e) {
-      gather(u, e, x);
-      const TetReference& r = refs_[static_cast<std::size_t>(e)];
-      double w = 0.0;
-      if (!K::energy(p, r.z_inv, r.volume, x, w)) inverted = true;
-      sum += w;
-    }
+    using K4 = TetKernel<decltype(m), L4>;
+    inverted = !for_each_element(
+        num_elements(),
+        [&](Index k) {
+          Mat34T<L4> x;
+          gather_block(u, k, x);
+          const RefBlock& rb = blocks_[static_cast<std::size_t>(k)];
+          L4 w;
+          if (!K4::energy(p, rb.z_inv, rb.volume, x, w)) return false;
+          sum += (w[0] + w[1]) + (w[2] + w[3]);
+          return true;
+        },
+        [&](Index e) {
+          Mat34 x;
+          gather(u, e, x);
+          const TetReference& r = refs_[static_cast<std::size_t>(e)];
+          double w = 0.0;
+          if (!K::energy(p, r.z_inv, r.volume, x, w)) return false;
+          sum += w;
+          return true;
+        });
   });
   flops_ += element_flops_.energy * static_cast<std::uint64_t>(num_elements());
   if (inverted) {
@@ -226,16 +305,29 @@ EvalStatus ElasticProblem::internal_forces(const VecX& u, VecX& f_int) {
   bool inverted = false;
   material::visit_model(material_.model_index(), [&](auto m) {
     using K = TetKernel<decltype(m), double>;
-    Mat34 x, q;
-    for (Index e = 0; e < num_elements(); ++e) {
-      gather(u, e, x);
-      const TetReference& r = refs_[static_cast<std::size_t>(e)];
-      if (!K::forces(p, r.z_inv, r.b, x, q)) {
-        inverted = true;
-        break;
-      }
-      for (int a = 0; a < 4; ++a) f_int.segment<3>(3 * cells_(a, e)) += q.col(a);
-    }
+    using K4 = TetKernel<decltype(m), L4>;
+    inverted = !for_each_element(
+        num_elements(),
+        [&](Index k) {
+          Mat34T<L4> x, q;
+          gather_block(u, k, x);
+          const RefBlock& rb = blocks_[static_cast<std::size_t>(k)];
+          if (!K4::forces(p, rb.z_inv, rb.b, x, q)) return false;
+          for (int l = 0; l < 4; ++l)
+            for (int a = 0; a < 4; ++a) {
+              const Index n = 3 * cells_(a, 4 * k + l);
+              for (int i = 0; i < 3; ++i) f_int[n + i] += q(i, a)[l];
+            }
+          return true;
+        },
+        [&](Index e) {
+          Mat34 x, q;
+          gather(u, e, x);
+          const TetReference& r = refs_[static_cast<std::size_t>(e)];
+          if (!K::forces(p, r.z_inv, r.b, x, q)) return false;
+          for (int a = 0; a < 4; ++a) f_int.segment<3>(3 * cells_(a, e)) += q.col(a);
+          return true;
+        });
   });
   flops_ += (element_flops_.force + 12) * static_cast<std::uint64_t>(num_elements());
   if (inverted) {
@@ -269,17 +361,31 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
   bool inverted = false;
   material::visit_model(material_.model_index(), [&](auto m) {
     using K = TetKernel<decltype(m), double>;
-    Mat34 x, dx, dq;
-    for (Index e = 0; e < num_elements(); ++e) {
-      gather(u, e, x);
-      gather(d, e, dx);
-      const TetReference& r = refs_[static_cast<std::size_t>(e)];
-      if (!K::product(p, r.z_inv, r.b, x, dx, dq)) {
-        inverted = true;
-        break;
-      }
-      for (int a = 0; a < 4; ++a) out.segment<3>(3 * cells_(a, e)) += dq.col(a);
-    }
+    using K4 = TetKernel<decltype(m), L4>;
+    inverted = !for_each_element(
+        num_elements(),
+        [&](Index k) {
+          Mat34T<L4> x, dx, dq;
+          gather_block(u, k, x);
+          gather_block(d, k, dx);
+          const RefBlock& rb = blocks_[static_cast<std::size_t>(k)];
+          if (!K4::product(p, rb.z_inv, rb.b, x, dx, dq)) return false;
+          for (int l = 0; l < 4; ++l)
+            for (int a = 0; a < 4; ++a) {
+              const Index n = 3 * cells_(a, 4 * k + l);
+              for (int i = 0; i < 3; ++i) out[n + i] += dq(i, a)[l];
+            }
+          return true;
+        },
+        [&](Index e) {
+          Mat34 x, dx, dq;
+          gather(u, e, x);
+          gather(d, e, dx);
+          const TetReference& r = refs_[static_cast<std::size_t>(e)];
+          if (!K::product(p, r.z_inv, r.b, x, dx, dq)) return false;
+          for (int a = 0; a < 4; ++a) out.segment<3>(3 * cells_(a, e)) += dq.col(a);
+          return true;
+        });
   });
   flops_ += (element_flops_.product + 12) * static_cast<std::uint64_t>(num_elements());
   if (inverted) {
@@ -371,28 +477,40 @@ EvalStatus ElasticProblem::assemble_tangent(const VecX& u, FixedDofTreatment tre
   std::fill(val, val + k_.nonZeros(), 0.0);
   const material::Lame p = material_.lame();
   bool inverted = false;
+  const auto scatter = [&](Index e, const auto& entry) {
+    const int* s = scatter_.data() + static_cast<std::size_t>(e) * kScatterPerElement;
+    for (int c = 0; c < 12; ++c)
+      for (int a = 0; a < 4; ++a) {
+        double* dst = val + s[4 * c + a];
+        dst[0] += entry(3 * a, c);
+        dst[1] += entry(3 * a + 1, c);
+        dst[2] += entry(3 * a + 2, c);
+      }
+  };
   material::visit_model(material_.model_index(), [&](auto m) {
     using K = TetKernel<decltype(m), double>;
-    Mat34 x, q;
+    using K4 = TetKernel<decltype(m), L4>;
+    Mat12T<L4> k4;
     Mat12 k;
-    for (Index e = 0; e < num_elements(); ++e) {
-      gather(u, e, x);
-      const TetReference& r = refs_[static_cast<std::size_t>(e)];
-      if (!K::forces_and_tangent(p, r.z_inv, r.b, r.volume, x, q, k)) {
-        inverted = true;
-        break;
-      }
-      const int* s = scatter_.data() + static_cast<std::size_t>(e) * kScatterPerElement;
-      const double* kv = k.data();  // column-major: column c holds rows 0..11 contiguously
-      for (int c = 0; c < 12; ++c)
-        for (int a = 0; a < 4; ++a) {
-          double* dst = val + s[4 * c + a];
-          const double* src = kv + 12 * c + 3 * a;
-          dst[0] += src[0];
-          dst[1] += src[1];
-          dst[2] += src[2];
-        }
-    }
+    inverted = !for_each_element(
+        num_elements(),
+        [&](Index blk) {
+          Mat34T<L4> x, q;
+          gather_block(u, blk, x);
+          const RefBlock& rb = blocks_[static_cast<std::size_t>(blk)];
+          if (!K4::forces_and_tangent(p, rb.z_inv, rb.b, rb.volume, x, q, k4)) return false;
+          for (int l = 0; l < 4; ++l)
+            scatter(4 * blk + l, [&](int r, int c) { return k4(r, c)[l]; });
+          return true;
+        },
+        [&](Index e) {
+          Mat34 x, q;
+          gather(u, e, x);
+          const TetReference& r = refs_[static_cast<std::size_t>(e)];
+          if (!K::forces_and_tangent(p, r.z_inv, r.b, r.volume, x, q, k)) return false;
+          scatter(e, [&](int rr, int c) { return k(rr, c); });
+          return true;
+        });
   });
   flops_ += (element_flops_.force_and_tangent + 144) * static_cast<std::uint64_t>(num_elements());
   if (inverted) return EvalStatus::kInverted;

@@ -16,6 +16,7 @@
 /// a projected right-hand side gives x with zero fixed components.
 
 #include <incise/core/problem.hpp>
+#include <incise/core/simd_scalar.hpp>
 #include <incise/core/types.hpp>
 #include <incise/fem/tet_kernels.hpp>
 #include <incise/material/material.hpp>
@@ -81,6 +82,12 @@ class ElasticProblem : public Problem {
   /// Add the body force ρ·g (g in m/s², e.g. (0,0,−9.81)), lumped: each node receives a
   /// quarter of ρ·g·v(τ) from every incident tetrahedron (§2.5).
   void add_gravity(const Vec3& g);
+  /// Add a uniform dead-load traction t (N/m², reference configuration) on the boundary faces
+  /// lying in the plane {x : x[axis] = value} (within `tolerance` m): each boundary triangle of
+  /// area A gives A·t/3 to each of its vertices (exact consistent load for linear elements).
+  /// Returns the total area loaded (m²); 0 when no boundary face lies in the plane.
+  double add_traction_on_plane(int axis, double value, const Vec3& traction,
+                               double tolerance = 1e-9);
   /// Remove all loads.
   void clear_loads();
   /// f_ext (N), length size().
@@ -136,7 +143,16 @@ class ElasticProblem : public Problem {
   double volume() const;
 
  private:
+  /// Reference data of four consecutive elements 4k..4k+3 in SIMD lanes (Lanes4): the kernels
+  /// evaluate whole blocks at once; the (num_elements mod 4) tail uses the double kernels.
+  struct RefBlock {
+    Mat3T<Lanes4> z_inv;
+    Mat3T<Lanes4> b;
+    Lanes4 volume;
+  };
   void gather(const VecX& u, Index e, Eigen::Matrix<double, 3, 4>& x) const;
+  void gather_block(const VecX& u, Index block, Mat34T<Lanes4>& x) const;
+  Index num_full_blocks() const { return num_elements() / 4; }
   void build_pattern();
   void rebuild_mass();
 
@@ -144,6 +160,7 @@ class ElasticProblem : public Problem {
   mesh::CellMatrix cells_;
   material::Material material_;
   std::vector<TetReference> refs_;
+  std::vector<RefBlock> blocks_;
   std::vector<char> fixed_;
   std::vector<PointLoad> point_loads_;
   Vec3 gravity_ = Vec3::Zero();

@@ -112,7 +112,7 @@ struct TetKernel {
   }
 
   /// Element energy v(τ)·W(C). Returns false (and +∞) when inverted.
-  static bool energy(const material::Lame& p, const Mat3T<T>& z_inv, double volume,
+  static bool energy(const material::Lame& p, const Mat3T<T>& z_inv, const T& volume,
                      const Mat34T<T>& x, T& w) {
     const Mat3T<T> g = differences(x) * z_inv;
     Mat3T<T> c;
@@ -137,7 +137,7 @@ struct TetKernel {
           c(i, j) = f(0, i) * f(0, j) + f(1, i) * f(1, j) + f(2, i) * f(2, j);
       material::detail::symmetrize_from_upper(c);
     }
-    w = T(volume) * Model::energy(p, c);
+    w = volume * Model::energy(p, c);
     return true;
   }
 
@@ -216,7 +216,7 @@ struct TetKernel {
   /// (linear geometry: F = I and no geometric S term), K_ba = K_abᵀ, and node-4 blocks from
   /// g4 = −g1 − g2 − g3. Returns false when inverted.
   static bool forces_and_tangent(const material::Lame& p, const Mat3T<T>& z_inv, const Mat3T<T>& b,
-                                 double volume, const Mat34T<T>& x, Mat34T<T>& q, Mat12T<T>& k) {
+                                 const T& volume, const Mat34T<T>& x, Mat34T<T>& q, Mat12T<T>& k) {
     State st;
     if (!kinematics(p, z_inv, x, st)) return false;
     if constexpr (Model::kLinearGeometry) {
@@ -225,7 +225,7 @@ struct TetKernel {
       nodal_from_piola(Mat3T<T>(st.f * st.s), b, q);
     }
     const material::TangentModuli<T> m = Model::moduli(p, st.m);
-    const T v(volume);
+    const T& v = volume;
     // gt columns: g_a (a = 0..2).
     const Mat3T<T> gt = z_inv.transpose();
     Mat3T<T> pv, p1, p2, hv, h3, h4, bb, am;
