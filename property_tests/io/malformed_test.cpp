@@ -157,7 +157,7 @@ TEST(Malformed, MeditInvertedTetrahedronAndReorientOption) {
   const LoadedMesh m = read_mesh(path, o);
   EXPECT_EQ(m.report.reoriented, 1);
   ASSERT_EQ(m.report.notes.size(), 1u);
-  EXPECT_NE(m.report.notes[0].find("lines 13"), std::string::npos) << m.report.notes[0];
+  EXPECT_NE(m.report.notes[0].find("(line 13)"), std::string::npos) << m.report.notes[0];
 }
 
 TEST(Malformed, MeditUnsupportedElementTypeAndUnknownKeyword) {

@@ -170,8 +170,10 @@ Key sorted_key(const Index* v, int k) {
   return key;
 }
 
-std::string join_first(const std::vector<long>& lines, std::size_t max) {
+// "line 12" or "lines 12, 40, ..." (at most `max` numbers).
+std::string line_list(const std::vector<long>& lines, std::size_t max) {
   std::ostringstream os;
+  os << (lines.size() == 1 ? "line " : "lines ");
   for (std::size_t i = 0; i < lines.size() && i < max; ++i) os << (i ? ", " : "") << lines[i];
   if (lines.size() > max) os << ", ...";
   return os.str();
@@ -273,9 +275,8 @@ LoadedMesh finalize(RawMesh&& raw, const std::string& file, const ReadOptions& o
     if (rep.duplicate_vertices > 0) {
       std::sort(dup_lines.begin(), dup_lines.end());
       std::ostringstream os;
-      os << rep.duplicate_vertices
-         << " vertices repeat the coordinates of an earlier vertex (lines "
-         << join_first(dup_lines, 5) << ")"
+      os << rep.duplicate_vertices << " vertices repeat the coordinates of an earlier vertex ("
+         << line_list(dup_lines, 5) << ")"
          << (options.merge_duplicate_vertices ? "; merged" : "; kept (merge option off)");
       rep.notes.push_back(os.str());
     }
@@ -369,8 +370,8 @@ LoadedMesh finalize(RawMesh&& raw, const std::string& file, const ReadOptions& o
   rep.reoriented = static_cast<Index>(flipped_lines.size());
   if (rep.reoriented > 0) {
     std::ostringstream os;
-    os << rep.reoriented << " of " << nc << " cells were inverted and have been reoriented (lines "
-       << join_first(flipped_lines, 5) << ")";
+    os << rep.reoriented << " of " << nc << " cells were inverted and have been reoriented ("
+       << line_list(flipped_lines, 5) << ")";
     rep.notes.push_back(os.str());
   }
 
@@ -382,10 +383,10 @@ LoadedMesh finalize(RawMesh&& raw, const std::string& file, const ReadOptions& o
       std::ostringstream os;
       os << rep.pinched_vertices << " pinched vertices (star not face-connected, thesis §7.3) "
          << "split into " << rep.added_vertices << " new vertices appended from " << split.first_new
-         << " (vertex lines ";
+         << " (vertex ";
       std::vector<long> l;
       for (Index v : split.pinched) l.push_back(raw.point_lines[v]);
-      os << join_first(l, 5) << ")";
+      os << line_list(l, 5) << ")";
       rep.notes.push_back(os.str());
     }
   }
