@@ -95,9 +95,10 @@ struct SolverSpec {
   int max_iterations = 10000;           ///< iteration (or time-step) budget, ≥ 1
   double time_budget = 0.0;             ///< wall-clock budget (s); 0 = unlimited
   std::string preconditioner = "none";  ///< "none" or "jacobi" (CG, Newton inner CG)
-  double time_step = 0.0;               ///< dynamic: Δt (s); 0 → estimated from the mesh
-  double damping = 0.0;                 ///< dynamic: mass-proportional damping (1/s), ≥ 0
-  bool spectral_tuning = false;         ///< dynamic: estimate damping from an FFT of the trace
+  double time_step = 0.0;  ///< dynamic: Δt (s); 0 → 0.9 × critical step 2/√λ_max (§4.1)
+  double damping = -1.0;  ///< dynamic: damping η (1/s), ≥ 0; −1 → automatic: critical damping
+                          ///< 2√λ₁ (§4.1) or, with spectral_tuning, from the FFT
+  bool spectral_tuning = false;  ///< dynamic: estimate damping from an FFT of the trace
 };
 
 /// A cutting tool. The scalpel is swept along a path; consecutive blade positions span the
