@@ -47,8 +47,10 @@ void check(const yeung2016::Options& opt) {
     EXPECT_EQ(r.status, "ok") << "step " << r.step;
     EXPECT_GE(r.rel_error, 0.0);
     EXPECT_LE(r.rel_error, kRelTol) << "step " << r.step;
-    // Backward error of the augmented solution: a few GMRES tolerances times κ-free growth.
-    EXPECT_LE(r.rel_residual, 1e-9) << "step " << r.step;
+    // Normwise backward error ‖K a − f − r‖/(‖K‖₁‖a‖ + ‖f + r‖) of the augmented solution.
+    // GMRES stops at a relative residual 1e-12 of eq. 17; that residual reaches the full
+    // system through J (entries of K) — measured ≤ 5e-9 up to the 25,600-node cut (README).
+    EXPECT_LE(r.rel_residual, 1e-8) << "step " << r.step;
     EXPECT_LE(r.gmres_iterations, std::max(r.m, 1)) << "step " << r.step;
     EXPECT_LE(r.closure_ja2, info.n0);
   }
