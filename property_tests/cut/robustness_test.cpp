@@ -3,16 +3,29 @@
 // sequences; CutMesh::validate() after every step.
 #include <gtest/gtest.h>
 
+#include <incise/core/error.hpp>
 #include <incise/cut/cutter.hpp>
 #include <incise/io/read_mesh.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise_test/seed.hpp>
 
+#include <algorithm>
 #include <iostream>
 #include <random>
 
 namespace incise::cut {
 namespace {
+
+/// Number of random sequences: `release` in optimized builds; in builds with debug checks
+/// (Debug, and the ASan preset, which sets INCISE_PARANOID) the connectivity validates itself
+/// after every edit — O(n) per edit — so a fraction is run there (ASan ×3–10 on top).
+int sequence_count(int release, int debug_divisor = 10) {
+#if INCISE_DEBUG_CHECKS
+  return incise::test::scaled(std::max(1, release / debug_divisor));
+#else
+  return incise::test::scaled(release);
+#endif
+}
 
 /// Number of face-connected components of the live elements.
 Index count_components(const CutMesh& m) {
@@ -268,7 +281,9 @@ void random_sequences(const mesh::MeshData& data, int sequences, std::mt19937_64
   // average is a loose floor that still fails if cutting silently stops working.
   EXPECT_GT(tot.faces_dissected, sequences / 4);
   EXPECT_GT(tot.nodes_snapped, 0);
-  EXPECT_GT(tot.collapses + tot.incollapsible, 0);  // degeneracy removal is exercised
+  if (sequences >= 100) {
+    EXPECT_GT(tot.collapses + tot.incollapsible, 0);  // degeneracy removal is exercised
+  }
   std::cout << "sequences " << sequences << ": faces dissected " << tot.faces_dissected
             << ", snapped " << tot.nodes_snapped << ", refused " << tot.snaps_refused
             << ", degenerate " << tot.degenerate_found << ", collapses " << tot.collapses
@@ -280,14 +295,14 @@ void random_sequences(const mesh::MeshData& data, int sequences, std::mt19937_64
 
 TEST(CutRobustness, RandomSweepSequencesOnACube) {
   INCISE_SEEDED_RNG(rng, 3001);
-  random_sequences(mesh::make_box(4, 4, 4, 1, 1, 1), incise::test::scaled(1000), rng, Vec3(0, 0, 0),
+  random_sequences(mesh::make_box(4, 4, 4, 1, 1, 1), sequence_count(1000), rng, Vec3(0, 0, 0),
                    Vec3(1, 1, 1));
 }
 
 TEST(CutRobustness, RandomSweepSequencesOnAFiveSplitBrick) {
   INCISE_SEEDED_RNG(rng, 3002);
-  random_sequences(mesh::make_box(4, 3, 2, 2, 1.5, 1, mesh::CubeSplit::kFive),
-                   incise::test::scaled(300), rng, Vec3(0, 0, 0), Vec3(2, 1.5, 1));
+  random_sequences(mesh::make_box(4, 3, 2, 2, 1.5, 1, mesh::CubeSplit::kFive), sequence_count(300),
+                   rng, Vec3(0, 0, 0), Vec3(2, 1.5, 1));
 }
 
 /// Elements touched by a step: changed ones and the stars of moved and new nodes.
@@ -310,8 +325,8 @@ TEST(CutRobustness, RandomSweepSequencesOnTheLiver) {
   Vec3 lo = liver.points.rowwise().minCoeff(), hi = liver.points.rowwise().maxCoeff();
   const Vec3 size = hi - lo;
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  const int sequences = incise::test::scaled(1000);
-  const int block = 50;
+  const int sequences = sequence_count(1000, 40);  // 16 597 tets: paranoid checks are costly
+  const int block = std::min(50, sequences);
   CutTotals tot;
   for (int first = 0; first < sequences; first += block) {
     CutMesh m(liver);
