@@ -21,10 +21,18 @@ function(incise_add_gtest name)
   add_executable(${name} ${A_SOURCES})
   target_link_libraries(${name} PRIVATE ${A_LIBS} incise_test_support GTest::gtest GTest::gtest_main
                                         incise_options)
+  # gtest_discover_tests (CMake 3.25) flattens PROPERTIES into one list, so a multi-valued
+  # LABELS would lose every label after the first. Discover without properties, then apply them
+  # from a second ctest include file that runs after the discovered list (<name>_TESTS) is known.
   gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                       WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
-                       PROPERTIES LABELS "${A_LABELS}" TIMEOUT ${A_TIMEOUT}
-                                  ENVIRONMENT "INCISE_SOURCE_DIR=${PROJECT_SOURCE_DIR}")
+                       WORKING_DIRECTORY ${PROJECT_SOURCE_DIR} TEST_LIST ${name}_TESTS)
+  set(props "${CMAKE_CURRENT_BINARY_DIR}/${name}_properties.cmake")
+  file(WRITE "${props}"
+       "if(${name}_TESTS)\n"
+       "  set_tests_properties(\${${name}_TESTS} PROPERTIES LABELS \"${A_LABELS}\"\n"
+       "    TIMEOUT ${A_TIMEOUT} ENVIRONMENT \"INCISE_SOURCE_DIR=${PROJECT_SOURCE_DIR}\")\n"
+       "endif()\n")
+  set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES "${props}")
 endfunction()
 
 # incise_add_benchmark(NAME SOURCES ... LIBS ...)
