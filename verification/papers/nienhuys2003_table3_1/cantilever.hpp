@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <map>
+#include <memory>
 #include <string>
 
 namespace incise::verify {
@@ -56,21 +57,22 @@ struct CantileverSetup {
   mesh::CubeSplit split = mesh::CubeSplit::kSix;
 };
 
-/// Solves the cantilever on make_box(nx, ny, nz, l, h, d), clamped at x = 0: the linear model by
-/// matrix-free CG, other models by nonlinear CG (secant, Polak-Ribière), to ‖r‖ ≤ ε‖f_ex‖. The
-/// tip load is the consistent nodal load of a uniform shear traction on the tip face (each tip
-/// boundary triangle gives a third of its share to each of its nodes); gravity is lumped.
-inline CantileverResult solve_cantilever(const CantileverSetup& s) {
-  const mesh::MeshData m = mesh::make_box(s.nx, s.ny, s.nz, kLength, kHeight, kDepth, s.split);
+/// The cantilever problem of `s` on mesh `m` (filled in): clamped at x = 0, tip traction and/or
+/// gravity as in solve_cantilever(). `tip` receives the tip nodes.
+inline std::unique_ptr<fem::ElasticProblem> make_cantilever(const CantileverSetup& s,
+                                                            mesh::MeshData& m,
+                                                            std::vector<Index>& tip) {
+  m = mesh::make_box(s.nx, s.ny, s.nz, kLength, kHeight, kDepth, s.split);
   material::Parameters par;
   par.youngs_modulus = s.young;
   par.poisson_ratio = s.poisson;
   par.density = s.density;
   const material::Material mat(s.material, par);
-  fem::ElasticProblem p(m, mat);
+  auto prob = std::make_unique<fem::ElasticProblem>(m, mat);
+  fem::ElasticProblem& p = *prob;
   p.fix_nodes(fem::nodes_on_plane(m, 0, 0.0));
   if (s.gravity != 0.0) p.add_gravity(Vec3(0.0, -s.gravity, 0.0));
-  const std::vector<Index> tip = fem::nodes_on_plane(m, 0, kLength);
+  tip = fem::nodes_on_plane(m, 0, kLength);
   // Tip-face triangles: faces of tetrahedra with all three vertices at x = l.
   std::map<Index, double> weight;
   double total_area = 0.0;
@@ -89,6 +91,16 @@ inline CantileverResult solve_cantilever(const CantileverSetup& s) {
     for (const auto& [node, w] : weight)
       p.add_point_load(fem::PointLoad{node, Vec3(0.0, -s.tip_load * w / total_area, 0.0)});
 
+  return prob;
+}
+
+/// Solves the cantilever on make_box(nx, ny, nz, l, h, d), clamped at x = 0: the linear model by
+/// matrix-free CG, other models by nonlinear CG (secant, Polak-Ribière), to ‖r‖ ≤ ε‖f_ex‖.
+inline CantileverResult solve_cantilever(const CantileverSetup& s) {
+  mesh::MeshData m;
+  std::vector<Index> tip;
+  auto prob = make_cantilever(s, m, tip);
+  fem::ElasticProblem& p = *prob;
   VecX u = VecX::Zero(p.size());
   solver::SolverReport rep;
   if (s.material == "linear") {
