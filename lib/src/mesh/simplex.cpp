@@ -98,11 +98,16 @@ Simplex Simplex::sup(Index v) const {
 }
 
 std::size_t Simplex::hash() const {
+  // One multiply per position (distinct odd constants), one finalising mix.
+  auto u = [this](int i) {
+    return static_cast<std::uint64_t>(static_cast<std::uint32_t>(v_[static_cast<std::size_t>(i)]));
+  };
   std::uint64_t h = static_cast<std::uint64_t>(count_) * 2 + (sign_ > 0 ? 1 : 0);
-  for (int i = 0; i < kMaxCount; ++i)
-    h = mix64(h ^ (static_cast<std::uint64_t>(static_cast<std::uint32_t>(v_[i])) +
-                   0x9e3779b97f4a7c15ULL * static_cast<std::uint64_t>(i + 1)));
-  return static_cast<std::size_t>(h);
+  h ^= u(0) * 0x9e3779b97f4a7c15ULL;
+  h ^= u(1) * 0xc2b2ae3d27d4eb4fULL;
+  h ^= u(2) * 0x165667b19e3779f9ULL;
+  h ^= u(3) * 0xd6e8feb86659fd93ULL;
+  return static_cast<std::size_t>(mix64(h));
 }
 
 std::string Simplex::to_string() const {
