@@ -499,8 +499,11 @@ EvalStatus ElasticProblem::assemble_tangent(const VecX& u, FixedDofTreatment tre
           gather_block(u, blk, x);
           const RefBlock& rb = blocks_[static_cast<std::size_t>(blk)];
           if (!K4::forces_and_tangent(p, rb.z_inv, rb.b, rb.volume, x, q, k4)) return false;
+          // Mat12T<Lanes4> is 144 consecutive groups of 4 lane values (column-major).
+          static_assert(sizeof(L4) == 4 * sizeof(double), "Lanes4 must be four packed doubles");
+          const double* lanes = reinterpret_cast<const double*>(k4.data());
           for (int l = 0; l < 4; ++l)
-            scatter(4 * blk + l, [&](int r, int c) { return k4(r, c)[l]; });
+            scatter(4 * blk + l, [&](int r, int c) { return lanes[4 * (12 * c + r) + l]; });
           return true;
         },
         [&](Index e) {

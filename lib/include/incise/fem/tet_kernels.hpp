@@ -80,7 +80,7 @@ struct TetKernel {
   /// undefined there (then C and S are not computed).
   static bool kinematics(const material::Lame& p, const Mat3T<T>& z_inv, const Mat34T<T>& x,
                          State& st) {
-    const Mat3T<T> g = differences(x) * z_inv;
+    const Mat3T<T> g = material::detail::mul(differences(x), z_inv);
     if constexpr (Model::kLinearGeometry) {
       st.f = g;
       for (int i = 0; i < 3; ++i) {
@@ -106,7 +106,7 @@ struct TetKernel {
 
   /// q (3×4) from the first Piola-Kirchhoff stress P: q_a = P·B e_a, q4 = −Σ q_a (51 flops).
   static void nodal_from_piola(const Mat3T<T>& piola, const Mat3T<T>& b, Mat34T<T>& q) {
-    const Mat3T<T> pb = piola * b;
+    const Mat3T<T> pb = material::detail::mul(piola, b);
     q.template leftCols<3>() = pb;
     for (int i = 0; i < 3; ++i) q(i, 3) = -(pb(i, 0) + pb(i, 1) + pb(i, 2));
   }
@@ -114,7 +114,7 @@ struct TetKernel {
   /// Element energy v(τ)·W(C). Returns false (and +∞) when inverted.
   static bool energy(const material::Lame& p, const Mat3T<T>& z_inv, const T& volume,
                      const Mat34T<T>& x, T& w) {
-    const Mat3T<T> g = differences(x) * z_inv;
+    const Mat3T<T> g = material::detail::mul(differences(x), z_inv);
     Mat3T<T> c;
     if constexpr (Model::kLinearGeometry) {
       for (int i = 0; i < 3; ++i) {
@@ -149,7 +149,7 @@ struct TetKernel {
     if constexpr (Model::kLinearGeometry) {
       nodal_from_piola(st.s, b, q);
     } else {
-      nodal_from_piola(Mat3T<T>(st.f * st.s), b, q);
+      nodal_from_piola(material::detail::mul(st.f, st.s), b, q);
     }
     return true;
   }
@@ -161,7 +161,7 @@ struct TetKernel {
                                  Mat34T<T>& dq) {
     State st;
     if (!kinematics(p, z_inv, x, st)) return false;
-    const Mat3T<T> dg = differences(d) * z_inv;
+    const Mat3T<T> dg = material::detail::mul(differences(d), z_inv);
     Mat3T<T> dc;
     if constexpr (Model::kLinearGeometry) {
       for (int i = 0; i < 3; ++i)
@@ -170,13 +170,13 @@ struct TetKernel {
       nodal_from_piola(st.s, b, q);
       nodal_from_piola(Model::stress_derivative(p, st.m, dc), b, dq);
     } else {
-      const Mat3T<T> a = st.f.transpose() * dg;
+      const Mat3T<T> a = material::detail::mul_tn(st.f, dg);
       for (int i = 0; i < 3; ++i)
         for (int j = i; j < 3; ++j) dc(i, j) = a(i, j) + a(j, i);
       material::detail::symmetrize_from_upper(dc);
-      nodal_from_piola(Mat3T<T>(st.f * st.s), b, q);
+      nodal_from_piola(material::detail::mul(st.f, st.s), b, q);
       const Mat3T<T> ds = Model::stress_derivative(p, st.m, dc);
-      const Mat3T<T> dp = dg * st.s + st.f * ds;
+      const Mat3T<T> dp = material::detail::mul(dg, st.s) + material::detail::mul(st.f, ds);
       nodal_from_piola(dp, b, dq);
     }
     return true;
@@ -190,7 +190,7 @@ struct TetKernel {
     if constexpr (!Model::kLinearGeometry) {
       if (!kinematics(p, z_inv, x, st)) return false;
     }
-    const Mat3T<T> dg = differences(d) * z_inv;
+    const Mat3T<T> dg = material::detail::mul(differences(d), z_inv);
     Mat3T<T> dc;
     if constexpr (Model::kLinearGeometry) {
       for (int i = 0; i < 3; ++i)
@@ -198,12 +198,12 @@ struct TetKernel {
       material::detail::symmetrize_from_upper(dc);
       nodal_from_piola(Model::stress_derivative(p, st.m, dc), b, dq);
     } else {
-      const Mat3T<T> a = st.f.transpose() * dg;
+      const Mat3T<T> a = material::detail::mul_tn(st.f, dg);
       for (int i = 0; i < 3; ++i)
         for (int j = i; j < 3; ++j) dc(i, j) = a(i, j) + a(j, i);
       material::detail::symmetrize_from_upper(dc);
       const Mat3T<T> ds = Model::stress_derivative(p, st.m, dc);
-      const Mat3T<T> dp = dg * st.s + st.f * ds;
+      const Mat3T<T> dp = material::detail::mul(dg, st.s) + material::detail::mul(st.f, ds);
       nodal_from_piola(dp, b, dq);
     }
     return true;
@@ -222,7 +222,7 @@ struct TetKernel {
     if constexpr (Model::kLinearGeometry) {
       nodal_from_piola(st.s, b, q);
     } else {
-      nodal_from_piola(Mat3T<T>(st.f * st.s), b, q);
+      nodal_from_piola(material::detail::mul(st.f, st.s), b, q);
     }
     const material::TangentModuli<T> m = Model::moduli(p, st.m);
     const T& v = volume;
@@ -238,7 +238,7 @@ struct TetKernel {
         bb.setZero();
         bb(0, 0) = bb(1, 1) = bb(2, 2) = k2;
       } else {
-        pv = st.f * gt;
+        pv = material::detail::mul(st.f, gt);
         for (int i = 0; i < 3; ++i)
           for (int j = i; j < 3; ++j)
             bb(i, j) =
@@ -251,8 +251,8 @@ struct TetKernel {
     if constexpr (Model::kHasInverseTerms) {
       const T k3 = T(2) * v * m.c3;
       k4 = v * m.c4;
-      const Mat3T<T> f_inv_t = st.f * st.m.c_inv;
-      hv = f_inv_t * gt;
+      const Mat3T<T> f_inv_t = material::detail::mul(st.f, st.m.c_inv);
+      hv = material::detail::mul(f_inv_t, gt);
       h3 = k3 * hv;
       h4 = k4 * hv;
     }
@@ -268,7 +268,7 @@ struct TetKernel {
       material::detail::symmetrize_from_upper(am);
     }
     Mat3T<T> ag;  // column b: am·g_b
-    if constexpr (!Model::kLinearGeometry) ag = am * gt;
+    if constexpr (!Model::kLinearGeometry) ag = material::detail::mul(am, gt);
     for (int a = 0; a < 3; ++a) {
       for (int bn = a; bn < 3; ++bn) {
         Mat3T<T> blk;

@@ -90,6 +90,25 @@ inline T symmetric_det(const Mat3T<T>& c) {
          c(0, 2) * (c(0, 1) * c(1, 2) - c(1, 1) * c(0, 2));
 }
 
+/// A·B for 3×3 matrices, written out (45 flops: the same operations as Eigen's product, in a
+/// form compilers inline for every scalar type, including incise::Lanes4).
+template <class T>
+inline Mat3T<T> mul(const Mat3T<T>& a, const Mat3T<T>& b) {
+  Mat3T<T> r;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) r(i, j) = a(i, 0) * b(0, j) + a(i, 1) * b(1, j) + a(i, 2) * b(2, j);
+  return r;
+}
+
+/// Aᵀ·B for 3×3 matrices (45 flops).
+template <class T>
+inline Mat3T<T> mul_tn(const Mat3T<T>& a, const Mat3T<T>& b) {
+  Mat3T<T> r;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) r(i, j) = a(0, i) * b(0, j) + a(1, i) * b(1, j) + a(2, i) * b(2, j);
+  return r;
+}
+
 /// A : B for symmetric A, B (12 flops).
 template <class T>
 inline T symmetric_contract(const Mat3T<T>& a, const Mat3T<T>& b) {
@@ -100,7 +119,7 @@ inline T symmetric_contract(const Mat3T<T>& a, const Mat3T<T>& b) {
 /// A·H·A for symmetric A and H, computing the upper triangle only (75 flops).
 template <class T>
 inline Mat3T<T> symmetric_sandwich(const Mat3T<T>& a, const Mat3T<T>& h) {
-  const Mat3T<T> ah = a * h;
+  const Mat3T<T> ah = mul(a, h);
   Mat3T<T> r;
   for (int i = 0; i < 3; ++i)
     for (int j = i; j < 3; ++j)
