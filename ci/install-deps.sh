@@ -8,6 +8,11 @@ packages=(
   libeigen3-dev libsuitesparse-dev libfftw3-dev nlohmann-json3-dev libopenblas-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev gnuplot-nox
 )
+# Headless Chromium (large) only on request, for the `slow` render test of the certification
+# report and the benchmark dashboard (verification/scene/render_pages.sh).
+if [ "${INCISE_WITH_CHROMIUM:-0}" = "1" ]; then
+  packages+=(chromium)
+fi
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 missing=()

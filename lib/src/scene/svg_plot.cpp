@@ -142,14 +142,29 @@ std::string svg_line_plot(const std::vector<Series>& series, const PlotOptions& 
   auto ticks_for = [](double lo, double hi, bool log) {
     std::vector<double> t;
     if (log) {
+      // Decades first; over less than two decades, "nice" mantissas 1-2-5, then 1..9.
       for (double e = std::ceil(lo); e <= std::floor(hi); e += 1.0) t.push_back(e);
+      for (const std::vector<double>& mantissas :
+           {std::vector<double>{1, 2, 5}, std::vector<double>{1, 2, 3, 4, 5, 6, 7, 8, 9}}) {
+        if (t.size() >= 3) break;
+        t.clear();
+        for (double e = std::floor(lo); e <= std::ceil(hi); e += 1.0)
+          for (double m : mantissas) {
+            const double v = e + std::log10(m);
+            if (v >= lo && v <= hi) t.push_back(v);
+          }
+      }
       if (t.size() < 2) t = linear_ticks(lo, hi);
     } else {
       t = linear_ticks(lo, hi);
     }
     return t;
   };
-  auto tick_label = [](double v, bool log) { return format_number(log ? std::pow(10.0, v) : v); };
+  auto tick_label = [](double v, bool log) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.4g", log ? std::pow(10.0, v) : v);
+    return std::string(buf);
+  };
   for (double t : ticks_for(ylo, yhi, o.log_y)) {
     os << "<line x1=\"" << ml << "\" x2=\"" << num(ml + pw) << "\" y1=\"" << num(py(t))
        << "\" y2=\"" << num(py(t)) << "\" stroke=\"#eee\"/>"
