@@ -6,6 +6,7 @@
 // written to a temporary name and renamed into place.
 
 #include <incise/core/error.hpp>
+#include <incise/core/timer.hpp>
 #include <incise/io/write_mesh.hpp>
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
@@ -93,6 +94,7 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   const double threshold = spec.solver.tolerance * built.problem->external_force_norm();
   double r0 = -1;
   int last_decile = -1;
+  Timer bar_timer;  // redraw the bar at most every 0.1 s
   long frames = 0;
   std::vector<std::string> frame_files;
   auto observer = [&](const solver::IterationInfo& info) {
@@ -101,7 +103,8 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     if (r0 > threshold && info.residual_norm > 0)
       frac = std::log(r0 / info.residual_norm) / std::log(r0 / threshold);
     frac = std::min(1.0, std::max(0.0, frac));
-    if (progress == "bar") {
+    if (progress == "bar" && (bar_timer.seconds() >= 0.1 || frac >= 1.0)) {
+      bar_timer.restart();
       const int width = 30, filled = static_cast<int>(frac * width);
       out << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
           << std::string(static_cast<std::size_t>(width - filled), '.') << "] it " << std::setw(6)
