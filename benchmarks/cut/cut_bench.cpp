@@ -10,7 +10,10 @@
 /// show its cost separately (the interactive loop can run it less often).
 #include <benchmark/benchmark.h>
 #include <incise/cut/cutter.hpp>
+#include <incise/fem/elastic_problem.hpp>
+#include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
+#include <incise/solver/linear_cg.hpp>
 #include <incise_bench/context.hpp>
 
 namespace {
@@ -72,6 +75,73 @@ BENCHMARK(BM_CutStep)
     ->Args({26, 1})
     ->Iterations(kTriangles)
     ->Unit(benchmark::kMicrosecond);
+
+/// A whole interactive step on the 10k mesh: one sweep triangle, then the solver update — the
+/// elastic problem rebuilt from the cut mesh (fem::ElasticProblem has no incremental update,
+/// so this part is O(n)) and linear CG (ν = 1/4, ‖r‖ < 1e-3‖f_ex‖, §3.3) restarted warm from
+/// the carried displacements. Counters: CG iterations per step.
+void BM_InteractiveStep(benchmark::State& state) {
+  const int n = 12;
+  const double side = n * kH;
+  incise::cut::CutMesh mesh(incise::mesh::make_box(n, n, n, side, side, side));
+  for (Index v = 0; v < mesh.num_nodes(); ++v)
+    if (mesh.reference(v).z() == 0.0) mesh.set_fixed(v, true);
+  incise::cut::CutOptions opt;
+  incise::cut::Cutter cutter(mesh, opt);
+  const incise::material::Material material("linear", {1e4, 0.25, 0.0, 1000.0});
+  long cg_iterations = 0;
+  auto solve = [&]() {
+    std::vector<Index> map;
+    const incise::mesh::MeshData md = mesh.to_mesh_data(false, true, &map);
+    incise::fem::ElasticProblem p(md, material);
+    std::vector<Index> fixed;
+    incise::VecX u = incise::VecX::Zero(p.size());
+    for (Index v = 0; v < mesh.num_nodes(); ++v) {
+      const Index m = map[static_cast<size_t>(v)];
+      if (m < 0) continue;
+      if (mesh.fixed(v)) fixed.push_back(m);
+      u.segment<3>(3 * m) = mesh.deformed(v) - mesh.reference(v);
+      // Dilating load on the side faces x = 0 and x = side (original nodes only).
+      if (v < (n + 1) * (n + 1) * (n + 1)) {
+        const double x = mesh.reference(v).x();
+        if (x == 0.0 || x == side) p.add_point_load({m, Vec3(x == 0.0 ? -0.5 : 0.5, 0, 0)});
+      }
+    }
+    p.fix_nodes(fixed);
+    p.project(u);
+    incise::solver::LinearCgOptions cg;
+    cg.stop.rule = incise::solver::ResidualRule::kExternalForce;
+    cg.stop.epsilon = 1e-3;
+    cg.budget.max_iterations = 20000;
+    const incise::solver::SolverReport r = incise::solver::linear_cg(p, u, cg);
+    cg_iterations += r.iterations;
+    Eigen::Matrix3Xd x = mesh.reference_matrix();
+    for (Index v = 0; v < mesh.num_nodes(); ++v) {
+      const Index m = map[static_cast<size_t>(v)];
+      if (m >= 0) x.col(v) += u.segment<3>(3 * m);
+    }
+    mesh.set_deformed(x);
+  };
+  solve();
+  cg_iterations = 0;
+  Vec3 a(0.3 * side, 0.2 * side, side + 0.37 * kH);
+  int tri = 0;
+  for (auto _ : state) {
+    const Vec3 a2 = a + Vec3(0.5 * kH, 0.01 * kH, 0);
+    const Vec3 b(a.x(), a.y(), side - 2.63 * kH), b2(a2.x(), a2.y(), side - 2.63 * kH);
+    const incise::cut::CutStepReport r =
+        (tri % 2 == 0) ? cutter.step(a, b, b2) : cutter.step(a, b2, a2);
+    benchmark::DoNotOptimize(r.faces_dissected);
+    solve();
+    if (tri % 2 == 1) a = a2;
+    ++tri;
+  }
+  state.counters["cg_iterations_per_step"] =
+      static_cast<double>(cg_iterations) / static_cast<double>(tri);
+  state.counters["tets"] = static_cast<double>(mesh.num_elements());
+}
+
+BENCHMARK(BM_InteractiveStep)->Iterations(20)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -96,6 +96,7 @@ void CutTotals::add(const CutStepReport& r) {
 /// Entries may be stale (moved or changed elements); queries test every candidate exactly.
 struct Cutter::Grid {
   double h = 1.0;
+  std::int64_t lo[3] = {0, 0, 0}, hi[3] = {-1, -1, -1};  ///< occupied cell range
   std::unordered_map<std::int64_t, std::vector<Index>> cells;
   static std::int64_t key(std::int64_t i, std::int64_t j, std::int64_t k) {
     constexpr std::int64_t kOff = 1 << 20;
@@ -137,16 +138,24 @@ void Cutter::grid_insert(Index e) {
     lo = lo.cwiseMin(mesh_.deformed(v));
     hi = hi.cwiseMax(mesh_.deformed(v));
   }
-  for (std::int64_t i = grid_->coord(lo.x()); i <= grid_->coord(hi.x()); ++i)
-    for (std::int64_t j = grid_->coord(lo.y()); j <= grid_->coord(hi.y()); ++j)
-      for (std::int64_t k = grid_->coord(lo.z()); k <= grid_->coord(hi.z()); ++k)
-        grid_->cells[Grid::key(i, j, k)].push_back(e);
+  const std::int64_t c0[3] = {grid_->coord(lo.x()), grid_->coord(lo.y()), grid_->coord(lo.z())};
+  const std::int64_t c1[3] = {grid_->coord(hi.x()), grid_->coord(hi.y()), grid_->coord(hi.z())};
+  const bool empty = grid_->hi[0] < grid_->lo[0];
+  for (int d = 0; d < 3; ++d) {
+    grid_->lo[d] = empty ? c0[d] : std::min(grid_->lo[d], c0[d]);
+    grid_->hi[d] = empty ? c1[d] : std::max(grid_->hi[d], c1[d]);
+  }
+  for (std::int64_t i = c0[0]; i <= c1[0]; ++i)
+    for (std::int64_t j = c0[1]; j <= c1[1]; ++j)
+      for (std::int64_t k = c0[2]; k <= c1[2]; ++k) grid_->cells[Grid::key(i, j, k)].push_back(e);
 }
 
 void Cutter::collect_seeds(const Vec3 (&tri)[3], std::vector<Index>& seeds) {
   if (grid_version_ != mesh_.positions_version()) {
     // (Re)build: cell size = mean longest edge of the boundary elements.
     grid_->cells.clear();
+    grid_->lo[0] = grid_->lo[1] = grid_->lo[2] = 0;
+    grid_->hi[0] = grid_->hi[1] = grid_->hi[2] = -1;
     double sum = 0;
     Index count = 0;
     for (Index e = 0; e < mesh_.element_capacity(); ++e) {
@@ -172,9 +181,16 @@ void Cutter::collect_seeds(const Vec3 (&tri)[3], std::vector<Index>& seeds) {
   const Vec3 hi = tri[0].cwiseMax(tri[1]).cwiseMax(tri[2]);
   const double h = grid_->h;
   const double reach = 0.5 * h * n.cwiseAbs().sum();
-  for (std::int64_t i = grid_->coord(lo.x()); i <= grid_->coord(hi.x()); ++i)
-    for (std::int64_t j = grid_->coord(lo.y()); j <= grid_->coord(hi.y()); ++j)
-      for (std::int64_t k = grid_->coord(lo.z()); k <= grid_->coord(hi.z()); ++k) {
+  // Enumerate only cells inside both Δ's box and the occupied range of the grid.
+  const std::int64_t q0[3] = {std::max(grid_->coord(lo.x()), grid_->lo[0]),
+                              std::max(grid_->coord(lo.y()), grid_->lo[1]),
+                              std::max(grid_->coord(lo.z()), grid_->lo[2])};
+  const std::int64_t q1[3] = {std::min(grid_->coord(hi.x()), grid_->hi[0]),
+                              std::min(grid_->coord(hi.y()), grid_->hi[1]),
+                              std::min(grid_->coord(hi.z()), grid_->hi[2])};
+  for (std::int64_t i = q0[0]; i <= q1[0]; ++i)
+    for (std::int64_t j = q0[1]; j <= q1[1]; ++j)
+      for (std::int64_t k = q0[2]; k <= q1[2]; ++k) {
         const Vec3 centre((i + 0.5) * h, (j + 0.5) * h, (k + 0.5) * h);
         if (std::abs(n.dot(centre - tri[0])) > reach * (1 + 1e-9)) continue;  // plane misses cell
         auto it = grid_->cells.find(Grid::key(i, j, k));
