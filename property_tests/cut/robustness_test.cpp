@@ -210,6 +210,40 @@ TEST(CutRobustness, FourMarkedNodesChooseAFaceBySeed) {
   EXPECT_EQ(first.points, second.points);
 }
 
+/// Records the element slots a ConnectivityWatcher is told about (§7.4).
+struct SlotRecorder : mesh::ConnectivityWatcher {
+  std::vector<Index> slots;
+  void element_removed(const mesh::Connectivity&, mesh::ElementHandle e,
+                       const mesh::Simplex&) override {
+    slots.push_back(e.index);
+  }
+  void element_added(const mesh::Connectivity&, mesh::ElementHandle e) override {
+    slots.push_back(e.index);
+  }
+  void element_changed(const mesh::Connectivity&, mesh::ElementHandle e,
+                       const mesh::Simplex&) override {
+    slots.push_back(e.index);
+  }
+};
+
+TEST(CutRobustness, WatchersSeeExactlyTheReportedElementChanges) {
+  // Every edit of the cutter goes through the connectivity, so a watcher (e.g. a solver that
+  // updates changed columns) sees the same element slots the step report lists.
+  CutMesh m(mesh::make_box(5, 5, 5, 1, 1, 1));
+  SlotRecorder rec;
+  m.connectivity().add_watcher(&rec);
+  Cutter cutter(m, report_only());
+  for (const auto& tri : square(Vec3(0.5, 0.5, 0.55), Vec3(0.3, 0.2, 1), 2.0)) {
+    rec.slots.clear();
+    const auto r = cutter.step(tri[0], tri[1], tri[2]);
+    std::sort(rec.slots.begin(), rec.slots.end());
+    rec.slots.erase(std::unique(rec.slots.begin(), rec.slots.end()), rec.slots.end());
+    EXPECT_EQ(rec.slots, r.changed_elements);
+    EXPECT_FALSE(r.changed_elements.empty());
+  }
+  m.connectivity().remove_watcher(&rec);
+}
+
 TEST(CutRobustness, SweepThroughAnEdgeAndAFaceOnly) {
   // A small triangle whose plane contains one mesh edge and crosses only the elements around
   // it: a valid mesh results whatever is selected.
