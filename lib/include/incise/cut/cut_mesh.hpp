@@ -49,11 +49,13 @@ class CutMesh {
   /// not tetrahedral, UsageError (from Connectivity) if its cells do not form a valid mesh.
   explicit CutMesh(const mesh::MeshData& data);
 
+  /// Number of nodes (used and unused; indices 0..num_nodes()−1).
   Index num_nodes() const { return static_cast<Index>(ref_.size()); }
   /// Capacity of element slots (live and free); element indices are < element_capacity().
   Index element_capacity() const { return conn_.element_capacity(); }
   /// Number of live elements.
   Index num_elements() const { return conn_.num_elements(); }
+  /// Whether slot e holds a live element.
   bool alive(Index e) const {
     return e >= 0 && e < element_capacity() && conn_.element_at(e).valid();
   }
@@ -75,7 +77,9 @@ class CutMesh {
   /// Deformed positions as a 3 × num_nodes matrix.
   Eigen::Matrix3Xd deformed_matrix() const;
 
+  /// Whether node v is fixed (all displacement components prescribed).
   bool fixed(Index v) const { return fixed_[static_cast<size_t>(v)] != 0; }
+  /// Marks node v as fixed or free.
   void set_fixed(Index v, bool f) { fixed_[static_cast<size_t>(v)] = f ? 1 : 0; }
   /// The original node a node descends from through dissection copies (itself otherwise).
   Index origin(Index v) const { return origin_[static_cast<size_t>(v)]; }

@@ -43,13 +43,13 @@ enum class CutStatus {
 
 /// Report of one step (one sweep triangle), for the caller and for warm-starting solvers.
 struct [[nodiscard]] CutStepReport {
-  CutStatus status = CutStatus::kOk;
-  Index elements_tested = 0;    ///< elements visited by the outward search
-  Index edges_intersected = 0;  ///< new sweep/edge intersections recorded
-  Index faces_selected = 0;     ///< faces chosen by §3.2.1 this step
-  Index faces_dissected = 0;    ///< faces that ended on the boundary this step (new or pending)
-  Index faces_pending = 0;      ///< selected faces still joined (Fig. 7.7), retried in later steps
-  Index halved_choices = 0;     ///< tetrahedra with four marked nodes (seeded choice)
+  CutStatus status = CutStatus::kOk;  ///< kDegenerateSweep: nothing was done
+  Index elements_tested = 0;          ///< elements visited by the outward search
+  Index edges_intersected = 0;        ///< new sweep/edge intersections recorded
+  Index faces_selected = 0;           ///< faces chosen by §3.2.1 this step
+  Index faces_dissected = 0;  ///< faces that ended on the boundary this step (new or pending)
+  Index faces_pending = 0;    ///< selected faces still joined (Fig. 7.7), retried in later steps
+  Index halved_choices = 0;   ///< tetrahedra with four marked nodes (seeded choice)
   Index incomplete_elements = 0;  ///< remembered incomplete tetrahedra after the step
   Index nodes_snapped = 0;        ///< nodes moved onto the sweep (§3.2.2)
   Index snaps_refused = 0;        ///< snaps refused because an element would invert
@@ -77,9 +77,11 @@ struct [[nodiscard]] CutStepReport {
 /// Totals over several steps (sums of the counts of CutStepReport; faces_pending is the
 /// value after the last step).
 struct CutTotals {
+  /// Sums of the CutStepReport fields of the same names (new_nodes: list sizes).
   Index faces_selected = 0, faces_dissected = 0, nodes_snapped = 0, snaps_refused = 0,
         snaps_failed = 0, snaps_outside_star = 0, faces_pending = 0, degenerate_found = 0,
         collapses = 0, incollapsible = 0, new_nodes = 0, free_components = 0;
+  /// Adds the counts of one step.
   void add(const CutStepReport& r);
 };
 
@@ -89,8 +91,10 @@ struct CutTotals {
 /// incomplete tetrahedra. Call `end_incision()` to forget it.
 class Cutter {
  public:
+  /// Cuts `mesh` (not owned; must outlive the cutter). Throws ParameterError for options out
+  /// of range (aspect ratio threshold outside [0,1), large angle outside (0,π)).
   Cutter(CutMesh& mesh, CutOptions options = {});
-  ~Cutter();
+  ~Cutter();  ///< Out of line: Grid is an incomplete type here.
   Cutter(const Cutter&) = delete;
   Cutter& operator=(const Cutter&) = delete;
 
