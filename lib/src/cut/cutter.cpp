@@ -936,7 +936,7 @@ CutStepReport Cutter::step(const Vec3& a, const Vec3& b, const Vec3& c) {
       // The sweep now passes through every snapped node: move the marks of the incident
       // edges there and select the faces this completes (see docs/cutting.md, "lag").
       std::vector<Index> affected;
-      remark_snapped(r.moved_nodes, affected);
+      if (options_.remark_snapped_nodes) remark_snapped(r.moved_nodes, affected);
       const size_t before = faces.size();
       evaluate(affected, r, faces);
       if (faces.size() > before) {

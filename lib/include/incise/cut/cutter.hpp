@@ -24,7 +24,10 @@ enum class FreeComponentPolicy {
 
 /// Options of the cutter. Defaults are the thesis' values (§3.3).
 struct CutOptions {
-  bool snap_nodes = true;                 ///< §3.2.2 node snapping
+  bool snap_nodes = true;  ///< §3.2.2 node snapping
+  /// After snapping, move the marks of the edges at each snapped node to it and re-evaluate
+  /// (docs/cutting.md, "lag"); false = the thesis' order (select, then snap) only.
+  bool remark_snapped_nodes = true;
   bool refuse_inverting_snaps = true;     ///< refuse a snap that inverts an element (§3.4)
   bool remove_degeneracies = true;        ///< §3.2.3
   double degenerate_aspect_ratio = 0.01;  ///< aspect ratio below which an element is flat
