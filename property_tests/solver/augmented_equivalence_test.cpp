@@ -130,6 +130,10 @@ struct Family {
   bool elastic = false;  ///< fem linear-elastic tangent (else the stand-in vector Laplacian)
 };
 
+void PrintTo(const Family& f, std::ostream* os) {
+  *os << f.name;
+}
+
 mesh::MeshData small_beam() {
   return mesh::make_beam(6, 0.1);
 }  // 5×5×6 nodes
