@@ -6,11 +6,11 @@
 ///   (read from /proc/self/maps — it is what CHOLMOD calls at run time), and the measured
 ///   vector-add baseline, as Google Benchmark context entries (they appear in the JSON output).
 /// - vector_add_mflops(): the thesis' machine baseline (§4.5, Table 4.5): repeated
-///   a ← a + b on 1024-double vectors, in MFLOP/s (one flop per element add).
-/// - fma_peak_mflops(): the nominal double-precision FMA peak of one core, from the measured
-///   clock of a dependent-FMA-free loop is *not* attempted; it is computed as
-///   clock_GHz × flops/cycle, with flops/cycle from the ISA (AVX2+FMA: 16, AVX: 8, SSE2: 4) and
-///   the clock from /proc/cpuinfo "cpu MHz". Stated as nominal, not measured.
+///   a ← a + b on 1024-double vectors, in MFLOP/s (one flop per element add), timed in thread
+///   CPU time like Google Benchmark's rates, best of 5 trials.
+/// - fma_peak_mflops(): the nominal double-precision FMA peak of one core, not measured:
+///   clock_GHz × flops/cycle, with flops/cycle from the ISA (AVX-512: 32, AVX2+FMA: 16, AVX: 8,
+///   SSE2: 4) and the clock from /proc/cpuinfo "cpu MHz".
 
 #include <string>
 
