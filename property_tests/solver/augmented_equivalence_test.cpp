@@ -11,12 +11,14 @@
 #include "augmented_reference.hpp"
 #include "augmented_stand_in.hpp"
 
+#include <incise/io/read_mesh.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise_test/seed.hpp>
 
 #include <gtest/gtest.h>
 
 #include <iostream>
+#include <limits>
 #include <map>
 #include <random>
 #include <string>
@@ -29,10 +31,15 @@ using solver::AugmentedStatus;
 using solver::AugmentedSystem;
 using solver::SchurPreconditioner;
 
-/// Relative tolerance of the equivalence: the meshes are tiny (κ(K) ≲ 1e4, κ of the Schur
-/// system similar), GMRES stops at a relative residual 1e-13, so the error bound
-/// κ·(1e-13 + n·eps) stays well below 1e-9, the tolerance the issue asks for.
+/// Relative tolerance of the equivalence: 1e-9 (the issue's), widened to 100·eps/rcond when the
+/// modified system is worse conditioned: both solutions carry a forward error ≈ κ·eps (backward
+/// stable direct solves), and CHOLMOD's pivot ratio rcond is a (crude, optimistic) estimate of
+/// 1/κ — hence the factor 100. GMRES runs to a relative residual 1e-14 on eq. 17: with 1e-13 the
+/// Schur system's own conditioning (m ≈ n on the small brick) left errors up to 1.7e-9 (seed 2).
 constexpr double kRelTol = 1e-9;
+double tolerance(double rcond) {
+  return std::max(kRelTol, 100 * std::numeric_limits<double>::epsilon() / rcond);
+}
 
 struct Sequence {
   CutModel model;
@@ -114,10 +121,11 @@ struct Sequence {
     const ReferenceSolution ref = reference_solve(model.assemble(), f, dirichlet);
     ASSERT_TRUE(ref.ok) << what;
     const double a_scale = std::max(ref.a.norm(), 1e-300);
-    EXPECT_LE((a - ref.a).norm(), kRelTol * a_scale)
+    const double tol = tolerance(ref.rcond);
+    EXPECT_LE((a - ref.a).norm(), tol * a_scale)
         << what << " step " << steps_checked << " m=" << rep.m;
     const double r_scale = std::max(ref.r.norm() + f.norm(), 1e-300);
-    EXPECT_LE((r - ref.r).norm(), kRelTol * r_scale)
+    EXPECT_LE((r - ref.r).norm(), tol * r_scale)
         << what << " step " << steps_checked << " m=" << rep.m;
     ++steps_checked;
   }
@@ -128,40 +136,56 @@ struct Family {
   mesh::MeshData (*make)();
   SchurPreconditioner preconditioner;
   bool elastic = false;  ///< fem linear-elastic tangent (else the stand-in vector Laplacian)
+  int seeds = 2;
+  int steps = 30;
+  double fixed_fraction = 0;  ///< nodes with z < zmin + fraction·(z range) are fixed (0: z = 0)
 };
 
 void PrintTo(const Family& f, std::ostream* os) {
   *os << f.name;
 }
 
+/// 5×5×6 nodes.
 mesh::MeshData small_beam() {
   return mesh::make_beam(6, 0.1);
-}  // 5×5×6 nodes
+}
+/// 3×3×5 nodes.
 mesh::MeshData small_brick() {
   return mesh::make_brick(2);
-}  // 3×3×5 nodes
+}
+/// The liver of reference_data (3,721 vertices, 16,597 tetrahedra; MANIFEST.tsv), in metres.
+mesh::MeshData liver() {
+  io::ReadOptions o;
+  o.scale = 0.001;
+  return io::read_mesh(source_path("reference_data/meshes/liver_coarse.mesh"), o).mesh;
+}
 
 class AugmentedEquivalence : public ::testing::TestWithParam<Family> {};
 
 // Yeung et al. 2016 eqs. 4–17: ≥ 200 random steps per default run across the parameter sets
-// (6 families × 2 seeds × 30 steps), each compared with a fresh factorization.
+// (6 families × 2 seeds × 30 steps, plus 4 steps on the liver mesh), each compared with a fresh
+// factorization.
 TEST_P(AugmentedEquivalence, RandomCutsRemovalsConstraintsEq4to17) {
   const Family fam = GetParam();
   INCISE_SEEDED_RNG(rng, 5);
-  const int seeds = 2;
-  const int steps = scaled(30);
+  const int seeds = fam.seeds;
+  const int steps = scaled(fam.steps);
   int total = 0;
   for (int s = 0; s < seeds; ++s) {
     std::mt19937_64 r(rng());
     std::uniform_real_distribution<double> unit(-1.0, 1.0);
     AugmentedOptions opt;
-    opt.gmres.tolerance = 1e-13;
+    opt.gmres.tolerance = 1e-14;
     opt.gmres.restart = 300;
     opt.gmres.max_iterations = 3000;
     opt.preconditioner = fam.preconditioner;
     opt.cholmod.kind =
         (s % 2 == 0) ? solver::CholmodKind::kSupernodal : solver::CholmodKind::kSimplicialLdl;
-    CutModel start = CutModel::from_mesh(fam.make(), 1e-9);
+    const mesh::MeshData mesh_data = fam.make();
+    const double zmin = mesh_data.points.row(2).minCoeff();
+    const double zrange = mesh_data.points.row(2).maxCoeff() - zmin;
+    CutModel start = CutModel::from_mesh(
+        mesh_data, fam.fixed_fraction > 0 ? zmin + fam.fixed_fraction * zrange : 1e-9);
     if (fam.elastic) start.use_linear_elastic(1e4, 0.3);
     Sequence seq(start, opt);
     // Initial load: pull on the far end.
@@ -289,22 +313,25 @@ TEST_P(AugmentedEquivalence, RandomCutsRemovalsConstraintsEq4to17) {
     seq.check("after final refactorization");
     total += seq.steps_checked;
     RecordProperty("cuts_" + std::to_string(s), seq.cuts);
-    // The sequence must really exercise every kind of change.
-    EXPECT_GT(seq.cuts + seq.removals, 0);
-    EXPECT_GT(seq.imposed, 0);
+    // A long sequence must really exercise every kind of change (short ones: liver).
+    if (steps >= 20) {
+      EXPECT_GT(seq.cuts + seq.removals, 0);
+      EXPECT_GT(seq.imposed, 0);
+    }
   }
-  EXPECT_GE(total, 2 * steps);
+  EXPECT_GE(total, seeds * steps);
 }
 
 INSTANTIATE_TEST_SUITE_P(
     Families, AugmentedEquivalence,
-    ::testing::Values(Family{"beam_diag", &small_beam, SchurPreconditioner::kDiagonal},
-                      Family{"brick_spai", &small_brick, SchurPreconditioner::kTridiagonalSpai},
-                      Family{"beam_none", &small_beam, SchurPreconditioner::kNone},
-                      Family{"brick_diag", &small_brick, SchurPreconditioner::kDiagonal},
-                      Family{"beam_elastic", &small_beam, SchurPreconditioner::kDiagonal, true},
-                      Family{"brick_elastic_spai", &small_brick,
-                             SchurPreconditioner::kTridiagonalSpai, true}),
+    ::testing::Values(
+        Family{"beam_diag", &small_beam, SchurPreconditioner::kDiagonal},
+        Family{"brick_spai", &small_brick, SchurPreconditioner::kTridiagonalSpai},
+        Family{"beam_none", &small_beam, SchurPreconditioner::kNone},
+        Family{"brick_diag", &small_brick, SchurPreconditioner::kDiagonal},
+        Family{"beam_elastic", &small_beam, SchurPreconditioner::kDiagonal, true},
+        Family{"brick_elastic_spai", &small_brick, SchurPreconditioner::kTridiagonalSpai, true},
+        Family{"liver_elastic", &liver, SchurPreconditioner::kDiagonal, true, 1, 4, 0.1}),
     [](const ::testing::TestParamInfo<Family>& p) { return std::string(p.param.name); });
 
 // Eq. 1: replacing one column (and, by symmetry, its row) by an explicit example.

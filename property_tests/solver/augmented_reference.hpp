@@ -15,6 +15,7 @@ struct ReferenceSolution {
   bool ok = false;
   Eigen::VectorXd a;  ///< displacements
   Eigen::VectorXd r;  ///< reactions K a − f on 𝓓 (zero elsewhere)
+  double rcond = 1;   ///< CHOLMOD's pivot-ratio estimate of 1/κ of the free block
 };
 
 inline ReferenceSolution reference_solve(const solver::SparseMatrix& k, const Eigen::VectorXd& f,
@@ -37,6 +38,7 @@ inline ReferenceSolution reference_solve(const solver::SparseMatrix& k, const Ei
   if (red.matrix.rows() > 0) {
     solver::CholmodFactor factor;
     if (factor.compute(red.matrix, 1) != solver::FactorStatus::kOk) return out;
+    out.rcond = factor.rcond();
     Eigen::VectorXd x;
     if (factor.solve(rhs, x) != solver::FactorStatus::kOk) return out;
     for (int i = 0; i < n; ++i) {
