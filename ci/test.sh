@@ -5,6 +5,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc 2>/dev/null || echo 2)
+# ctest runs $jobs tests at once: keep BLAS/OpenMP single-threaded so they don't oversubscribe.
+export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
 logdir=build/ci-logs
 mkdir -p "$logdir"
 
