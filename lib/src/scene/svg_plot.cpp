@@ -2,7 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 
@@ -15,9 +15,9 @@ const char* const kColors[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
                                "#E69F00", "#56B4E9", "#000000", "#F0E442"};
 
 std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.2f", v);
-  return buf;
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(2) << v;
+  return os.str();
 }
 
 // "Nice" tick values covering [lo, hi] on a linear axis.
@@ -43,13 +43,13 @@ std::vector<double> linear_ticks(double lo, double hi) {
 std::string format_number(double v) {
   if (std::isnan(v)) return "\xE2\x80\x94";  // em dash
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  char buf[32];
+  std::ostringstream os;
   const double a = std::abs(v);
   if (a != 0.0 && (a < 1e-3 || a >= 1e6))
-    std::snprintf(buf, sizeof buf, "%.3e", v);
+    os << std::scientific << std::setprecision(3) << v;  // as printf "%.3e"
   else
-    std::snprintf(buf, sizeof buf, "%.4g", v);
-  return buf;
+    os << std::setprecision(4) << v;  // as printf "%.4g"
+  return os.str();
 }
 
 std::string html_escape(const std::string& s) {
@@ -161,9 +161,9 @@ std::string svg_line_plot(const std::vector<Series>& series, const PlotOptions& 
     return t;
   };
   auto tick_label = [](double v, bool log) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.4g", log ? std::pow(10.0, v) : v);
-    return std::string(buf);
+    std::ostringstream label;
+    label << std::setprecision(4) << (log ? std::pow(10.0, v) : v);  // as printf "%.4g"
+    return label.str();
   };
   for (double t : ticks_for(ylo, yhi, o.log_y)) {
     os << "<line x1=\"" << ml << "\" x2=\"" << num(ml + pw) << "\" y1=\"" << num(py(t))
