@@ -7,10 +7,6 @@
 namespace incise::solver {
 namespace {
 
-StopReason status_reason(EvalStatus s) {
-  return s == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
-}
-
 const VecX& checked_mass(const Problem& problem) {
   const VecX& m = problem.lumped_mass();
   INCISE_CHECK(m.size() == problem.size(), "eigenvalue estimate needs Problem::lumped_mass()");
@@ -41,7 +37,7 @@ EigenEstimate largest_eigenvalue(Problem& problem, const VecX& u, const EigenOpt
   for (long k = 0; k < options.max_iterations; ++k) {
     const EvalStatus st = problem.hessian_product(u, x, kx);
     if (st != EvalStatus::kOk || !kx.allFinite()) {
-      est.reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+      est.reason = failure_reason(st);
       break;
     }
     problem.project(kx);
@@ -106,7 +102,7 @@ EigenEstimate smallest_eigenvalue(Problem& problem, const VecX& u, const EigenOp
     x = y / mnorm;
     const EvalStatus st = problem.hessian_product(u, x, kx);
     if (st != EvalStatus::kOk || !kx.allFinite()) {
-      est.reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+      est.reason = failure_reason(st);
       break;
     }
     problem.project(kx);

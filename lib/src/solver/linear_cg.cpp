@@ -5,10 +5,6 @@
 namespace incise::solver {
 namespace {
 
-StopReason status_reason(EvalStatus s) {
-  return s == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
-}
-
 // z = D⁻¹ r (or r when no preconditioner).
 void precondition(const VecX& inv_diag, const VecX& r, VecX& z) {
   if (inv_diag.size() == 0)
@@ -46,7 +42,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
   double energy = 0.0;
   EvalStatus st = problem.gradient(u, g, &energy);
   if (st != EvalStatus::kOk || !g.allFinite()) {
-    rep.reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+    rep.reason = failure_reason(st);
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
     return rep;
@@ -80,7 +76,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
 
     st = problem.hessian_product(u0, d, q);
     if (st != EvalStatus::kOk || !q.allFinite()) {
-      reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+      reason = failure_reason(st);
       break;
     }
     const double curvature = d.dot(q);  // d is projected, so dᵀq = dᵀ P K P d
@@ -169,7 +165,7 @@ InnerCgResult projected_cg(const LinearOperator& apply, const Problem& problem,
     }
     const EvalStatus st = apply(d, q);
     if (st != EvalStatus::kOk || !q.allFinite()) {
-      res.reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+      res.reason = failure_reason(st);
       break;
     }
     problem.project(q);

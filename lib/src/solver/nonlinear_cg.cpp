@@ -20,10 +20,6 @@ const char* to_string(LineSearchKind l) {
 
 namespace {
 
-StopReason status_reason(EvalStatus s) {
-  return s == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
-}
-
 struct LineSearchResult {
   StopReason reason = StopReason::kConverged;  // kConverged: an admissible α was found
   double alpha = 0.0;
@@ -67,7 +63,7 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
       meter.add(4 * nn);
       if (st != EvalStatus::kOk || !s.allFinite()) {
         if (j == 0) {
-          res.reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+          res.reason = failure_reason(st);
           return res;
         }
         break;
@@ -141,7 +137,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   double energy = 0.0;
   EvalStatus st = problem.gradient(u, g, &energy);
   if (st != EvalStatus::kOk || !g.allFinite()) {
-    rep.reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+    rep.reason = failure_reason(st);
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
     return rep;

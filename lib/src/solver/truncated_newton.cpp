@@ -5,13 +5,6 @@
 #include <limits>
 
 namespace incise::solver {
-namespace {
-
-StopReason status_reason(EvalStatus s) {
-  return s == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
-}
-
-}  // namespace
 
 SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOptions& options) {
   INCISE_CHECK(u.size() == problem.size(), "truncated_newton: u has the wrong size");
@@ -28,7 +21,7 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
   double energy = 0.0;
   EvalStatus st = problem.gradient(u, g, &energy);
   if (st != EvalStatus::kOk || !g.allFinite()) {
-    rep.reason = st == EvalStatus::kOk ? StopReason::kNonFinite : status_reason(st);
+    rep.reason = failure_reason(st);
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
     return rep;

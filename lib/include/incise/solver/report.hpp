@@ -122,6 +122,12 @@ class CostMeter {
   Timer timer_;
 };
 
+/// Stop reason for a failed evaluation: kInverted when the problem reported inverted elements,
+/// kNonFinite otherwise (including an evaluation that said kOk but produced NaN/inf values).
+inline StopReason failure_reason(EvalStatus s) {
+  return s == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
+}
+
 /// ‖v‖₂ of the components of v at fixed DOFs (the reaction force norm of (6.9) when v = ∇Π).
 double fixed_norm(const Problem& problem, const VecX& v);
 
