@@ -1,23 +1,15 @@
 #include "incise_bench/context.hpp"
 
+#include <incise/core/baseline.hpp>
+
 #include <benchmark/benchmark.h>
 
-#include <ctime>
 #include <fstream>
 #include <sstream>
-#include <vector>
 
 namespace incise::bench {
 
 namespace {
-// CPU time of this thread in seconds: the baseline must be timed like Google Benchmark's
-// rates (CPU time), or a loaded machine inflates every "% of baseline" figure.
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
-
 std::string cpuinfo_field(const std::string& key) {
   std::ifstream in("/proc/cpuinfo");
   std::string line;
@@ -32,30 +24,7 @@ std::string cpuinfo_field(const std::string& key) {
 }  // namespace
 
 double vector_add_mflops() {
-  static const double cached = [] {
-    constexpr int kN = 1024;
-    std::vector<double> a(kN, 1.0), b(kN, 1e-9);
-    double best = 0.0;
-    // Best of 5 trials of ~20 ms each; the thesis used the best sustained rate as its baseline.
-    for (int trial = 0; trial < 5; ++trial) {
-      long reps = 0;
-      const double start = thread_cpu_seconds();
-      double elapsed = 0.0;
-      do {
-        for (int r = 0; r < 1000; ++r) {
-          for (int i = 0; i < kN; ++i) a[i] += b[i];
-          benchmark::ClobberMemory();
-        }
-        reps += 1000;
-        elapsed = thread_cpu_seconds() - start;
-      } while (elapsed < 0.02);
-      const double rate = reps * double(kN) / elapsed / 1e6;
-      if (rate > best) best = rate;
-    }
-    benchmark::DoNotOptimize(a.data());
-    return best;
-  }();
-  return cached;
+  return incise::vector_add_mflops();  // lib/src/core/baseline.cpp, one implementation
 }
 
 double fma_peak_mflops() {

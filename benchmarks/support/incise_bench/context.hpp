@@ -5,7 +5,8 @@
 /// - add_context(): records CPU model, the BLAS shared object actually mapped into the process
 ///   (read from /proc/self/maps — it is what CHOLMOD calls at run time), and the measured
 ///   vector-add baseline, as Google Benchmark context entries (they appear in the JSON output).
-/// - vector_add_mflops(): the thesis' machine baseline (§4.5, Table 4.5): repeated
+/// - vector_add_mflops(): the thesis' machine baseline (§4.5, Table 4.5), forwarded to
+///   incise::vector_add_mflops() (incise/core/baseline.hpp, shared with `incise certify`):
 ///   a ← a + b on 1024-double vectors, in MFLOP/s (one flop per element add), timed in thread
 ///   CPU time like Google Benchmark's rates, best of 5 trials.
 /// - fma_peak_mflops(): the nominal double-precision FMA peak of one core, not measured:

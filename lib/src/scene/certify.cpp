@@ -1,5 +1,6 @@
 #include <incise/scene/certify.hpp>
 
+#include <incise/core/baseline.hpp>
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
 #include <incise/fem/elastic_problem.hpp>
@@ -11,6 +12,9 @@
 #include <incise/scene/scene_builder.hpp>
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
+#include <incise/solver/dynamic_relaxation.hpp>
+#include <incise/solver/linear_cg.hpp>
+#include <incise/solver/nonlinear_cg.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -55,11 +59,8 @@ double tet_volume(const mesh::MeshData& m, Index c) {
 
 // --- mesh generators ------------------------------------------------------------------------
 
-CheckResult check_box_volume(const CertifyContext& ctx) {
-  CheckResult r;
-  r.source = "generators.hpp make_box; thesis §3.3 cantilever mesh";
-  r.comparison = "max |sum of tet volumes - lx ly lz| / (lx ly lz) <= tolerance, all volumes > 0";
-  r.tolerance = ctx.tolerance("box_volume", "relative");
+Measurement measure_box_volume(const CertifyContext& /*ctx*/) {
+  Measurement r;
   ReportTable t{"Boxes", {"cubes", "split", "tets", "relative volume error", "min tet volume"}, {}};
   double worst = 0, min_vol = 1e300;
   struct B {
@@ -84,17 +85,14 @@ CheckResult check_box_volume(const CertifyContext& ctx) {
     }
   }
   r.value = worst;
-  r.passed = worst <= r.tolerance && min_vol > 0;
+  r.conditions_ok = min_vol > 0;
   r.detail = "Sum of signed tetrahedron volumes of generated boxes against the exact box volume.";
   r.tables.push_back(t);
   return r;
 }
 
-CheckResult check_cylinder_volume(const CertifyContext& ctx) {
-  CheckResult r;
-  r.source = "generators.hpp make_cylinder (thesis §4.2 cylinder, Table 4.2)";
-  r.comparison = "max relative error against the inscribed 6k-gon prism volume <= tolerance";
-  r.tolerance = ctx.tolerance("cylinder_volume", "relative");
+Measurement measure_cylinder_volume(const CertifyContext& /*ctx*/) {
+  Measurement r;
   ReportTable t{
       "Cylinders (length 0.1 m, radius 0.03 m)",
       {"rings", "layers", "tets", "volume (m^3)", "polygon prism (m^3)", "relative error"},
@@ -117,17 +115,14 @@ CheckResult check_cylinder_volume(const CertifyContext& ctx) {
                       fmt(sum), fmt(exact), fmt(err)});
   }
   r.value = worst;
-  r.passed = worst <= r.tolerance && positive;
+  r.conditions_ok = positive;
   r.detail = "The O-grid cylinder tiles the prism over the regular polygon of its outer ring.";
   r.tables.push_back(t);
   return r;
 }
 
-CheckResult check_liver_validate(const CertifyContext& ctx) {
-  CheckResult r;
-  r.source = "thesis §7.2-7.3 invariants (7.1)-(7.5); reference_data/meshes/liver_coarse.mesh";
-  r.comparison = "number of violated invariants <= tolerance";
-  r.tolerance = ctx.tolerance("liver_validate", "violations");
+Measurement measure_liver_validate(const CertifyContext& ctx) {
+  Measurement r;
   const std::string path = ctx.data_dir + "/meshes/liver_coarse.mesh";
   Timer t;
   const io::LoadedMesh lm = io::read_mesh(path);
@@ -141,7 +136,6 @@ CheckResult check_liver_validate(const CertifyContext& ctx) {
   const mesh::ValidationReport v = mesh::validate(conn, vo);
   const double t_val = t.seconds();
   r.value = static_cast<double>(v.violations.size());
-  r.passed = r.value <= r.tolerance;
   r.detail = "Read (" + lm.report.format +
              "), built the connectivity and validated all "
              "invariants including connected stars and orientation." +
@@ -156,11 +150,8 @@ CheckResult check_liver_validate(const CertifyContext& ctx) {
 
 // --- scenes -----------------------------------------------------------------------------------
 
-CheckResult check_shipped_scenes(const CertifyContext& ctx) {
-  CheckResult r;
-  r.source = "docs/scenes.md; reference_data/scenes/";
-  r.comparison = "scenes failing to parse or build <= tolerance";
-  r.tolerance = ctx.tolerance("shipped_scenes", "failures");
+Measurement measure_shipped_scenes(const CertifyContext& ctx) {
+  Measurement r;
   ReportTable t{"Shipped scenes", {"file", "result", "nodes", "tets", "fixed nodes"}, {}};
   int failures = 0;
   std::vector<std::filesystem::path> files;
@@ -178,7 +169,7 @@ CheckResult check_shipped_scenes(const CertifyContext& ctx) {
     }
   }
   r.value = failures;
-  r.passed = failures <= r.tolerance && !files.empty();
+  r.conditions_ok = !files.empty();
   r.detail = std::to_string(files.size()) + " scene files parsed and built (not solved).";
   r.tables.push_back(t);
   return r;
@@ -195,11 +186,8 @@ material::Material make_material(const std::string& name) {
   return material::Material(name, p);
 }
 
-CheckResult check_patch_test(const CertifyContext& ctx) {
-  CheckResult r;
-  r.source = "thesis §3.3 (deformation test), homogeneous deformations for every material";
-  r.comparison = "max |interior nodal force| / max |nodal force| <= tolerance";
-  r.tolerance = ctx.tolerance("patch_test", "relative");
+Measurement measure_patch_test(const CertifyContext& /*ctx*/) {
+  Measurement r;
   ReportTable t{"Affine displacement u = A x on a 3x3x3 box (six split)",
                 {"material", "max interior |g| (N)", "max |g| (N)", "ratio"},
                 {}};
@@ -228,7 +216,6 @@ CheckResult check_patch_test(const CertifyContext& ctx) {
     t.rows.push_back({name, fmt(gi), fmt(gmax), fmt(ratio)});
   }
   r.value = worst;
-  r.passed = worst <= r.tolerance;
   r.detail =
       "Constant stress is divergence free: interior nodes of an affinely deformed mesh "
       "carry no net internal force (random A, |A_ij| <= 0.05, seed 20031107).";
@@ -236,11 +223,8 @@ CheckResult check_patch_test(const CertifyContext& ctx) {
   return r;
 }
 
-CheckResult check_matrix_free(const CertifyContext& ctx) {
-  CheckResult r;
-  r.source = "thesis §3.1 matrix-free K d vs assembled K (DESIGN §3 equivalences)";
-  r.comparison = "max ||K_mf d - K_asm d|| / ||K_asm d|| <= tolerance";
-  r.tolerance = ctx.tolerance("matrix_free_vs_assembled", "relative");
+Measurement measure_matrix_free(const CertifyContext& /*ctx*/) {
+  Measurement r;
   ReportTable t{"Thesis small cylinder (make_thesis_cylinder_small), random u and d",
                 {"material", "relative difference"},
                 {}};
@@ -262,17 +246,13 @@ CheckResult check_matrix_free(const CertifyContext& ctx) {
     t.rows.push_back({name, fmt(rel)});
   }
   r.value = worst;
-  r.passed = worst <= r.tolerance;
   r.detail = "Element-by-element products (4.4) against the assembled sparse tangent.";
   r.tables.push_back(t);
   return r;
 }
 
-CheckResult check_flop_table(const CertifyContext& ctx) {
-  CheckResult r;
-  r.source = "thesis §4.3, Table 4.3 (hand counts, reference values)";
-  r.comparison = "max over models of max(ours/thesis, thesis/ours) <= tolerance";
-  r.tolerance = ctx.tolerance("flop_table_4_3", "ratio_bound");
+Measurement measure_flop_table(const CertifyContext& /*ctx*/) {
+  Measurement r;
   struct Row {
     const char* name;
     double force, derivative;
@@ -301,7 +281,6 @@ CheckResult check_flop_table(const CertifyContext& ctx) {
     ++k;
   }
   r.value = worst;
-  r.passed = worst <= r.tolerance;
   r.detail =
       "Our kernels are counted by instantiating them with incise::Counted (exp charged 50 "
       "flops as in §4.2); the thesis counted its formulas by hand, so only agreement in "
@@ -349,13 +328,8 @@ SceneSpec cantilever_spec(int n, double tolerance) {
   return s;
 }
 
-CheckResult check_cantilever(const CertifyContext& ctx) {
-  CheckResult r;
-  r.source = "thesis §3.3, Table 3.1 (l = 1.2, h = 0.2, d = 0.3 m, E = 1e6 Pa, nu = 0, F = 3 N)";
-  r.comparison =
-      "max over meshes of (our avg tip error - thesis avg error) in % points <= tolerance; errors "
-      "positive (FEM stiffer) and decreasing";
-  r.tolerance = ctx.tolerance("cantilever_table_3_1", "excess_percent_points");
+Measurement measure_cantilever(const CertifyContext& ctx) {
+  Measurement r;
   const double y_exact = 4 * 3.0 / (1e6 * 0.3) * std::pow(1.2 / 0.2, 3);  // 8.64e-3 m
   // Published reference values, thesis Table 3.1 (avg error %, iterations) for n×4 cubes.
   struct T {
@@ -401,7 +375,7 @@ CheckResult check_cantilever(const CertifyContext& ctx) {
     conv.push_back(c);
   }
   r.value = worst;
-  r.passed = ok && worst <= r.tolerance;
+  r.conditions_ok = ok;
   r.detail +=
       "Linear elasticity, matrix-free CG to ||r|| < 1e-8 ||f_ext|| (the thesis' rule), "
       "load split equally over the tip nodes. Mesh split: 6 tets per cube (the thesis' "
@@ -422,11 +396,8 @@ CheckResult check_cantilever(const CertifyContext& ctx) {
   return r;
 }
 
-CheckResult check_cg_vs_cholmod(const CertifyContext& ctx) {
-  CheckResult r;
-  r.source = "DESIGN §3 equivalence: CG == CHOLMOD (the augmented method's initial solve)";
-  r.comparison = "||u_cg - u_cholmod|| / ||u_cholmod|| <= tolerance";
-  r.tolerance = ctx.tolerance("cg_vs_cholmod", "relative");
+Measurement measure_cg_vs_cholmod(const CertifyContext& ctx) {
+  Measurement r;
   SceneSpec s = cantilever_spec(ctx.quick ? 2 : 4, 1e-9);
   BuiltScene b1 = build_scene(s);
   const SceneRunResult cg = run_scene(b1);
@@ -434,7 +405,7 @@ CheckResult check_cg_vs_cholmod(const CertifyContext& ctx) {
   BuiltScene b2 = build_scene(s);
   const SceneRunResult ch = run_scene(b2);
   r.value = (cg.u - ch.u).norm() / ch.u.norm();
-  r.passed = cg.report.converged() && ch.report.converged() && r.value <= r.tolerance;
+  r.conditions_ok = cg.report.converged() && ch.report.converged();
   r.detail = "Cantilever " + std::to_string(b1.mesh.num_points()) +
              " nodes: CG to ||r|| < 1e-9 ||f|| (" + solver::to_string(cg.report.reason) + ", " +
              std::to_string(cg.report.iterations) + " iterations) vs CHOLMOD factor + solve (" +
@@ -464,13 +435,8 @@ SceneSpec cylinder_spec(const std::string& model, bool quick) {
   return s;
 }
 
-CheckResult check_solver_trade(const CertifyContext& ctx) {
-  CheckResult r;
-  r.source =
-      "thesis §4.2-4.5: nonlinear CG and dynamic relaxation (SS22) on the cylinder under "
-      "gravity, neo-Hookean, Table 4.1 parameters; reference by truncated Newton";
-  r.comparison = "max ||u - u_newton|| / ||u_newton|| over methods <= tolerance, all converged";
-  r.tolerance = ctx.tolerance("solver_equivalence_cylinder", "relative");
+Measurement measure_solver_trade(const CertifyContext& ctx) {
+  Measurement r;
   const double tol_ref = 1e-8, tol = ctx.tolerance("solver_equivalence_cylinder", "residual");
   SceneSpec spec = cylinder_spec("neohookean", ctx.quick);
   spec.solver.method = SolverSpec::Method::kNewton;
@@ -514,7 +480,7 @@ CheckResult check_solver_trade(const CertifyContext& ctx) {
     curves.push_back(trace_series(to_string(method), res));
   }
   r.value = worst;
-  r.passed = ok && worst <= r.tolerance;
+  r.conditions_ok = ok;
   r.detail =
       "Nonlinear CG (secant line search, Polak-Ribiere) and SS22 dynamic relaxation (dt "
       "and critical damping from eigenvalue estimates, §4.1) run to ||r|| <= " +
@@ -531,23 +497,207 @@ CheckResult check_solver_trade(const CertifyContext& ctx) {
   return r;
 }
 
+// --- machine-dependent performance (thesis §4.5.2, Table 4.5) ----------------------------------
+
+/// One row of thesis Table 4.5 (published reference values: "% peak" of the 246 MFLOP/s
+/// vector-add baseline, iterations per second and MFLOP per iteration on a 1 GHz Pentium III).
+struct Table45Row {
+  const char* material;
+  const char* method;       ///< "static" (linear CG / nonlinear CG) or "dynamic" (SS22)
+  const char* line_search;  ///< "newton", "secant" or "" (linear CG, dynamic)
+  bool large;               ///< the large mesh of Table 4.2
+  double percent_peak, iterations_per_second, mflop_per_iteration;
+};
+
+const Table45Row kTable45[] = {
+    {"linear", "dynamic", "", false, 49, 628, 0.2},
+    {"linear", "static", "", false, 56, 708, 0.2},
+    {"stvk", "static", "newton", false, 48, 71, 1.7},
+    {"stvk", "static", "secant", false, 53, 113, 1.2},
+    {"stvk", "dynamic", "", false, 62, 426, 0.4},
+    {"neohookean", "static", "newton", false, 85, 109, 1.9},
+    {"neohookean", "static", "secant", false, 77, 144, 1.3},
+    {"neohookean", "dynamic", "", false, 54, 356, 0.4},
+    {"veronda-westmann", "static", "newton", false, 90, 91, 2.4},
+    {"veronda-westmann", "static", "secant", false, 80, 120, 1.7},
+    {"veronda-westmann", "dynamic", "", false, 61, 327, 0.5},
+    {"neohookean", "static", "newton", true, 73, 12, 14.2},
+    {"neohookean", "static", "secant", true, 66, 16, 9.9},
+    {"neohookean", "dynamic", "", true, 49, 41, 2.9},
+};
+
+/// The §4.2 cylinder (Table 4.1 parameters, one end fixed, gravity), small or large mesh.
+std::unique_ptr<fem::ElasticProblem> table_4_5_cylinder(const std::string& model, bool large) {
+  const mesh::MeshData m =
+      large ? mesh::make_thesis_cylinder_large() : mesh::make_thesis_cylinder_small();
+  auto p = std::make_unique<fem::ElasticProblem>(m, make_material(model));
+  p->fix_nodes(fem::nodes_on_plane(m, 0, 0.0));
+  p->add_gravity(Vec3(0.0, 0.0, -9.8));
+  return p;
+}
+
+/// Runs `iterations` iterations of the row's method from u = 0 (no stopping test: ε = 0) and
+/// returns its report (counted flops, iterations actually done).
+solver::SolverReport run_table_4_5_method(fem::ElasticProblem& p, const Table45Row& row,
+                                          long iterations) {
+  VecX u = VecX::Zero(p.size());
+  const std::string method = row.method, ls = row.line_search;
+  if (method == "dynamic") {
+    solver::DynamicRelaxationOptions o;
+    o.time_step = 1e-4;  // below the critical step of both meshes: the run stays bounded
+    o.damping = 20.0;    // the cost of a step does not depend on Δt or η
+    o.stop.epsilon = 0.0;
+    o.budget.max_iterations = iterations;
+    return solver::dynamic_relaxation(p, u, o);
+  }
+  if (std::string(row.material) == "linear") {
+    solver::LinearCgOptions o;
+    o.stop.epsilon = 0.0;
+    o.budget.max_iterations = iterations;
+    o.recompute_residual = false;
+    return solver::linear_cg(p, u, o);
+  }
+  solver::NonlinearCgOptions o;  // the thesis' §4.5 settings: PR, ε_newton = 0.1
+  o.stop.epsilon = 0.0;
+  o.budget.max_iterations = iterations;
+  o.line_search =
+      ls == "newton" ? solver::LineSearchKind::kNewton : solver::LineSearchKind::kSecant;
+  return solver::nonlinear_cg(p, u, o);
+}
+
+Measurement measure_table_4_5(const CertifyContext& ctx) {
+  Measurement r;
+  // Thread CPU seconds spent repeating each row's run (the thesis captured the first 1.0 s).
+  const double cpu_seconds = ctx.quick ? 0.02 : 0.5;
+  const double baseline = vector_add_mflops();  // measured now, in this process
+  ReportTable t{
+      "Per iteration, from u = 0 (ours measured in this process; thesis Table 4.5 "
+      "values on a 1 GHz Pentium III, baseline 246 MFLOP/s)",
+      {"material", "method", "line search", "mesh", "MFLOP/iter (ours, counted)",
+       "MFLOP/iter (thesis)", "iter/s (ours)", "iter/s (thesis)", "MFLOP/s (ours)",
+       "% of baseline (ours)", "% peak (thesis)"},
+      {}};
+  Series ours{"incise (counted)", {}, {}, {}, false}, ref{"thesis Table 4.5", {}, {}, {}, true};
+  PlotOptions po;
+  double worst = 1;
+  bool ok = true;
+  int k = 0;
+  for (const Table45Row& row : kTable45) {
+    if (row.large && ctx.quick) continue;
+    auto p = table_4_5_cylinder(row.material, row.large);
+    const std::string method = row.method;
+    const long iterations = method == "dynamic"                     ? 100
+                            : std::string(row.material) == "linear" ? 50
+                                                                    : 20;
+    // Counted flops per iteration: deterministic, compared with the thesis.
+    const solver::SolverReport first = run_table_4_5_method(*p, row, iterations);
+    if (first.iterations <= 0 || (first.iterations < iterations && !first.converged())) {
+      ok = false;
+      r.detail += std::string(row.material) + " " + row.method + ": stopped after " +
+                  std::to_string(first.iterations) + " iterations (" +
+                  solver::to_string(first.reason) + "). ";
+    }
+    const double mflop_iter =
+        static_cast<double>(first.flops) / 1e6 / std::max<long>(1, first.iterations);
+    // Rates: repeat the same run for at least cpu_seconds of thread CPU time (displayed only).
+    double iters = 0, flops = 0;
+    const double start = thread_cpu_seconds();
+    double elapsed = 0;
+    do {
+      const solver::SolverReport rep = run_table_4_5_method(*p, row, iterations);
+      iters += static_cast<double>(rep.iterations);
+      flops += static_cast<double>(rep.flops);
+      elapsed = thread_cpu_seconds() - start;
+    } while (elapsed < cpu_seconds);
+    const double mflops = flops / 1e6 / elapsed;
+    worst = std::max(
+        {worst, mflop_iter / row.mflop_per_iteration, row.mflop_per_iteration / mflop_iter});
+    const std::string mesh = std::string(row.large ? "large" : "small") + " (" +
+                             std::to_string(p->num_elements()) + " tets)";
+    t.rows.push_back({row.material, row.method, row.line_search, mesh, fmt(mflop_iter),
+                      fmt(row.mflop_per_iteration), fmt(iters / elapsed),
+                      fmt(row.iterations_per_second), fmt(mflops), fmt(100 * mflops / baseline),
+                      fmt(row.percent_peak)});
+    const std::string label = std::string(row.material) + " " + row.method +
+                              (row.line_search[0] ? std::string(" ") + row.line_search : "") +
+                              (row.large ? " (large)" : "");
+    po.x_categories.push_back(label);
+    ours.x.push_back(k), ours.y.push_back(mflop_iter);
+    ref.x.push_back(k), ref.y.push_back(row.mflop_per_iteration);
+    ++k;
+  }
+  r.value = worst;
+  r.conditions_ok = ok;
+  r.detail +=
+      "Each row runs its method from u = 0 on the §4.2 cylinder (Table 4.1 parameters, gravity, "
+      "one end fixed; our O-grid meshes instead of the thesis' Delaunay meshes of 1230 and 9300 "
+      "elements): linear CG 50 iterations, nonlinear CG (Polak-Ribiere, epsilon_newton = 0.1) 20 "
+      "iterations, SS22 100 steps (dt = 1e-4 s, eta = 20/s). MFLOP/iter is counted "
+      "(deterministic) and compared with the thesis; iter/s, MFLOP/s and % of the vector-add "
+      "baseline (a <- a + b on 1024 doubles, measured in this process: " +
+      fmt(baseline) + " MFLOP/s) are thread CPU time rates over " + fmt(cpu_seconds) +
+      " s per row, displayed and never asserted. The thesis' kernels ran at 48-90 % of its "
+      "baseline; the add is bound by loads and stores, the element kernels by arithmetic, so a "
+      "modern core can exceed 100 %.";
+  r.tables.push_back(t);
+  po.title = "MFLOP per iteration (Table 4.5)";
+  po.y_label = "MFLOP / iteration";
+  po.x_label = "material, method";
+  po.log_y = true;
+  r.plots.push_back(ReportPlot{po, {ours, ref}});
+  return r;
+}
+
 }  // namespace
 
 const std::vector<Check>& certify_catalogue() {
+  // One row per check: id, title, what it reproduces, the criterion, the name of its bound in
+  // reference_data/certify/tolerances.json, and the measurement. run_certify() judges.
   static const std::vector<Check> kCatalogue = {
-      {"box_volume", "Box generator: volumes exact", check_box_volume},
+      {"box_volume", "Box generator: volumes exact",
+       "generators.hpp make_box; thesis §3.3 cantilever mesh",
+       "max |sum of tet volumes - lx ly lz| / (lx ly lz) <= tolerance, all volumes > 0", "relative",
+       measure_box_volume},
       {"cylinder_volume", "Cylinder generator: volume of the polygonal prism",
-       check_cylinder_volume},
-      {"liver_validate", "Liver mesh: connectivity invariants (7.1)-(7.5)", check_liver_validate},
-      {"shipped_scenes", "Shipped scenes parse and build", check_shipped_scenes},
-      {"patch_test", "Patch test: homogeneous deformations, every material", check_patch_test},
-      {"matrix_free_vs_assembled", "Matrix-free K.d equals assembled K.d", check_matrix_free},
-      {"flop_table_4_3", "Flops per element vs thesis Table 4.3", check_flop_table},
-      {"cantilever_table_3_1", "Cantilever tip deflection vs thesis Table 3.1", check_cantilever},
-      {"cg_vs_cholmod", "Linear CG equals CHOLMOD direct solve", check_cg_vs_cholmod},
+       "generators.hpp make_cylinder (thesis §4.2 cylinder, Table 4.2)",
+       "max relative error against the inscribed 6k-gon prism volume <= tolerance, all volumes > 0",
+       "relative", measure_cylinder_volume},
+      {"liver_validate", "Liver mesh: connectivity invariants (7.1)-(7.5)",
+       "thesis §7.2-7.3 invariants (7.1)-(7.5); reference_data/meshes/liver_coarse.mesh",
+       "number of violated invariants <= tolerance", "violations", measure_liver_validate},
+      {"shipped_scenes", "Shipped scenes parse and build", "docs/scenes.md; reference_data/scenes/",
+       "scenes failing to parse or build <= tolerance", "failures", measure_shipped_scenes},
+      {"patch_test", "Patch test: homogeneous deformations, every material",
+       "thesis §3.3 (deformation test), homogeneous deformations for every material",
+       "max |interior nodal force| / max |nodal force| <= tolerance", "relative",
+       measure_patch_test},
+      {"matrix_free_vs_assembled", "Matrix-free K.d equals assembled K.d",
+       "thesis §3.1 matrix-free K d vs assembled K (DESIGN §3 equivalences)",
+       "max ||K_mf d - K_asm d|| / ||K_asm d|| <= tolerance", "relative", measure_matrix_free},
+      {"flop_table_4_3", "Flops per element vs thesis Table 4.3",
+       "thesis §4.3, Table 4.3 (hand counts, reference values)",
+       "max over models of max(ours/thesis, thesis/ours) <= tolerance", "ratio_bound",
+       measure_flop_table},
+      {"cantilever_table_3_1", "Cantilever tip deflection vs thesis Table 3.1",
+       "thesis §3.3, Table 3.1 (l = 1.2, h = 0.2, d = 0.3 m, E = 1e6 Pa, nu = 0, F = 3 N)",
+       "max over meshes of (our avg tip error - thesis avg error) in % points <= tolerance; errors "
+       "positive (FEM stiffer) and decreasing",
+       "excess_percent_points", measure_cantilever},
+      {"cg_vs_cholmod", "Linear CG equals CHOLMOD direct solve",
+       "DESIGN §3 equivalence: CG == CHOLMOD (the augmented method's initial solve)",
+       "||u_cg - u_cholmod|| / ||u_cholmod|| <= tolerance, both converged", "relative",
+       measure_cg_vs_cholmod},
       {"solver_equivalence_cylinder",
        "Nonlinear CG and dynamic relaxation reach the Newton minimizer (speed/accuracy)",
-       check_solver_trade},
+       "thesis §4.2-4.5: nonlinear CG and dynamic relaxation (SS22) on the cylinder under "
+       "gravity, neo-Hookean, Table 4.1 parameters; reference by truncated Newton",
+       "max ||u - u_newton|| / ||u_newton|| over methods <= tolerance, all converged", "relative",
+       measure_solver_trade},
+      {"performance_table_4_5", "Cost per iteration vs thesis Table 4.5 (machine baseline)",
+       "thesis §4.5.2, Table 4.5 (MFLOP/iteration, iterations/s, % of the vector-add baseline)",
+       "max over rows of max(ours/thesis, thesis/ours) of the counted MFLOP per iteration <= "
+       "tolerance, every run completes its iterations; rates displayed only",
+       "ratio_bound", measure_table_4_5},
   };
   return kCatalogue;
 }
@@ -575,16 +725,25 @@ CertifySummary run_certify(const std::string& data_dir, bool quick, const std::s
     if (progress) progress(c.id);
     Timer t;
     CheckResult r;
-    try {
-      r = c.run(ctx);
-    } catch (const std::exception& e) {
-      r = CheckResult{};
-      r.passed = false;
-      r.value = std::numeric_limits<double>::quiet_NaN();
-      r.detail = std::string("exception: ") + e.what();
-    }
     r.id = c.id;
     r.title = c.title;
+    r.source = c.source;
+    r.comparison = c.comparison;
+    r.tolerance = std::numeric_limits<double>::quiet_NaN();
+    r.value = std::numeric_limits<double>::quiet_NaN();
+    try {
+      // The bound first: a check without a stored tolerance fails without running.
+      r.tolerance = ctx.tolerance(c.id, c.tolerance_name);
+      Measurement m = c.measure(ctx);
+      r.value = m.value;
+      r.passed = m.conditions_ok && m.value <= r.tolerance;  // NaN value: false
+      r.detail = std::move(m.detail);
+      r.tables = std::move(m.tables);
+      r.plots = std::move(m.plots);
+    } catch (const std::exception& e) {
+      r.passed = false;
+      r.detail = std::string("exception: ") + e.what();
+    }
     r.seconds = t.seconds();
     const std::string why = ctx.why(c.id);
     if (!why.empty()) r.detail += " Tolerance: " + why;

@@ -43,7 +43,32 @@ struct ReportPlot {
   std::vector<Series> series;
 };
 
-/// Outcome of one check.
+/// What a check's measurement returns: the compared quantity and the evidence behind it. The
+/// measurement does not judge itself: run_certify() compares `value` with the stored tolerance.
+struct Measurement {
+  double value = 0.0;  ///< the compared quantity (worst case over the check's cases)
+  /// Side conditions that must hold besides value ≤ tolerance (every solve converged, every
+  /// volume positive, the errors decrease, ...); false fails the check.
+  bool conditions_ok = true;
+  std::string detail;  ///< what was done, and which side condition failed if one did
+  std::vector<ReportTable> tables;
+  std::vector<ReportPlot> plots;
+};
+
+/// A registered check: what it reproduces, the criterion, the name of its bound in
+/// `reference_data/certify/tolerances.json` (checks.<id>.<tolerance_name>), and the
+/// measurement. It passes iff the tolerance exists, the measurement throws nothing,
+/// conditions_ok holds and value ≤ tolerance (a NaN value fails).
+struct Check {
+  std::string id;
+  std::string title;
+  std::string source;          ///< thesis / paper section the check reproduces
+  std::string comparison;      ///< the criterion, e.g. "max relative volume error <= tolerance"
+  std::string tolerance_name;  ///< key of the bound under checks.<id> in tolerances.json
+  std::function<Measurement(const CertifyContext&)> measure;
+};
+
+/// Outcome of one check (a Check, its Measurement and the verdict).
 struct CheckResult {
   std::string id;
   std::string title;
@@ -56,13 +81,6 @@ struct CheckResult {
   std::vector<ReportTable> tables;
   std::vector<ReportPlot> plots;
   double seconds = 0.0;
-};
-
-/// A registered check.
-struct Check {
-  std::string id;
-  std::string title;
-  std::function<CheckResult(const CertifyContext&)> run;
 };
 
 /// The catalogue, in report order.

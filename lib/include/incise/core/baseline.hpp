@@ -1,0 +1,22 @@
+#pragma once
+/// \file baseline.hpp
+/// The thesis' machine baseline (Nienhuys 2003, §4.5.2, Table 4.5): the MFLOP/s rate of a
+/// repeated double vector add a ← a + b on 1024-double vectors, against which the thesis states
+/// its solvers' speed ("% peak"). One implementation, used by `incise certify` (Table 4.5
+/// comparison) and by the benchmark binaries' context (benchmarks/support).
+///
+/// Timings are CPU time of the calling thread (CLOCK_THREAD_CPUTIME_ID), so that a loaded
+/// machine does not inflate every "% of baseline" figure; they are measurements, never used in
+/// assertions.
+
+namespace incise {
+
+/// CPU time consumed by the calling thread, in seconds (CLOCK_THREAD_CPUTIME_ID).
+double thread_cpu_seconds();
+
+/// Measured vector-add baseline in MFLOP/s (one flop per element add): best of 5 trials of
+/// about 20 ms thread CPU time each (the thesis used the best sustained rate). Computed on the
+/// first call (≈ 0.1 s) and cached for the life of the process; thread-safe.
+double vector_add_mflops();
+
+}  // namespace incise
