@@ -75,6 +75,31 @@ void closest_params(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s, 
   sr = std::clamp(sr, 0.0, 1.0);
 }
 
+/// Whether the fixed nodes seen so far hold a component rigidly: three non-collinear ones
+/// (fewer leave a rigid-body rotation free, and the stiffness matrix singular).
+class Anchor {
+ public:
+  void add(const Vec3& p) {
+    if (count_ == 0) {
+      p0_ = p;
+      count_ = 1;
+    } else if (count_ == 1 && (p - p0_).norm() > 0) {
+      p1_ = p;
+      count_ = 2;
+    } else if (count_ == 2) {
+      const Vec3 a = p1_ - p0_, b = p - p0_;
+      // Relative collinearity threshold far above round-off of the cross product.
+      if (a.cross(b).norm() > 1e-9 * a.norm() * b.norm()) count_ = 3;
+    }
+  }
+  bool any() const { return count_ > 0; }
+  bool anchored() const { return count_ == 3; }
+
+ private:
+  Vec3 p0_ = Vec3::Zero(), p1_ = Vec3::Zero();
+  int count_ = 0;
+};
+
 }  // namespace
 
 void CutTotals::add(const CutStepReport& r) {
@@ -772,9 +797,10 @@ bool Cutter::local_component_check(const std::vector<std::pair<Index, Index>>& s
   // are expanded one element each in turn, and groups that touch are merged. Expansion stops
   // when at most one open group is left. A group whose frontier empties is a whole component
   // S: without fixed nodes it is a new free component (the fixed nodes of the old component
-  // all lie elsewhere); with fixed nodes the rest may have lost them, so the caller falls
-  // back to the O(n) search (return false). Groups near one cut front merge after exploring
-  // a neighbourhood of the front, so the usual cost does not depend on the mesh size.
+  // all lie elsewhere); with fixed nodes the rest may have lost them (or S holds fewer than
+  // three non-collinear ones), so the caller falls back to the O(n) search (return false). Groups
+  // near one cut front merge after exploring a neighbourhood of the front, so the usual cost does
+  // not depend on the mesh size.
   struct Group {
     std::deque<Index> frontier;
     std::vector<Index> members;
@@ -821,10 +847,13 @@ bool Cutter::local_component_check(const std::vector<std::pair<Index, Index>>& s
       Group& grp = groups[static_cast<size_t>(g)];
       if (g != g0 || grp.closed) continue;
       if (grp.frontier.empty()) {
-        bool has_fixed = false;
+        Anchor anchor;
         for (Index e : grp.members)
-          for (Index v : mesh_.element(e)) has_fixed = has_fixed || mesh_.fixed(v);
-        if (has_fixed) return false;
+          for (Index v : mesh_.element(e))
+            if (mesh_.fixed(v)) anchor.add(mesh_.reference(v));
+        // Fixed nodes in S: the rest may have lost its anchor, or S may be anchored by fewer
+        // than three non-collinear nodes; the O(n) search decides both.
+        if (anchor.any()) return false;
         grp.closed = true;
         free_parts.push_back(grp.members);
         continue;
@@ -868,8 +897,11 @@ bool Cutter::local_component_check(const std::vector<std::pair<Index, Index>>& s
       int j = 0;
       while (j < 4 && mesh_.neighbor(e, j) >= 0) ++j;
       if (j == 4) continue;
-      for (int k = 0; k < 3; ++k)
-        mesh_.set_fixed(mesh_.element(e)[static_cast<size_t>(kTetFace[j][k])], true);
+      for (int k = 0; k < 3; ++k) {
+        const Index v = mesh_.element(e)[static_cast<size_t>(kTetFace[j][k])];
+        if (!mesh_.fixed(v)) r.fixed_nodes.push_back(v);
+        mesh_.set_fixed(v, true);
+      }
       ++r.components_fixed;
       break;
     }
@@ -884,7 +916,7 @@ void Cutter::check_components(CutStepReport& r) {
   std::vector<Index> stack;
   for (Index s = 0; s < cap; ++s) {
     if (!mesh_.alive(s) || comp[static_cast<size_t>(s)] >= 0) continue;
-    bool has_fixed = false;
+    Anchor anchor;
     Index face_e = -1;
     int face_j = -1;
     comp[static_cast<size_t>(s)] = ncomp;
@@ -892,7 +924,8 @@ void Cutter::check_components(CutStepReport& r) {
     while (!stack.empty()) {
       const Index e = stack.back();
       stack.pop_back();
-      for (Index v : mesh_.element(e)) has_fixed = has_fixed || mesh_.fixed(v);
+      for (Index v : mesh_.element(e))
+        if (mesh_.fixed(v)) anchor.add(mesh_.reference(v));
       for (int j = 0; j < 4; ++j) {
         const Index nb = mesh_.neighbor(e, j);
         if (nb < 0) {
@@ -907,11 +940,14 @@ void Cutter::check_components(CutStepReport& r) {
       }
     }
     ++ncomp;
-    if (has_fixed) continue;
+    if (anchor.anchored()) continue;
     ++r.free_components;
     if (options_.free_components == FreeComponentPolicy::kFixOnFace && face_e >= 0) {
-      for (int k = 0; k < 3; ++k)
-        mesh_.set_fixed(mesh_.element(face_e)[static_cast<size_t>(kTetFace[face_j][k])], true);
+      for (int k = 0; k < 3; ++k) {
+        const Index v = mesh_.element(face_e)[static_cast<size_t>(kTetFace[face_j][k])];
+        if (!mesh_.fixed(v)) r.fixed_nodes.push_back(v);
+        mesh_.set_fixed(v, true);
+      }
       ++r.components_fixed;
     }
   }

@@ -16,7 +16,10 @@
 
 namespace incise::cut {
 
-/// What to do with a connected component that has no fixed node after a cut (§3.3).
+/// What to do with a connected component that is not anchored after a cut (§3.3: the thesis
+/// looks for components without fixed nodes; we also count components whose fixed nodes are
+/// all collinear — one or two nodes, or a line — since a rigid rotation is then still free
+/// and the stiffness matrix singular).
 enum class FreeComponentPolicy {
   kFixOnFace,  ///< fix the nodes of one boundary face of it (the thesis' choice)
   kReport      ///< leave it free, report it
@@ -65,7 +68,7 @@ struct [[nodiscard]] CutStepReport {
   Index collapses = 0;            ///< edge collapses performed (§3.2.3)
   Index incollapsible = 0;        ///< degenerate elements cut free and removed
   Index removal_passes = 0;       ///< removal passes made
-  Index free_components = 0;      ///< components found without a fixed node
+  Index free_components = 0;      ///< components found without three non-collinear fixed nodes
   Index components_fixed = 0;     ///< of those, fixed on a face (policy kFixOnFace)
   /// True when the O(n) component search ran (the two sides of a separated face, or the
   /// neighbours of a cut-free element, did not meet in the local search); otherwise the
@@ -75,6 +78,7 @@ struct [[nodiscard]] CutStepReport {
   std::vector<Index> moved_nodes;       ///< existing nodes whose positions changed
   std::vector<Index> changed_elements;  ///< element handles changed, added or removed
   std::vector<Index> removed_nodes;     ///< nodes that became unused (collapses, cut-free)
+  std::vector<Index> fixed_nodes;       ///< nodes newly fixed by FreeComponentPolicy::kFixOnFace
 };
 
 /// Totals over several steps (sums of the counts of CutStepReport; faces_pending is the

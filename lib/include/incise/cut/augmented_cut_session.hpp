@@ -1,0 +1,188 @@
+#pragma once
+/// \file augmented_cut_session.hpp
+/// One interactive cutting session on a linear-elastic body whose static solution is kept
+/// current by the augmented-matrix solver (thesis §3.2 cut steps; Yeung, Crouch & Pothen 2016
+/// §3 column replacements, docs/augmented.md). It owns the cut mesh, the Cutter, the element
+/// stiffness bookkeeping and an solver::AugmentedSystem.
+///
+/// After every sweep-triangle step (Cutter::step) the CutStepReport — the single description
+/// of "what changed in this step", also used by the warm-restarted relaxation path — is
+/// translated into column replacements:
+/// - every element slot listed in `changed_elements`, or incident with a node in
+///   `moved_nodes` (snapping changes reference positions), is compared with the element the
+///   system holds for that slot; if its nodes or reference positions differ, the old element
+///   stiffness is subtracted (AugmentedSystem::add_element(·, Kₑ, −1)) and the new one added
+///   (+1). Kₑ is the linear-elastic tetrahedron tangent (thesis (2.22), §3.1);
+/// - nodes created by the step (`new_nodes`) get three new DOFs (add_dofs); copies of a node
+///   fixed from the start stay fixed (no DOFs, zero displacement);
+/// - nodes fixed by the component policy (`fixed_nodes`, FreeComponentPolicy::kFixOnFace) and
+///   nodes left without elements (`removed_nodes`) are held at their current displacement by
+///   Dirichlet constraints (impose_dirichlet), so no DOF is left without stiffness;
+/// - then AugmentedSystem::solve() gives the new static displacement without refactoring.
+///
+/// DOF numbering: nodes fixed at construction have no DOFs (removed from K⁰,
+/// remove_fixed_dofs convention of augmented_system.hpp); the other used nodes of the initial
+/// mesh get 3·k, 3·k+1, 3·k+2 in node order; new nodes get the next DOFs in creation order.
+///
+/// Failure is a status (CutSolveStatus), never an exception: a component without fixed nodes
+/// (policy kReport) makes K singular and the solve is skipped; an element inverted in the
+/// reference configuration (only possible with refuse_inverting_snaps = false) has no valid
+/// stiffness; the augmented solve itself may report kSingularModifiedSystem (e.g. a piece held
+/// by a single fixed node) or kGmresNotConverged.
+
+#include <incise/core/types.hpp>
+#include <incise/cut/cut_mesh.hpp>
+#include <incise/cut/cutter.hpp>
+#include <incise/material/material.hpp>
+#include <incise/mesh/mesh_data.hpp>
+#include <incise/solver/augmented_system.hpp>
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace incise::cut {
+
+/// Options of an AugmentedCutSession.
+struct AugmentedCutOptions {
+  CutOptions cut;                      ///< the cutter's options (thesis defaults)
+  solver::AugmentedOptions augmented;  ///< the augmented solver's options
+  /// After every successful solve set the cut mesh's deformed positions to X + a, so that the
+  /// next sweep triangle is interpreted in the deformed configuration (§3.2). O(n) per step
+  /// (the cutter's boundary search grid is rebuilt); false keeps x = X (cutting in the
+  /// reference configuration).
+  bool update_deformed = true;
+};
+
+/// Outcome of the solver update of one step.
+enum class CutSolveStatus {
+  kOk,               ///< solved; displacement() is the static solution of the cut mesh
+  kFreeComponent,    ///< a component without fixed nodes exists (policy kReport): K is
+                     ///< singular, no solve was made; displacement() keeps the last solution
+  kInvertedElement,  ///< a live element has non-positive reference volume: no stiffness
+  kSolverFailed      ///< AugmentedSystem::solve() failed; see AugmentedCutStepReport::solve
+};
+
+/// Human-readable name of a CutSolveStatus.
+const char* to_string(CutSolveStatus status);
+
+/// Report of one interactive step (one sweep triangle, then the solver update).
+struct [[nodiscard]] AugmentedCutStepReport {
+  CutSolveStatus status = CutSolveStatus::kOk;
+  std::string advice;  ///< what the caller can do when status != kOk
+  CutStepReport cut;   ///< the cutter's report (what changed in the mesh)
+  // Translation into column replacements (this step).
+  Index elements_subtracted = 0;  ///< element stiffnesses removed (old version of a slot)
+  Index elements_added = 0;       ///< element stiffnesses added (new version of a slot)
+  Index dofs_added = 0;           ///< new DOFs (3 per new free node)
+  Index constrained_fixed = 0;    ///< DOFs constrained because the cutter fixed their node
+  Index constrained_unused = 0;   ///< DOFs constrained because their node lost all elements
+  Index free_components = 0;      ///< components without fixed nodes in the mesh (cumulative)
+  Index inverted_elements = 0;    ///< live elements with reference volume ≤ 0 (current)
+  bool solved = false;            ///< whether AugmentedSystem::solve() ran
+  solver::AugmentedReport solve;  ///< m = |𝓛|, GMRES iterations, closures, solver timings
+  // Timings (seconds). CPU = CLOCK_THREAD_CPUTIME_ID of the calling thread.
+  double seconds_cut = 0;         ///< wall time of Cutter::step
+  double seconds_update = 0;      ///< wall time of the column replacements (no solve)
+  double seconds_solve = 0;       ///< wall time of AugmentedSystem::solve() (+ deformed update)
+  double cpu_seconds_cut = 0;     ///< CPU time of Cutter::step
+  double cpu_seconds_update = 0;  ///< CPU time of the column replacements and the solve
+  /// True when status == kOk.
+  bool ok() const { return status == CutSolveStatus::kOk; }
+};
+
+/// A cut mesh, its cutter and the augmented linear-elastic static solver, kept consistent
+/// step by step (see file comment). Not copyable or movable (the cutter refers to the mesh);
+/// hold it by std::unique_ptr when needed. Not thread-safe.
+class AugmentedCutSession {
+ public:
+  /// Body `mesh` (3D tetrahedra, reference configuration, m) of linear material `material`
+  /// ("linear" model: thesis (2.22)); nodes `fixed_nodes` are held at zero displacement;
+  /// `node_forces` (3 × num_points, N) are the external nodal forces. Factors K⁰ and solves
+  /// the uncut problem: the outcome is initial_report(). Throws ParameterError for a
+  /// non-linear material, a non-tetrahedral mesh, a bad node index or a force matrix of the
+  /// wrong size; UsageError for an invalid mesh (from CutMesh).
+  AugmentedCutSession(const mesh::MeshData& mesh, const material::Material& material,
+                      const std::vector<Index>& fixed_nodes, const Eigen::Matrix3Xd& node_forces,
+                      AugmentedCutOptions options = {});
+  ~AugmentedCutSession();
+  AugmentedCutSession(const AugmentedCutSession&) = delete;
+  AugmentedCutSession& operator=(const AugmentedCutSession&) = delete;
+
+  /// Report of the initial factorization and solve (cut fields empty). When K⁰ is not
+  /// positive definite (e.g. no fixed nodes) status is kSolverFailed with solve.status
+  /// kNoFactor; steps then cut the mesh but cannot solve.
+  const AugmentedCutStepReport& initial_report() const { return initial_; }
+
+  /// One interactive step: Cutter::step on sweep triangle (a, b, c) (deformed configuration,
+  /// m), the translation of its CutStepReport into column replacements, and the augmented
+  /// solve. Post: displacement() is the static solution of the cut mesh when ok().
+  AugmentedCutStepReport step(const Vec3& a, const Vec3& b, const Vec3& c);
+  /// Same with the triangle as an array.
+  AugmentedCutStepReport step(const std::array<Vec3, 3>& tri) {
+    return step(tri[0], tri[1], tri[2]);
+  }
+
+  /// Ends the current incision (Cutter::end_incision): the next step starts a new one.
+  void end_incision() { cutter_->end_incision(); }
+
+  /// Changes the external force on node v (N); takes effect at the next solve.
+  void set_node_force(Index v, const Vec3& force);
+  /// Solves again without cutting (e.g. after set_node_force); cut fields of the report empty.
+  AugmentedCutStepReport solve();
+
+  /// §3.6 of the augmented paper: refactors the current K in a background thread; later
+  /// solves swap it in and m drops. Returns false if a job is already running.
+  bool start_refactorization() { return system_->start_refactorization(); }
+
+  /// The cut mesh (reference and deformed positions, connectivity).
+  const CutMesh& mesh() const { return *mesh_; }
+  /// The cutter (options, degeneracy count).
+  const Cutter& cutter() const { return *cutter_; }
+  /// The augmented system (m, current K, constraints).
+  const solver::AugmentedSystem& system() const { return *system_; }
+  /// First of the three DOFs of node v, or −1 (fixed from the start, or never used).
+  int dof(Index v) const { return node_dof_[static_cast<size_t>(v)]; }
+  /// Current displacement of every node (3 × num_nodes, m): the last successful solution;
+  /// zero for nodes fixed from the start.
+  const Eigen::Matrix3Xd& displacement() const { return displacement_; }
+  /// Element stiffness Kₑ (12×12, node-major DOF order 3a+i) of the linear-elastic
+  /// tetrahedron with reference nodes `x` (columns, m), symmetrized; zero when the volume
+  /// is not positive. The matrix the session adds and subtracts.
+  Eigen::Matrix<double, 12, 12> element_stiffness(const Eigen::Matrix<double, 3, 4>& x) const;
+
+ private:
+  struct LastSolve {  // outcome of the last solve_into (reused when a step changes nothing)
+    CutSolveStatus status = CutSolveStatus::kOk;
+    std::string advice;
+    Index free_components = 0, inverted_elements = 0;
+    bool solved = false;  // a valid solution for the current system and forces
+  };
+  struct Record {  // what the system holds for one element slot
+    Tet nodes{-1, -1, -1, -1};
+    Eigen::Matrix<double, 3, 4> x;
+  };
+  std::vector<int> element_dofs(const Tet& t) const;
+  void add_record(Index slot, double scale);
+  void assign_new_nodes(const CutStepReport& cut, AugmentedCutStepReport& r);
+  void constrain(Index v, Index& counter);
+  void solve_into(AugmentedCutStepReport& r);
+
+  material::Material material_;
+  AugmentedCutOptions options_;
+  std::unique_ptr<CutMesh> mesh_;
+  std::unique_ptr<Cutter> cutter_;
+  std::unique_ptr<solver::AugmentedSystem> system_;
+  std::vector<int> node_dof_;
+  std::vector<char> initially_fixed_;
+  std::vector<Vec3> node_force_;
+  std::vector<Record> records_;
+  Eigen::Matrix3Xd displacement_;
+  Index free_components_ = 0;
+  Index inverted_ = 0;
+  AugmentedCutStepReport initial_;
+  LastSolve last_;
+};
+
+}  // namespace incise::cut
