@@ -19,21 +19,126 @@ using Mat34 = Eigen::Matrix<double, 3, 4>;
 using Mat12 = Eigen::Matrix<double, 12, 12>;
 using L4 = Lanes4;
 
-/// Visits the m elements: blocks of four through `block(k)` (SIMD lanes), falling back to
-/// `element(e)` for the four elements of a block that reports failure (some lane inverted), and
-/// `element(e)` for the tail. Both return false for an inverted element; a block must not
-/// produce side effects before it knows it succeeds. Returns false when an element is inverted.
-template <class BlockFn, class ElementFn>
-bool for_each_element(Index m, BlockFn&& block, ElementFn&& element) {
-  const Index nb = m / 4;
-  for (Index k = 0; k < nb; ++k)
-    if (!block(k))
-      for (Index e = 4 * k; e < 4 * k + 4; ++e)
-        if (!element(e)) return false;
-  for (Index e = 4 * nb; e < m; ++e)
-    if (!element(e)) return false;
-  return true;
-}
+/// One element (T = double) or a block of four consecutive elements in SIMD lanes (T = Lanes4)
+/// as a kernel sees it: reference data, gather of nodal values, and scatter-add of element
+/// results into global vectors and the assembled matrix. ElasticProblem::sweep() hands either
+/// kind to one generic kernel body, so every global operation is written once for both.
+template <class T>
+class Elements;
+
+template <>
+class Elements<double> {
+ public:
+  using Scalar = double;
+  /// `cell`: the element's 4 node indices; `scatter`: its 48 value indices (or null).
+  Elements(const TetReference& r, const Index* cell, const int* scatter)
+      : r_(r), cell_(cell), scatter_(scatter) {}
+  const Mat3& z_inv() const { return r_.z_inv; }
+  const Mat3& b() const { return r_.b; }
+  const double& volume() const { return r_.volume; }
+  /// x(:, a) = v(3·node_a + 0..2).
+  void gather(const double* v, Mat34& x) const {
+    for (int a = 0; a < 4; ++a) {
+      const double* src = v + 3 * static_cast<std::ptrdiff_t>(cell_[a]);
+      x(0, a) = src[0];
+      x(1, a) = src[1];
+      x(2, a) = src[2];
+    }
+  }
+  /// out(3·node_a + i) += q(i, a).
+  void add(const Mat34& q, double* out) const {
+    for (int a = 0; a < 4; ++a) {
+      double* dst = out + 3 * static_cast<std::ptrdiff_t>(cell_[a]);
+      dst[0] += q(0, a);
+      dst[1] += q(1, a);
+      dst[2] += q(2, a);
+    }
+  }
+  /// out(3·node_a + i) += k(3a + i, 3a + i).
+  void add_diagonal(const Mat12& k, double* out) const {
+    for (int a = 0; a < 4; ++a)
+      for (int i = 0; i < 3; ++i)
+        out[3 * static_cast<std::ptrdiff_t>(cell_[a]) + i] += k(3 * a + i, 3 * a + i);
+  }
+  /// Adds k into the values of the assembled matrix through the scatter map.
+  void add_matrix(const Mat12& k, double* val) const {
+    for (int c = 0; c < 12; ++c)
+      for (int a = 0; a < 4; ++a) {
+        double* dst = val + scatter_[4 * c + a];
+        dst[0] += k(3 * a, c);
+        dst[1] += k(3 * a + 1, c);
+        dst[2] += k(3 * a + 2, c);
+      }
+  }
+  /// The element's share of a global sum.
+  static double sum(double w) { return w; }
+
+ private:
+  const TetReference& r_;
+  const Index* cell_;
+  const int* scatter_;
+};
+
+template <>
+class Elements<L4> {
+ public:
+  using Scalar = L4;
+  /// `cells`: 16 node indices, element-major (4 per lane); `scatter`: 4·48 value indices.
+  Elements(const Mat3T<L4>& z_inv, const Mat3T<L4>& b, const L4& volume, const Index* cells,
+           const int* scatter)
+      : z_inv_(z_inv), b_(b), volume_(volume), cells_(cells), scatter_(scatter) {}
+  const Mat3T<L4>& z_inv() const { return z_inv_; }
+  const Mat3T<L4>& b() const { return b_; }
+  const L4& volume() const { return volume_; }
+  void gather(const double* v, Mat34T<L4>& x) const {
+    for (int a = 0; a < 4; ++a) {
+      const double* s0 = v + 3 * static_cast<std::ptrdiff_t>(cells_[a]);
+      const double* s1 = v + 3 * static_cast<std::ptrdiff_t>(cells_[4 + a]);
+      const double* s2 = v + 3 * static_cast<std::ptrdiff_t>(cells_[8 + a]);
+      const double* s3 = v + 3 * static_cast<std::ptrdiff_t>(cells_[12 + a]);
+      for (int i = 0; i < 3; ++i) x(i, a) = L4(s0[i], s1[i], s2[i], s3[i]);
+    }
+  }
+  void add(const Mat34T<L4>& q, double* out) const {
+    for (int l = 0; l < 4; ++l)
+      for (int a = 0; a < 4; ++a) {
+        double* dst = out + 3 * static_cast<std::ptrdiff_t>(cells_[4 * l + a]);
+        dst[0] += q(0, a)[l];
+        dst[1] += q(1, a)[l];
+        dst[2] += q(2, a)[l];
+      }
+  }
+  void add_diagonal(const Mat12T<L4>& k, double* out) const {
+    for (int l = 0; l < 4; ++l)
+      for (int a = 0; a < 4; ++a)
+        for (int i = 0; i < 3; ++i)
+          out[3 * static_cast<std::ptrdiff_t>(cells_[4 * l + a]) + i] += k(3 * a + i, 3 * a + i)[l];
+  }
+  void add_matrix(const Mat12T<L4>& k, double* val) const {
+    // Mat12T<Lanes4> is 144 consecutive groups of 4 lane values (column-major).
+    static_assert(sizeof(L4) == 4 * sizeof(double), "Lanes4 must be four packed doubles");
+    const double* lanes = reinterpret_cast<const double*>(k.data());
+    for (int l = 0; l < 4; ++l) {
+      const int* s = scatter_ + 48 * l;
+      for (int c = 0; c < 12; ++c)
+        for (int a = 0; a < 4; ++a) {
+          double* dst = val + s[4 * c + a];
+          const double* src = lanes + 4 * (12 * c + 3 * a) + l;
+          dst[0] += src[0];
+          dst[1] += src[4];
+          dst[2] += src[8];
+        }
+    }
+  }
+  static double sum(const L4& w) { return (w[0] + w[1]) + (w[2] + w[3]); }
+
+ private:
+  const Mat3T<L4>& z_inv_;
+  const Mat3T<L4>& b_;
+  const L4& volume_;
+  const Index* cells_;
+  const int* scatter_;
+};
 
 }  // namespace
 
@@ -247,50 +352,48 @@ double ElasticProblem::volume() const {
   return v;
 }
 
-void ElasticProblem::gather(const VecX& u, Index e, Mat34& x) const {
-  for (int a = 0; a < 4; ++a) x.col(a) = u.segment<3>(3 * cells_(a, e));
-}
-
-void ElasticProblem::gather_block(const VecX& u, Index block, Mat34T<L4>& x) const {
-  const Index e = 4 * block;
-  for (int a = 0; a < 4; ++a) {
-    const Index n0 = 3 * cells_(a, e), n1 = 3 * cells_(a, e + 1), n2 = 3 * cells_(a, e + 2),
-                n3 = 3 * cells_(a, e + 3);
-    for (int i = 0; i < 3; ++i) x(i, a) = L4(u[n0 + i], u[n1 + i], u[n2 + i], u[n3 + i]);
+template <class Visit>
+bool ElasticProblem::sweep(Visit&& visit) const {
+  const Index* cells = cells_.data();
+  const int* scatter = scatter_.empty() ? nullptr : scatter_.data();
+  const auto element = [&](Index e) {
+    const std::size_t i = static_cast<std::size_t>(e);
+    return visit(Elements<double>(refs_[i], cells + 4 * i,
+                                  scatter ? scatter + kScatterPerElement * i : nullptr));
+  };
+  const Index nb = num_full_blocks();
+  for (Index k = 0; k < nb; ++k) {
+    const std::size_t i = static_cast<std::size_t>(k);
+    const RefBlock& rb = blocks_[i];
+    if (visit(Elements<L4>(rb.z_inv, rb.b, rb.volume, cells + 16 * i,
+                           scatter ? scatter + 4 * kScatterPerElement * i : nullptr)))
+      continue;
+    // Some lane is inverted: the block had no side effects; redo its elements one by one.
+    for (Index e = 4 * k; e < 4 * k + 4; ++e)
+      if (!element(e)) return false;
   }
+  for (Index e = 4 * nb; e < num_elements(); ++e)
+    if (!element(e)) return false;
+  return true;
 }
 
 EvalStatus ElasticProblem::energy(const VecX& u, double& energy) {
   INCISE_CHECK(u.size() == size(), "energy: u has the wrong size");
   const material::Lame p = material_.lame();
   double sum = 0.0;
-  bool inverted = false;
-  material::visit_model(material_.model_index(), [&](auto m) {
-    using K = TetKernel<decltype(m), double>;
-    using K4 = TetKernel<decltype(m), L4>;
-    inverted = !for_each_element(
-        num_elements(),
-        [&](Index k) {
-          Mat34T<L4> x;
-          gather_block(u, k, x);
-          const RefBlock& rb = blocks_[static_cast<std::size_t>(k)];
-          L4 w;
-          if (!K4::energy(p, rb.z_inv, rb.volume, x, w)) return false;
-          sum += (w[0] + w[1]) + (w[2] + w[3]);
-          return true;
-        },
-        [&](Index e) {
-          Mat34 x;
-          gather(u, e, x);
-          const TetReference& r = refs_[static_cast<std::size_t>(e)];
-          double w = 0.0;
-          if (!K::energy(p, r.z_inv, r.volume, x, w)) return false;
-          sum += w;
-          return true;
-        });
+  const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
+    return sweep([&](const auto& el) {
+      using T = typename std::decay_t<decltype(el)>::Scalar;
+      Mat34T<T> x;
+      el.gather(u.data(), x);
+      T w(0);
+      if (!TetKernel<decltype(m), T>::energy(p, el.z_inv(), el.volume(), x, w)) return false;
+      sum += el.sum(w);
+      return true;
+    });
   });
   flops_ += element_flops_.energy * static_cast<std::uint64_t>(num_elements());
-  if (inverted) {
+  if (!ok) {
     energy = kInf;
     return EvalStatus::kInverted;
   }
@@ -302,35 +405,19 @@ EvalStatus ElasticProblem::internal_forces(const VecX& u, VecX& f_int) {
   INCISE_CHECK(u.size() == size(), "internal_forces: u has the wrong size");
   const material::Lame p = material_.lame();
   f_int.setZero(size());
-  bool inverted = false;
-  material::visit_model(material_.model_index(), [&](auto m) {
-    using K = TetKernel<decltype(m), double>;
-    using K4 = TetKernel<decltype(m), L4>;
-    inverted = !for_each_element(
-        num_elements(),
-        [&](Index k) {
-          Mat34T<L4> x, q;
-          gather_block(u, k, x);
-          const RefBlock& rb = blocks_[static_cast<std::size_t>(k)];
-          if (!K4::forces(p, rb.z_inv, rb.b, x, q)) return false;
-          for (int l = 0; l < 4; ++l)
-            for (int a = 0; a < 4; ++a) {
-              const Index n = 3 * cells_(a, 4 * k + l);
-              for (int i = 0; i < 3; ++i) f_int[n + i] += q(i, a)[l];
-            }
-          return true;
-        },
-        [&](Index e) {
-          Mat34 x, q;
-          gather(u, e, x);
-          const TetReference& r = refs_[static_cast<std::size_t>(e)];
-          if (!K::forces(p, r.z_inv, r.b, x, q)) return false;
-          for (int a = 0; a < 4; ++a) f_int.segment<3>(3 * cells_(a, e)) += q.col(a);
-          return true;
-        });
+  double* out = f_int.data();
+  const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
+    return sweep([&](const auto& el) {
+      using T = typename std::decay_t<decltype(el)>::Scalar;
+      Mat34T<T> x, q;
+      el.gather(u.data(), x);
+      if (!TetKernel<decltype(m), T>::forces(p, el.z_inv(), el.b(), x, q)) return false;
+      el.add(q, out);
+      return true;
+    });
   });
   flops_ += (element_flops_.force + 12) * static_cast<std::uint64_t>(num_elements());
-  if (inverted) {
+  if (!ok) {
     f_int.setZero();
     return EvalStatus::kInverted;
   }
@@ -358,37 +445,20 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
   INCISE_CHECK(u.size() == size() && d.size() == size(), "hessian_product: wrong sizes");
   const material::Lame p = material_.lame();
   out.setZero(size());
-  bool inverted = false;
-  material::visit_model(material_.model_index(), [&](auto m) {
-    using K = TetKernel<decltype(m), double>;
-    using K4 = TetKernel<decltype(m), L4>;
-    inverted = !for_each_element(
-        num_elements(),
-        [&](Index k) {
-          Mat34T<L4> x, dx, dq;
-          gather_block(u, k, x);
-          gather_block(d, k, dx);
-          const RefBlock& rb = blocks_[static_cast<std::size_t>(k)];
-          if (!K4::product(p, rb.z_inv, rb.b, x, dx, dq)) return false;
-          for (int l = 0; l < 4; ++l)
-            for (int a = 0; a < 4; ++a) {
-              const Index n = 3 * cells_(a, 4 * k + l);
-              for (int i = 0; i < 3; ++i) out[n + i] += dq(i, a)[l];
-            }
-          return true;
-        },
-        [&](Index e) {
-          Mat34 x, dx, dq;
-          gather(u, e, x);
-          gather(d, e, dx);
-          const TetReference& r = refs_[static_cast<std::size_t>(e)];
-          if (!K::product(p, r.z_inv, r.b, x, dx, dq)) return false;
-          for (int a = 0; a < 4; ++a) out.segment<3>(3 * cells_(a, e)) += dq.col(a);
-          return true;
-        });
+  double* dst = out.data();
+  const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
+    return sweep([&](const auto& el) {
+      using T = typename std::decay_t<decltype(el)>::Scalar;
+      Mat34T<T> x, dx, dq;
+      el.gather(u.data(), x);
+      el.gather(d.data(), dx);
+      if (!TetKernel<decltype(m), T>::product(p, el.z_inv(), el.b(), x, dx, dq)) return false;
+      el.add(dq, dst);
+      return true;
+    });
   });
   flops_ += (element_flops_.product + 12) * static_cast<std::uint64_t>(num_elements());
-  if (inverted) {
+  if (!ok) {
     out.setZero();
     return EvalStatus::kInverted;
   }
@@ -399,24 +469,22 @@ bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
   INCISE_CHECK(u.size() == size(), "hessian_diagonal: u has the wrong size");
   const material::Lame p = material_.lame();
   diag.setZero(size());
-  bool inverted = false;
-  material::visit_model(material_.model_index(), [&](auto m) {
-    using K = TetKernel<decltype(m), double>;
-    Mat34 x, q;
-    Mat12 k;
-    for (Index e = 0; e < num_elements(); ++e) {
-      gather(u, e, x);
-      const TetReference& r = refs_[static_cast<std::size_t>(e)];
-      if (!K::forces_and_tangent(p, r.z_inv, r.b, r.volume, x, q, k)) {
-        inverted = true;
-        break;
-      }
-      for (int a = 0; a < 4; ++a)
-        for (int i = 0; i < 3; ++i) diag[3 * cells_(a, e) + i] += k(3 * a + i, 3 * a + i);
-    }
+  double* dst = diag.data();
+  const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
+    return sweep([&](const auto& el) {
+      using T = typename std::decay_t<decltype(el)>::Scalar;
+      Mat34T<T> x, q;
+      Mat12T<T> k;
+      el.gather(u.data(), x);
+      if (!TetKernel<decltype(m), T>::forces_and_tangent(p, el.z_inv(), el.b(), el.volume(), x, q,
+                                                         k))
+        return false;
+      el.add_diagonal(k, dst);
+      return true;
+    });
   });
   flops_ += (element_flops_.force_and_tangent + 12) * static_cast<std::uint64_t>(num_elements());
-  if (inverted) return false;
+  if (!ok) return false;
   for (Eigen::Index i = 0; i < diag.size(); ++i)
     if (fixed_[static_cast<std::size_t>(i)]) diag[i] = 1.0;
   return diag.allFinite();
@@ -476,47 +544,21 @@ EvalStatus ElasticProblem::assemble_tangent(const VecX& u, FixedDofTreatment tre
   double* val = k_.valuePtr();
   std::fill(val, val + k_.nonZeros(), 0.0);
   const material::Lame p = material_.lame();
-  bool inverted = false;
-  const auto scatter = [&](Index e, const auto& entry) {
-    const int* s = scatter_.data() + static_cast<std::size_t>(e) * kScatterPerElement;
-    for (int c = 0; c < 12; ++c)
-      for (int a = 0; a < 4; ++a) {
-        double* dst = val + s[4 * c + a];
-        dst[0] += entry(3 * a, c);
-        dst[1] += entry(3 * a + 1, c);
-        dst[2] += entry(3 * a + 2, c);
-      }
-  };
-  material::visit_model(material_.model_index(), [&](auto m) {
-    using K = TetKernel<decltype(m), double>;
-    using K4 = TetKernel<decltype(m), L4>;
-    Mat12T<L4> k4;
-    Mat12 k;
-    inverted = !for_each_element(
-        num_elements(),
-        [&](Index blk) {
-          Mat34T<L4> x, q;
-          gather_block(u, blk, x);
-          const RefBlock& rb = blocks_[static_cast<std::size_t>(blk)];
-          if (!K4::forces_and_tangent(p, rb.z_inv, rb.b, rb.volume, x, q, k4)) return false;
-          // Mat12T<Lanes4> is 144 consecutive groups of 4 lane values (column-major).
-          static_assert(sizeof(L4) == 4 * sizeof(double), "Lanes4 must be four packed doubles");
-          const double* lanes = reinterpret_cast<const double*>(k4.data());
-          for (int l = 0; l < 4; ++l)
-            scatter(4 * blk + l, [&](int r, int c) { return lanes[4 * (12 * c + r) + l]; });
-          return true;
-        },
-        [&](Index e) {
-          Mat34 x, q;
-          gather(u, e, x);
-          const TetReference& r = refs_[static_cast<std::size_t>(e)];
-          if (!K::forces_and_tangent(p, r.z_inv, r.b, r.volume, x, q, k)) return false;
-          scatter(e, [&](int rr, int c) { return k(rr, c); });
-          return true;
-        });
+  const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
+    return sweep([&](const auto& el) {
+      using T = typename std::decay_t<decltype(el)>::Scalar;
+      Mat34T<T> x, q;
+      Mat12T<T> k;
+      el.gather(u.data(), x);
+      if (!TetKernel<decltype(m), T>::forces_and_tangent(p, el.z_inv(), el.b(), el.volume(), x, q,
+                                                         k))
+        return false;
+      el.add_matrix(k, val);
+      return true;
+    });
   });
   flops_ += (element_flops_.force_and_tangent + 144) * static_cast<std::uint64_t>(num_elements());
-  if (inverted) return EvalStatus::kInverted;
+  if (!ok) return EvalStatus::kInverted;
   if (treatment == FixedDofTreatment::kIdentity) {
     const int* outer = k_.outerIndexPtr();
     const int* inner = k_.innerIndexPtr();

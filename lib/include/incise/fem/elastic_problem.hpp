@@ -150,8 +150,12 @@ class ElasticProblem : public Problem {
     Mat3T<Lanes4> b;
     Lanes4 volume;
   };
-  void gather(const VecX& u, Index e, Eigen::Matrix<double, 3, 4>& x) const;
-  void gather_block(const VecX& u, Index block, Mat34T<Lanes4>& x) const;
+  /// The one element loop behind every evaluation: calls `visit(el)` for each block of four
+  /// elements (el: a Lanes4 view, elastic_problem.cpp `Elements`), and for the elements of a
+  /// block whose visit returned false (some lane inverted; the visit must not have had side
+  /// effects) and for the tail, with a double view. Returns false when a double visit fails.
+  template <class Visit>
+  bool sweep(Visit&& visit) const;
   Index num_full_blocks() const { return num_elements() / 4; }
   void build_pattern();
   void rebuild_mass();

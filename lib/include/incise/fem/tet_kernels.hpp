@@ -69,7 +69,7 @@ struct TetKernel {
   };
 
   /// U from nodal displacements x (3×4): column a is x_a − x_4 (9 flops).
-  static Mat3T<T> differences(const Mat34T<T>& x) {
+  static INCISE_KERNEL_INLINE Mat3T<T> differences(const Mat34T<T>& x) {
     Mat3T<T> u;
     for (int a = 0; a < 3; ++a)
       for (int i = 0; i < 3; ++i) u(i, a) = x(i, a) - x(i, 3);
@@ -78,8 +78,8 @@ struct TetKernel {
 
   /// F (or G), C and S from nodal displacements. Returns false when det F ≤ 0 and the model is
   /// undefined there (then C and S are not computed).
-  static bool kinematics(const material::Lame& p, const Mat3T<T>& z_inv, const Mat34T<T>& x,
-                         State& st) {
+  static INCISE_KERNEL_INLINE bool kinematics(const material::Lame& p, const Mat3T<T>& z_inv,
+                                              const Mat34T<T>& x, State& st) {
     const Mat3T<T> g = material::detail::mul(differences(x), z_inv);
     if constexpr (Model::kLinearGeometry) {
       st.f = g;
@@ -105,15 +105,16 @@ struct TetKernel {
   }
 
   /// q (3×4) from the first Piola-Kirchhoff stress P: q_a = P·B e_a, q4 = −Σ q_a (51 flops).
-  static void nodal_from_piola(const Mat3T<T>& piola, const Mat3T<T>& b, Mat34T<T>& q) {
+  static INCISE_KERNEL_INLINE void nodal_from_piola(const Mat3T<T>& piola, const Mat3T<T>& b,
+                                                    Mat34T<T>& q) {
     const Mat3T<T> pb = material::detail::mul(piola, b);
     q.template leftCols<3>() = pb;
     for (int i = 0; i < 3; ++i) q(i, 3) = -(pb(i, 0) + pb(i, 1) + pb(i, 2));
   }
 
   /// Element energy v(τ)·W(C). Returns false (and +∞) when inverted.
-  static bool energy(const material::Lame& p, const Mat3T<T>& z_inv, const T& volume,
-                     const Mat34T<T>& x, T& w) {
+  static INCISE_KERNEL_INLINE bool energy(const material::Lame& p, const Mat3T<T>& z_inv,
+                                          const T& volume, const Mat34T<T>& x, T& w) {
     const Mat3T<T> g = material::detail::mul(differences(x), z_inv);
     Mat3T<T> c;
     if constexpr (Model::kLinearGeometry) {
@@ -142,8 +143,8 @@ struct TetKernel {
   }
 
   /// Internal nodal forces q (eq. (4.3) negated). Returns false when inverted (q untouched).
-  static bool forces(const material::Lame& p, const Mat3T<T>& z_inv, const Mat3T<T>& b,
-                     const Mat34T<T>& x, Mat34T<T>& q) {
+  static INCISE_KERNEL_INLINE bool forces(const material::Lame& p, const Mat3T<T>& z_inv,
+                                          const Mat3T<T>& b, const Mat34T<T>& x, Mat34T<T>& q) {
     State st;
     if (!kinematics(p, z_inv, x, st)) return false;
     if constexpr (Model::kLinearGeometry) {
@@ -156,9 +157,10 @@ struct TetKernel {
 
   /// Forces and the directional derivative (4.4) along nodal displacement direction d:
   /// dq = K_e·d. This is the pair Table 4.3 counts ("force" and "derivative").
-  static bool forces_and_product(const material::Lame& p, const Mat3T<T>& z_inv, const Mat3T<T>& b,
-                                 const Mat34T<T>& x, const Mat34T<T>& d, Mat34T<T>& q,
-                                 Mat34T<T>& dq) {
+  static INCISE_KERNEL_INLINE bool forces_and_product(const material::Lame& p,
+                                                      const Mat3T<T>& z_inv, const Mat3T<T>& b,
+                                                      const Mat34T<T>& x, const Mat34T<T>& d,
+                                                      Mat34T<T>& q, Mat34T<T>& dq) {
     State st;
     if (!kinematics(p, z_inv, x, st)) return false;
     const Mat3T<T> dg = material::detail::mul(differences(d), z_inv);
@@ -184,8 +186,9 @@ struct TetKernel {
 
   /// Matrix-free product only: dq = K_e·d (recomputes the kinematics; no forces). For the
   /// linear model K_e does not depend on x, so the kinematics at x are skipped.
-  static bool product(const material::Lame& p, const Mat3T<T>& z_inv, const Mat3T<T>& b,
-                      const Mat34T<T>& x, const Mat34T<T>& d, Mat34T<T>& dq) {
+  static INCISE_KERNEL_INLINE bool product(const material::Lame& p, const Mat3T<T>& z_inv,
+                                           const Mat3T<T>& b, const Mat34T<T>& x,
+                                           const Mat34T<T>& d, Mat34T<T>& dq) {
     State st;
     if constexpr (!Model::kLinearGeometry) {
       if (!kinematics(p, z_inv, x, st)) return false;
@@ -215,8 +218,10 @@ struct TetKernel {
   ///            + 2c3 h_a h_bᵀ + c4 h_b h_aᵀ],
   /// (linear geometry: F = I and no geometric S term), K_ba = K_abᵀ, and node-4 blocks from
   /// g4 = −g1 − g2 − g3. Returns false when inverted.
-  static bool forces_and_tangent(const material::Lame& p, const Mat3T<T>& z_inv, const Mat3T<T>& b,
-                                 const T& volume, const Mat34T<T>& x, Mat34T<T>& q, Mat12T<T>& k) {
+  static INCISE_KERNEL_INLINE bool forces_and_tangent(const material::Lame& p,
+                                                      const Mat3T<T>& z_inv, const Mat3T<T>& b,
+                                                      const T& volume, const Mat34T<T>& x,
+                                                      Mat34T<T>& q, Mat12T<T>& k) {
     State st;
     if (!kinematics(p, z_inv, x, st)) return false;
     if constexpr (Model::kLinearGeometry) {
