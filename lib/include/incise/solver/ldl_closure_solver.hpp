@@ -9,6 +9,7 @@
 
 #include <incise/solver/cholmod_factor.hpp>
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -49,12 +50,25 @@ class ClosureLdlSolver {
   /// Dense solve A x = b (full forward and backward substitution).
   void solve_dense(const Eigen::VectorXd& b, Eigen::VectorXd& x);
 
+  /// Number of fundamental supernodes of L (maximal chains of columns j, j+1, … with
+  /// pattern(L_{*j}) = {j+1} ∪ pattern(L_{*,j+1})), detected at construction. The triangular
+  /// solves use them: one row list per supernode, contiguous dot products in the backward pass.
+  int num_supernodes() const { return num_supernodes_; }
+
  private:
+  void forward_column(int j, double* x) const;
   void forward(const std::vector<int>& closure_positions);
+  template <typename Positions>
+  void backward(const Positions& positions, size_t count);
   std::shared_ptr<const LdlFactorData> factor_;
   std::vector<double> work_;  // permuted positions, zero between calls
   std::vector<int> mark_;
   int stamp_ = 0;
+  std::vector<int> super_last_;  // position → last column of its fundamental supernode
+  std::vector<double> gather_;   // x on a supernode's row set (backward substitution)
+  std::vector<int> super_rows_;  // row set of each supernode (at its last column), concatenated
+  std::vector<std::int64_t> super_row_ptr_;  // column j₁ → start in super_rows_ (size n + 1)
+  int num_supernodes_ = 0;
 };
 
 }  // namespace incise::solver
