@@ -128,7 +128,21 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
       ++frames;
     }
   };
-  const scene::SceneRunResult res = scene::run_scene(built, observer);
+  // Interactive cutting run ("augmented" with tools): one line (or bar frame) per solve.
+  auto cut_observer = [&](const scene::CutStepRow& row, std::size_t total_steps) {
+    if (progress == "bar") {
+      const double frac = total_steps ? double(row.step) / double(total_steps) : 1.0;
+      const int width = 30, filled = static_cast<int>(frac * width);
+      out << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
+          << std::string(static_cast<std::size_t>(width - filled), '.') << "] step " << std::setw(4)
+          << row.step << "/" << total_steps << "  m = " << std::setw(5) << row.m << std::flush;
+    } else if (progress == "lines") {
+      out << "step " << row.step << "/" << total_steps << ": " << row.status << ", m = " << row.m
+          << ", GMRES " << row.gmres_iterations << " it, update " << row.seconds_update * 1e3
+          << " ms\n";
+    }
+  };
+  const scene::SceneRunResult res = scene::run_scene(built, observer, cut_observer);
   if (progress == "bar") out << "\n";
 
   const auto& rep = res.report;
@@ -136,16 +150,24 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   out << "\n== summary\n";
   out << "method:          " << res.method_detail << "\n";
   out << "result:          " << solver::to_string(rep.reason) << "\n";
-  out << "iterations:      " << rep.iterations;
-  if (rep.inner_iterations > 0) out << " (inner " << rep.inner_iterations << ")";
-  out << "\n";
+  if (res.cut_steps.empty()) {
+    out << "iterations:      " << rep.iterations;
+    if (rep.inner_iterations > 0) out << " (inner " << rep.inner_iterations << ")";
+    out << "\n";
+  } else {
+    out << "solves:          " << rep.iterations << " (initial + " << rep.iterations - 1
+        << " sweep triangles), " << rep.inner_iterations << " GMRES iterations in all\n";
+  }
   out << "final residual:  ||r|| = " << rep.residual_norm
       << " N, ||r||/||f_ext|| = " << rep.residual_norm / fnorm << " (tolerance "
       << spec.solver.tolerance << ")\n";
   out << "energy:          " << rep.energy << " J\n";
-  out << "flops:           " << static_cast<double>(rep.flops) / 1e6 << " MFLOP (counted)\n";
+  if (res.cut_steps.empty())
+    out << "flops:           " << static_cast<double>(rep.flops) / 1e6 << " MFLOP (counted)\n";
+  else
+    out << "flops:           not counted (CHOLMOD and the augmented updates are timed)\n";
   out << "solver time:     " << rep.seconds << " s";
-  if (rep.seconds > 0)
+  if (rep.seconds > 0 && rep.flops > 0)
     out << " (" << static_cast<double>(rep.flops) / rep.seconds / 1e6 << " MFLOP/s)";
   out << "\n";
   for (const auto& p : res.probes) {
@@ -154,6 +176,24 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
       out << ", reference " << join_vec(*p.reference) << ", relative error "
           << 100 * p.relative_error << " %";
     out << "\n";
+  }
+  if (!res.cut_steps.empty()) {
+    // Per solve: m = replaced columns, GMRES iterations on the Schur system, update time
+    // (column replacements + augmented solve; wall and thread CPU), cut time.
+    out << "\n== augmented cut steps (no refactorization)\n";
+    out << "  step  tool  faces  +nodes  nodes   tets     m  GMRES  rel.res    update ms  "
+           "(cpu)  cut ms  status\n";
+    for (const auto& c : res.cut_steps) {
+      out << "  " << std::setw(4) << c.step << "  " << std::setw(4) << c.tool << "  "
+          << std::setw(5) << c.faces_dissected << "  " << std::setw(6) << c.new_nodes << "  "
+          << std::setw(5) << c.nodes << "  " << std::setw(5) << c.tetrahedra << "  " << std::setw(4)
+          << c.m << "  " << std::setw(5) << c.gmres_iterations << "  " << std::scientific
+          << std::setprecision(1) << std::setw(8) << c.gmres_relative_residual << std::fixed
+          << std::setprecision(3) << std::setw(11) << c.seconds_update * 1e3 << " " << std::setw(6)
+          << c.cpu_seconds_update * 1e3 << std::setw(8) << c.seconds_cut * 1e3 << "  " << c.status
+          << "\n"
+          << std::defaultfloat << std::setprecision(6);
+    }
   }
   out << "\n== built (what the scene names)\n";
   for (const auto& s : built.steps) {
@@ -167,7 +207,30 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
 
   // Outputs.
   std::vector<std::string> written;
-  if (!outs.csv.empty()) {
+  if (!outs.csv.empty() && !res.cut_steps.empty()) {
+    std::ostringstream csv;
+    csv << std::setprecision(10)
+        << "step,tool,status,degenerate_sweep,faces_dissected,nodes_snapped,new_nodes,nodes,"
+           "tetrahedra,m,dirichlet,gmres_iterations,gmres_relative_residual,nnz_l,cut_seconds,"
+           "update_seconds,update_cpu_seconds";
+    for (const auto& p : built.probes)
+      csv << "," << p.spec.name << "_x," << p.spec.name << "_y," << p.spec.name << "_z";
+    csv << "\n";
+    for (const auto& c : res.cut_steps) {
+      std::string status = c.status;  // CSV field: no commas or quotes
+      for (char& ch : status)
+        if (ch == ',' || ch == '"') ch = ';';
+      csv << c.step << "," << c.tool << "," << status << "," << c.degenerate_sweep << ","
+          << c.faces_dissected << "," << c.nodes_snapped << "," << c.new_nodes << "," << c.nodes
+          << "," << c.tetrahedra << "," << c.m << "," << c.dirichlet << "," << c.gmres_iterations
+          << "," << c.gmres_relative_residual << "," << c.nnz_l << "," << c.seconds_cut << ","
+          << c.seconds_update << "," << c.cpu_seconds_update;
+      for (const auto& v : c.probes) csv << "," << v[0] << "," << v[1] << "," << v[2];
+      csv << "\n";
+    }
+    write_file_atomic(outs.csv, csv.str());
+    written.push_back(outs.csv);
+  } else if (!outs.csv.empty()) {
     std::ostringstream csv;
     csv << std::setprecision(10)
         << "iteration,residual_norm,relative_residual,energy,flops,seconds";
@@ -227,6 +290,28 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
                             {"bytes", s.bytes},
                             {"flops", s.flops >= 0 ? Json(s.flops) : Json(nullptr)}});
     j["not_built"] = built.not_built;
+    for (const auto& c : res.cut_steps) {
+      Json cj = {{"step", c.step},
+                 {"tool", c.tool},
+                 {"status", c.status},
+                 {"degenerate_sweep", c.degenerate_sweep},
+                 {"faces_dissected", c.faces_dissected},
+                 {"nodes_snapped", c.nodes_snapped},
+                 {"new_nodes", c.new_nodes},
+                 {"nodes", c.nodes},
+                 {"tetrahedra", c.tetrahedra},
+                 {"m", c.m},
+                 {"dirichlet", c.dirichlet},
+                 {"gmres_iterations", c.gmres_iterations},
+                 {"gmres_relative_residual", c.gmres_relative_residual},
+                 {"nnz_l", c.nnz_l},
+                 {"cut_seconds", c.seconds_cut},
+                 {"update_seconds", c.seconds_update},
+                 {"update_cpu_seconds", c.cpu_seconds_update}};
+      for (std::size_t k = 0; k < c.probes.size() && k < built.probes.size(); ++k)
+        cj["probes"][built.probes[k].spec.name] = vec_json(c.probes[k]);
+      j["cut_steps"].push_back(cj);
+    }
     j["outputs"] = written;
     write_file_atomic(summary_json, j.dump(2) + "\n");
     written.push_back(summary_json);

@@ -1,6 +1,7 @@
 # ctest driver for `incise run`: runs INCISE with ARGS in WORKDIR (emptied first) and checks the
 # exit code (EXPECT_RC), that EXPECT_FILE exists (if given) and that WORKDIR holds no file at all
-# when EXPECT_EMPTY is set (a rejected scene must write nothing).
+# when EXPECT_EMPTY is set (a rejected scene must write nothing); EXPECT_MESSAGE / EXPECT_OUTPUT:
+# regular expressions stderr / stdout must match.
 file(REMOVE_RECURSE "${WORKDIR}")
 file(MAKE_DIRECTORY "${WORKDIR}")
 separate_arguments(arg_list UNIX_COMMAND "${ARGS}")
@@ -15,6 +16,9 @@ if(EXPECT_FILE AND NOT EXISTS "${WORKDIR}/${EXPECT_FILE}")
 endif()
 if(EXPECT_MESSAGE AND NOT err MATCHES "${EXPECT_MESSAGE}")
   message(FATAL_ERROR "stderr does not match '${EXPECT_MESSAGE}'")
+endif()
+if(EXPECT_OUTPUT AND NOT out MATCHES "${EXPECT_OUTPUT}")
+  message(FATAL_ERROR "stdout does not match '${EXPECT_OUTPUT}'")
 endif()
 if(EXPECT_EMPTY)
   file(GLOB_RECURSE written "${WORKDIR}/*")

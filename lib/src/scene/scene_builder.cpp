@@ -150,6 +150,19 @@ Vec3 probe_value(const ResolvedProbe& probe, const VecX& u) {
   return s / static_cast<double>(probe.nodes.size());
 }
 
+mesh::MeshData live_mesh_data(const cut::CutMesh& cm) {
+  mesh::MeshData m;
+  m.dimension = 3;
+  m.points = cm.reference_matrix();
+  std::vector<cut::Tet> live;
+  for (Index e = 0; e < cm.element_capacity(); ++e)
+    if (cm.alive(e)) live.push_back(cm.element(e));
+  m.cells.resize(4, static_cast<Eigen::Index>(live.size()));
+  for (std::size_t e = 0; e < live.size(); ++e)
+    for (int k = 0; k < 4; ++k) m.cells(k, static_cast<Eigen::Index>(e)) = live[e][k];
+  return m;
+}
+
 BuiltScene build_scene(const SceneSpec& spec) {
   BuiltScene b;
   b.spec = spec;
@@ -180,9 +193,25 @@ BuiltScene build_scene(const SceneSpec& spec) {
                  std::to_string(spec.fixed.size()) + " region(s)",
              t.seconds(), b.fixed_nodes.size() * sizeof(Index));
 
+  // Tools with the augmented solver: the run cuts interactively, one sweep triangle at a time,
+  // updating the static solution after every step (scene_runner.hpp); here only the sweep
+  // triangles are made, and loads and probes are selected on the uncut mesh.
+  const bool interactive_cut =
+      !spec.tools.empty() && spec.solver.method == SolverSpec::Method::kAugmented;
+  if (interactive_cut) {
+    t.restart();
+    for (const ToolSpec& tool : spec.tools) {
+      const auto tris = sweep_triangles(tool);
+      b.sweep_triangles.insert(b.sweep_triangles.end(), tris.begin(), tris.end());
+    }
+    b.record("sweep triangles: " + std::to_string(b.sweep_triangles.size()) + " from " +
+                 std::to_string(spec.tools.size()) +
+                 " tool(s), cut one by one during the augmented run",
+             t.seconds(), b.sweep_triangles.size() * sizeof(std::array<Vec3, 3>));
+  }
   // Tools: the scalpel cuts the mesh (thesis §3.2) before the problem is built, so loads,
   // probes and the elastic problem see the cut mesh. Fixed flags travel with dissection copies.
-  if (!spec.tools.empty()) {
+  if (!spec.tools.empty() && !interactive_cut) {
     t.restart();
     cut::CutMesh cm(b.mesh);
     for (Index v : b.fixed_nodes) cm.set_fixed(v, true);
@@ -199,15 +228,7 @@ BuiltScene build_scene(const SceneSpec& spec) {
       cutter.end_incision();
       b.sweep_triangles.insert(b.sweep_triangles.end(), tris.begin(), tris.end());
     }
-    mesh::MeshData cut_mesh;
-    cut_mesh.dimension = 3;
-    cut_mesh.points = cm.reference_matrix();
-    std::vector<cut::Tet> live;
-    for (Index e = 0; e < cm.element_capacity(); ++e)
-      if (cm.alive(e)) live.push_back(cm.element(e));
-    cut_mesh.cells.resize(4, static_cast<Eigen::Index>(live.size()));
-    for (std::size_t e = 0; e < live.size(); ++e)
-      for (int k = 0; k < 4; ++k) cut_mesh.cells(k, static_cast<Eigen::Index>(e)) = live[e][k];
+    mesh::MeshData cut_mesh = live_mesh_data(cm);
     b.fixed_nodes.clear();
     Index unused = 0;
     for (Index v = 0; v < cm.num_nodes(); ++v) {
@@ -226,7 +247,7 @@ BuiltScene build_scene(const SceneSpec& spec) {
                  " unused nodes -> " + std::to_string(b.mesh.num_cells()) + " tets, " +
                  std::to_string(b.mesh.num_points()) + " nodes (cell tags dropped)",
              t.seconds(), matrix_bytes(b.mesh));
-  } else {
+  } else if (spec.tools.empty()) {
     b.not_built.push_back("cut mesh and sweep triangles: no tool named");
   }
   const Index n = b.mesh.num_points();

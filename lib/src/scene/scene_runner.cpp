@@ -2,6 +2,8 @@
 
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
+#include <incise/cut/augmented_cut_session.hpp>
+#include <incise/material/material.hpp>
 #include <incise/solver/cholmod_factor.hpp>
 #include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/solver/eigen_estimates.hpp>
@@ -78,13 +80,197 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
   return rep;
 }
 
+/// Stop reason of a failed interactive step (cut::CutSolveStatus → solver::StopReason).
+solver::StopReason stop_reason_of(const cut::AugmentedCutStepReport& r) {
+  switch (r.status) {
+    case cut::CutSolveStatus::kOk: return solver::StopReason::kConverged;
+    case cut::CutSolveStatus::kFreeComponent: return solver::StopReason::kIndefinite;
+    case cut::CutSolveStatus::kInvertedElement: return solver::StopReason::kInverted;
+    case cut::CutSolveStatus::kSolverFailed: break;
+  }
+  switch (r.solve.status) {
+    case solver::AugmentedStatus::kGmresNotConverged: return solver::StopReason::kMaxIterations;
+    case solver::AugmentedStatus::kNonFinite: return solver::StopReason::kNonFinite;
+    default: return solver::StopReason::kIndefinite;  // singular modified K, or no factor
+  }
+}
+
+/// Memory held by a mesh's point and cell arrays (bytes).
+std::size_t matrix_bytes_of(const mesh::MeshData& m) {
+  return static_cast<std::size_t>(m.points.size()) * sizeof(double) +
+         static_cast<std::size_t>(m.cells.size()) * sizeof(Index);
+}
+
+VecX displacement_vector(const Eigen::Matrix3Xd& d) {
+  return Eigen::Map<const VecX>(d.data(), d.size());
+}
+
+/// "augmented" with tools: the interactive cutting run (scene_runner.hpp).
+void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObserver& observer,
+                       std::ostringstream& detail) {
+  const SceneSpec& spec = scene.spec;
+  Timer total;
+  material::Parameters mp;
+  mp.youngs_modulus = spec.material.E;
+  mp.poisson_ratio = spec.material.nu;
+  mp.gamma = spec.material.gamma;
+  mp.density = spec.material.rho;
+  const material::Material mat(spec.material.model, mp);
+  const Index n0 = scene.mesh.num_points();
+  // The loads of the uncut body, held as nodal forces during the cut (new nodes carry none).
+  const Eigen::Matrix3Xd forces =
+      Eigen::Map<const Eigen::Matrix3Xd>(scene.external_force.data(), 3, n0);
+
+  Timer t;
+  auto session =
+      std::make_unique<cut::AugmentedCutSession>(scene.mesh, mat, scene.fixed_nodes, forces);
+  const cut::AugmentedCutStepReport& init = session->initial_report();
+  scene.record("stiffness K0 of the uncut body (" + std::to_string(session->system().num_dofs()) +
+                   " free DOFs), its CHOLMOD factor (|L| = " + std::to_string(init.solve.nnz_l) +
+                   ") and the initial solve",
+               t.seconds(),
+               static_cast<std::size_t>(init.solve.nnz_l) * (sizeof(double) + sizeof(int)));
+
+  std::size_t total_steps = 0;
+  for (const ToolSpec& tool : spec.tools) total_steps += sweep_triangles(tool).size();
+  bool failed = false;
+  solver::StopReason failure = solver::StopReason::kConverged;
+  std::string failure_text;
+  long gmres_total = 0;
+  double cut_seconds = 0;
+  cut::CutTotals totals;
+  auto add_row = [&](int step, int tool, const cut::AugmentedCutStepReport& r) {
+    CutStepRow row;
+    row.step = step;
+    row.tool = tool;
+    row.status = r.ok() ? "ok" : cut::to_string(r.status);
+    if (!r.ok() && !r.advice.empty()) row.status += ": " + r.advice;
+    row.degenerate_sweep = r.cut.status == cut::CutStatus::kDegenerateSweep;
+    row.faces_dissected = r.cut.faces_dissected;
+    row.nodes_snapped = r.cut.nodes_snapped;
+    row.new_nodes = static_cast<Index>(r.cut.new_nodes.size());
+    row.nodes = session->mesh().num_nodes();
+    row.tetrahedra = session->mesh().num_elements();
+    row.m = session->system().num_replaced();
+    if (r.solved) {
+      row.dirichlet = r.solve.dirichlet;
+      row.gmres_iterations = r.solve.gmres.iterations;
+      row.gmres_relative_residual = r.solve.gmres.relative_residual;
+      row.nnz_l = r.solve.nnz_l;
+    }
+    row.seconds_cut = r.seconds_cut;
+    row.seconds_update = r.seconds_update + r.seconds_solve;
+    row.cpu_seconds_update = r.cpu_seconds_update;
+    const VecX u = displacement_vector(session->displacement());
+    for (const auto& pr : scene.probes) row.probes.push_back(probe_value(pr, u));
+    gmres_total += row.gmres_iterations;
+    cut_seconds += r.seconds_cut;
+    if (!r.ok() && !failed) {
+      failed = true;
+      failure = stop_reason_of(r);
+      failure_text = "step " + std::to_string(step) + ": " + row.status;
+    }
+    if (observer) observer(row, total_steps);
+    res.cut_steps.push_back(std::move(row));
+  };
+  add_row(0, -1, init);
+  int step = 0;
+  for (std::size_t k = 0; k < spec.tools.size(); ++k) {
+    for (const auto& tri : sweep_triangles(spec.tools[k])) {
+      const cut::AugmentedCutStepReport r = session->step(tri);
+      totals.add(r.cut);
+      add_row(++step, static_cast<int>(k), r);
+    }
+    session->end_incision();
+  }
+
+  // The final cut mesh, its held nodes and a matrix-free elastic problem carrying the same
+  // nodal forces: the residual of the last augmented solution is recomputed independently.
+  t.restart();
+  const cut::CutMesh& cm = session->mesh();
+  mesh::MeshData final_mesh = live_mesh_data(cm);
+  std::vector<Index> held;
+  Index unused = 0;
+  for (Index v = 0; v < cm.num_nodes(); ++v) {
+    const int d = session->dof(v);
+    unused += cm.unused(v);
+    if (d < 0 || cm.unused(v) || session->system().is_constrained(d)) held.push_back(v);
+  }
+  scene.record("cut: " + std::to_string(step) + " sweep triangles, " +
+                   std::to_string(totals.faces_dissected) + " faces dissected, " +
+                   std::to_string(totals.nodes_snapped) + " nodes snapped, " +
+                   std::to_string(totals.collapses) + " collapses, " +
+                   std::to_string(totals.new_nodes) + " new nodes, " + std::to_string(unused) +
+                   " unused nodes -> " + std::to_string(final_mesh.num_cells()) + " tets, " +
+                   std::to_string(final_mesh.num_points()) + " nodes (cell tags dropped)",
+               cut_seconds, matrix_bytes_of(final_mesh));
+  auto check = std::make_unique<fem::ElasticProblem>(final_mesh, mat);
+  check->fix_nodes(held);
+  for (Index v = 0; v < n0; ++v)
+    if (forces.col(v).squaredNorm() > 0) check->add_point_load(fem::PointLoad{v, forces.col(v)});
+  res.u = displacement_vector(session->displacement());
+  VecX g;
+  double energy = 0;
+  const EvalStatus es = check->gradient(res.u, g, &energy);
+  check->project(g);
+  scene.record("elastic problem on the cut mesh (residual check of the augmented solution)",
+               t.seconds(),
+               static_cast<std::size_t>(final_mesh.num_cells()) * sizeof(fem::TetReference));
+
+  solver::SolverReport& rep = res.report;
+  rep.iterations = static_cast<long>(res.cut_steps.size());
+  rep.inner_iterations = gmres_total;
+  rep.residual_norm = g.norm();
+  rep.energy = energy;
+  res.external_force_norm = check->external_force_norm();
+  rep.threshold = spec.solver.tolerance * res.external_force_norm;
+  rep.residual_history = {res.external_force_norm, rep.residual_norm};
+  rep.energy_history = {0.0, energy};
+  rep.reason = failed                               ? failure
+               : es != EvalStatus::kOk              ? solver::StopReason::kNonFinite
+               : rep.residual_norm <= rep.threshold ? solver::StopReason::kConverged
+                                                    : solver::StopReason::kStagnated;
+  rep.seconds = total.seconds();
+  detail << "interactive cut with the augmented solver (Yeung et al. 2016 §3): K0 factored once "
+            "(CHOLMOD, |L| = "
+         << init.solve.nnz_l << "), then per sweep triangle: cut (thesis §3.2, in the deformed "
+         << "configuration), element stiffness changes and new DOFs as replaced columns, GMRES "
+         << "on the Schur system; no refactorization. " << step
+         << " steps, final m = " << session->system().num_replaced() << ", " << gmres_total
+         << " GMRES iterations in all"
+         << (failed ? "; first failure at " + failure_text : std::string());
+  scene.mesh = std::move(final_mesh);
+  scene.fixed_nodes = std::move(held);
+  scene.external_force = check->external_force();
+  scene.problem = std::move(check);
+}
+
 }  // namespace
 
-SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer) {
+SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
+                         const CutStepObserver& cut_observer) {
   INCISE_CHECK(scene.problem != nullptr, "run_scene needs a built problem");
-  fem::ElasticProblem& p = *scene.problem;
   const SolverSpec& s = scene.spec.solver;
   SceneRunResult res;
+  auto evaluate_probes = [&] {
+    for (const auto& pr : scene.probes) {
+      ProbeResult r;
+      r.name = pr.spec.name;
+      r.value = probe_value(pr, res.u);
+      r.reference = pr.spec.reference;
+      if (r.reference && r.reference->norm() > 0)
+        r.relative_error = (r.value - *r.reference).norm() / r.reference->norm();
+      res.probes.push_back(r);
+    }
+  };
+  if (s.method == SolverSpec::Method::kAugmented && !scene.spec.tools.empty()) {
+    std::ostringstream detail;
+    run_augmented_cut(scene, res, cut_observer, detail);
+    res.method_detail = detail.str();
+    evaluate_probes();
+    return res;
+  }
+  fem::ElasticProblem& p = *scene.problem;
   res.u = VecX::Zero(p.size());
   res.external_force_norm = p.external_force_norm();
 
@@ -198,15 +384,7 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer) {
     }
   }
   res.method_detail = detail.str();
-  for (const auto& pr : scene.probes) {
-    ProbeResult r;
-    r.name = pr.spec.name;
-    r.value = probe_value(pr, res.u);
-    r.reference = pr.spec.reference;
-    if (r.reference && r.reference->norm() > 0)
-      r.relative_error = (r.value - *r.reference).norm() / r.reference->norm();
-    res.probes.push_back(r);
-  }
+  evaluate_probes();
   return res;
 }
 

@@ -2,10 +2,13 @@
 /// \file scene_builder.hpp
 /// Builds the parts a scene names, and only those ("model only what a scene requires"): the
 /// mesh, the fixed node set, the external loads, the elastic problem,
-/// sweep triangles only when a tool is named, probe node sets only when probes are named. Every
+/// sweep triangles only when a tool is named (with the "augmented" solver the builder leaves
+/// the cut to the run, which cuts one sweep triangle at a time; otherwise it cuts first),
+/// probe node sets only when probes are named. Every
 /// part built is recorded with its wall time and the memory it holds; every part deliberately
 /// not built is recorded with the reason, so a run summary can show both.
 
+#include <incise/cut/cut_mesh.hpp>
 #include <incise/fem/elastic_problem.hpp>
 #include <incise/mesh/mesh_data.hpp>
 #include <incise/scene/scene_spec.hpp>
@@ -67,6 +70,11 @@ mesh::CellMatrix boundary_faces(const mesh::MeshData& mesh);
 /// Sweep triangles of a scalpel (thesis §3.2): for each path segment p_i → p_{i+1} the quad
 /// (p_i, p_{i+1}, p_{i+1}+b, p_i+b) split into two triangles, b the blade vector.
 std::vector<std::array<Vec3, 3>> sweep_triangles(const ToolSpec& tool);
+
+/// The live tetrahedra of a cut mesh as MeshData: every node (unused ones included, so node
+/// indices are those of the CutMesh), reference positions (m), cells in element-handle order,
+/// no tags.
+mesh::MeshData live_mesh_data(const cut::CutMesh& cut_mesh);
 
 /// Mean displacement (m) over the probe's nodes; u holds 3 DOFs per node.
 Vec3 probe_value(const ResolvedProbe& probe, const VecX& u);

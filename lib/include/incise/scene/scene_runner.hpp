@@ -8,7 +8,12 @@
 /// or estimated (§4.1: Δt = 0.9·2/√λ_max, η = 2√λ₁, or η from the FFT of an undamped run when
 /// spectral_tuning is set); "augmented" → CHOLMOD factorization of the assembled K (fixed DOFs
 /// as identity rows) and one direct solve, the initial system of the augmented method
-/// (Yeung et al. 2016 §3). Parts built on the way (eigenvalue estimates, FFT, factorization) are
+/// (Yeung et al. 2016 §3). "augmented" with tools → an interactive cutting run
+/// (cut::AugmentedCutSession): K⁰ of the uncut body is factored once, then every sweep triangle
+/// is cut (thesis §3.2) and the static solution updated by the augmented solver — element
+/// stiffness changes and new DOFs as replaced columns, GMRES on the Schur system — without
+/// refactorization; the per-step m, GMRES iterations and update times are returned as
+/// SceneRunResult::cut_steps. Parts built on the way (eigenvalue estimates, FFT, factorization) are
 /// recorded in BuiltScene::steps with their cost.
 
 #include <incise/scene/scene_builder.hpp>
@@ -40,6 +45,28 @@ struct TraceRow {
   std::vector<Vec3> probes;  ///< probe values at this iteration (m)
 };
 
+/// One solve of an interactive cutting run ("augmented" with tools): the initial factorization
+/// and solve (step 0), then one row per sweep triangle.
+struct CutStepRow {
+  int step = 0;                     ///< 0: initial solve; k ≥ 1: k-th sweep triangle
+  int tool = -1;                    ///< index into SceneSpec::tools (−1 for step 0)
+  std::string status;               ///< "ok" or the cut::CutSolveStatus name (+ advice)
+  bool degenerate_sweep = false;    ///< the cutter skipped a zero-area sweep triangle
+  Index faces_dissected = 0;        ///< faces dissected by this step (§3.2)
+  Index nodes_snapped = 0;          ///< nodes snapped onto the sweep (§3.2.2)
+  Index new_nodes = 0;              ///< nodes created by this step
+  Index nodes = 0, tetrahedra = 0;  ///< mesh size after the step (nodes incl. unused; live tets)
+  int m = 0;                        ///< replaced columns |𝓛| after the step (Yeung et al. §3)
+  int dirichlet = 0;                ///< |𝓓|: constrained DOFs among them
+  int gmres_iterations = 0;         ///< GMRES iterations on the Schur system (eq. 17)
+  double gmres_relative_residual = 0;  ///< its relative residual at exit
+  std::int64_t nnz_l = 0;              ///< |L| of the factor in use (constant: no refactoring)
+  double seconds_cut = 0;              ///< wall time of the cut (Cutter::step)
+  double seconds_update = 0;           ///< wall time of column replacements + augmented solve
+  double cpu_seconds_update = 0;       ///< thread CPU time of the same
+  std::vector<Vec3> probes;            ///< probe values after the step (m)
+};
+
 /// Outcome of run_scene().
 struct SceneRunResult {
   solver::SolverReport report;     ///< the solver's report (reason, iterations, flops, time)
@@ -48,13 +75,25 @@ struct SceneRunResult {
   double external_force_norm = 0;  ///< ‖f_ext‖₂ over free DOFs (N)
   std::vector<ProbeResult> probes;
   std::vector<TraceRow> trace;  ///< one row per iteration (initial state first)
+  /// Interactive cutting run only: one row per solve (initial solve first). The report then
+  /// holds iterations = number of solves, inner_iterations = total GMRES iterations and the
+  /// residual ‖P(K u − f)‖ recomputed matrix-free on the final cut mesh (scene.problem).
+  std::vector<CutStepRow> cut_steps;
 };
 
 /// Called after every iteration with the solver's snapshot (u valid during the call).
 using RunObserver = std::function<void(const solver::IterationInfo&)>;
 
+/// Called after every solve of an interactive cutting run, with the row and the number of
+/// sweep triangles in the run.
+using CutStepObserver = std::function<void(const CutStepRow&, std::size_t total_steps)>;
+
 /// Runs the scene's solver from u = 0. Numerical failure is reported in result.report.reason,
 /// never thrown. Throws UsageError only for a scene whose problem was not built.
-SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer = {});
+/// An interactive cutting run replaces scene.mesh, scene.fixed_nodes and scene.problem by the
+/// final cut mesh, its held nodes (fixed from the start, fixed by the cutter, unused) and an
+/// elastic problem on it carrying the same nodal forces (used to verify the residual).
+SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer = {},
+                         const CutStepObserver& cut_observer = {});
 
 }  // namespace incise::scene
