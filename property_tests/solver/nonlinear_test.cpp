@@ -1,6 +1,7 @@
 /// Nonlinear CG (§2.4.2, line searches §4.4.2) and truncated Newton (§2.4.3) on a convex
 /// nonlinear spring chain with an inversion barrier; statuses on +∞ regions and indefinite
 /// problems; budgets.
+#include <incise/solver/energy_error.hpp>
 #include <incise/solver/nonlinear_cg.hpp>
 #include <incise/solver/truncated_newton.hpp>
 #include <incise_test/seed.hpp>
@@ -206,6 +207,48 @@ TEST(NonlinearCg, BudgetsHonoured) {
   rep = truncated_newton(p, u, to);
   EXPECT_EQ(rep.reason, StopReason::kMaxIterations);
   EXPECT_EQ(rep.iterations, 1);
+}
+
+// check_inversion (§4.3.1 post-check): random rotations + stretches keep every tetrahedron
+// positive (ratio = det F), a reflection of one vertex through the opposite face inverts exactly
+// that element, and the status says so.
+TEST(InversionCheck, DetectsExactlyTheReflectedElements_Sec4_3_1) {
+  INCISE_SEEDED_RNG(rng, 4321);
+  std::uniform_real_distribution<double> unif(-1.0, 1.0);
+  // Two tetrahedra sharing the face (1, 2, 3); the second is (4, 3, 2, 1)-oriented positively.
+  Eigen::Matrix3Xd x(3, 5);
+  x << 0, 1, 0, 0, 1, 0, 0, 1, 0, 1, 0, 0, 0, 1, 1;
+  Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic> cells(4, 2);
+  cells << 0, 4, 1, 2, 2, 1, 3, 3;
+  auto volume = [&](int e, const VecX& u) {
+    Vec3 p[4];
+    for (int a = 0; a < 4; ++a) p[a] = x.col(cells(a, e)) + u.segment<3>(3 * cells(a, e));
+    return (p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]);
+  };
+  ASSERT_GT(volume(0, VecX::Zero(15)), 0.0);
+  ASSERT_GT(volume(1, VecX::Zero(15)), 0.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::Quaterniond q(unif(rng), unif(rng), unif(rng), unif(rng));
+    const Mat3 f = q.normalized().toRotationMatrix() * (1.5 + 0.5 * unif(rng));
+    VecX u(15);
+    for (int n = 0; n < 5; ++n) u.segment<3>(3 * n) = f * x.col(n) - x.col(n);
+    const InversionCheck ok = check_inversion(x, cells, u);
+    EXPECT_EQ(ok.status, InversionStatus::kNoneInverted);
+    EXPECT_EQ(ok.inverted_elements, 0);
+    // min det F of a uniform deformation is det f (1e-12: rounding of 3×3 products).
+    EXPECT_NEAR(ok.min_volume_ratio, f.determinant(), 1e-12 * f.determinant());
+  }
+  // Push vertex 0 through the face (1, 2, 3): only element 0 inverts.
+  VecX u = VecX::Zero(15);
+  u.segment<3>(0) = Vec3(0.6, 0.6, 0.6);
+  const InversionCheck bad = check_inversion(x, cells, u);
+  EXPECT_EQ(bad.status, InversionStatus::kInverted);
+  EXPECT_EQ(bad.inverted_elements, 1);
+  ASSERT_EQ(bad.elements.size(), 1u);
+  EXPECT_EQ(bad.elements[0], 0);
+  EXPECT_LT(bad.min_volume_ratio, 0.0);
+  EXPECT_STREQ(to_string(bad.status), "inverted");
+  EXPECT_THROW((void)check_inversion(x, cells, VecX::Zero(14)), ParameterError);
 }
 
 }  // namespace

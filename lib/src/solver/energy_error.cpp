@@ -1,5 +1,6 @@
 #include <incise/solver/energy_error.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -36,6 +37,38 @@ const EnergyErrorTrace::Sample* EnergyErrorTrace::first_below(double level) cons
   for (const Sample& s : samples_)
     if (s.energy_error <= level) return &s;
   return nullptr;
+}
+
+const char* to_string(InversionStatus s) {
+  return s == InversionStatus::kInverted ? "inverted" : "none_inverted";
+}
+
+InversionCheck check_inversion(const Eigen::Matrix3Xd& points,
+                               const Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic>& cells,
+                               const VecX& u) {
+  INCISE_CHECK_PARAM(cells.rows() == 4 || cells.cols() == 0,
+                     "check_inversion: cells must be 4 x m (tetrahedra)");
+  INCISE_CHECK_PARAM(u.size() == 3 * points.cols(),
+                     "check_inversion: u must have 3 entries per node");
+  InversionCheck out;
+  for (Eigen::Index e = 0; e < cells.cols(); ++e) {
+    Vec3 x[4], X[4];
+    for (int a = 0; a < 4; ++a) {
+      const Index n = cells(a, e);
+      INCISE_CHECK_PARAM(n >= 0 && n < points.cols(), "check_inversion: vertex index out of range");
+      X[a] = points.col(n);
+      x[a] = X[a] + u.segment<3>(3 * Eigen::Index(n));
+    }
+    const double v0 = (X[1] - X[0]).cross(X[2] - X[0]).dot(X[3] - X[0]);
+    const double v = (x[1] - x[0]).cross(x[2] - x[0]).dot(x[3] - x[0]);
+    out.min_volume_ratio = std::min(out.min_volume_ratio, v / v0);
+    if (!(v > 0.0)) {
+      ++out.inverted_elements;
+      out.elements.push_back(Index(e));
+    }
+  }
+  if (out.inverted_elements > 0) out.status = InversionStatus::kInverted;
+  return out;
 }
 
 }  // namespace incise::solver

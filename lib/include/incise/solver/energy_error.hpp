@@ -10,6 +10,7 @@
 
 #include <incise/solver/report.hpp>
 
+#include <limits>
 #include <vector>
 
 namespace incise::solver {
@@ -51,5 +52,34 @@ class EnergyErrorTrace {
   VecX e_, ke_;
   std::vector<Sample> samples_;
 };
+
+/// Whether a displacement field inverts elements (post-check of a solution, thesis §4.3.1).
+enum class InversionStatus {
+  kNoneInverted,  ///< every tetrahedron keeps a positive deformed volume
+  kInverted       ///< at least one tetrahedron has deformed volume ≤ 0 (det F ≤ 0)
+};
+
+/// Human-readable name ("none_inverted", "inverted").
+const char* to_string(InversionStatus s);
+
+/// Outcome of check_inversion().
+struct [[nodiscard]] InversionCheck {
+  InversionStatus status = InversionStatus::kNoneInverted;  ///< any element inverted?
+  int inverted_elements = 0;                                ///< how many (det F ≤ 0)
+  /// min over elements of deformed/reference volume = min det F (dimensionless; ≤ 0 iff
+  /// inverted; 1 for a rigid motion); +∞ for an empty mesh.
+  double min_volume_ratio = std::numeric_limits<double>::infinity();
+  std::vector<Index> elements;  ///< indices of the inverted elements, ascending
+};
+
+/// Post-check of a solution u (3 displacements per node, m) on a tetrahedral mesh: which
+/// elements have non-positive deformed volume. Material models that are defined for det F ≤ 0
+/// (linear, St. Venant–Kirchhoff) report EvalStatus::kOk there, so a solver cannot see the
+/// inversion; the thesis observed it for StVK near the clamp of its cylinder (§4.3.1, Fig. 4.3).
+/// `points` is 3×n (m), `cells` 4×m vertex indices with positive reference volume.
+/// Throws ParameterError on mismatched sizes or a non-tetrahedral cell matrix.
+InversionCheck check_inversion(const Eigen::Matrix3Xd& points,
+                               const Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic>& cells,
+                               const VecX& u);
 
 }  // namespace incise::solver
