@@ -9,6 +9,7 @@
 /// solver update). Arg 1 = 1 adds the O(n) free-component check after every dissecting step, to
 /// show its cost separately (the interactive loop can run it less often).
 #include <benchmark/benchmark.h>
+#include <incise/cut/augmented_cut_session.hpp>
 #include <incise/cut/cutter.hpp>
 #include <incise/fem/elastic_problem.hpp>
 #include <incise/material/material.hpp>
@@ -142,6 +143,81 @@ void BM_InteractiveStep(benchmark::State& state) {
 }
 
 BENCHMARK(BM_InteractiveStep)->Iterations(20)->Unit(benchmark::kMillisecond);
+
+/// A whole interactive step with the augmented solver (cut/augmented_cut_session.hpp): one
+/// sweep triangle, the translation of its CutStepReport into column replacements of the
+/// augmented system (Yeung et al. 2016 §3) and the augmented solve of the linear static problem
+/// (ν = 1/4, bottom face fixed, dilating load on x = 0 and x = side), without refactoring; the
+/// deformed positions are updated after every solve. Arg 0: cells per side (12: 10 368 tets,
+/// 26: 105 456 tets). The same blade path as BM_InteractiveStep. Counters (per step, CPU time
+/// of this thread): cut_us = Cutter::step (with the search-grid rebuild the deformed update
+/// causes), update_ms = column replacements + solve; m, GMRES iterations; setup_s = K⁰
+/// factorization + first solve (outside the timed loop). Args: cells per side, supernodal
+/// factor, deformed update after each solve.
+void BM_AugmentedInteractiveStep(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const double side = n * kH;
+  const incise::mesh::MeshData box = incise::mesh::make_box(n, n, n, side, side, side);
+  std::vector<Index> fixed;
+  Eigen::Matrix3Xd forces = Eigen::Matrix3Xd::Zero(3, box.num_points());
+  for (Index v = 0; v < box.num_points(); ++v) {
+    const Vec3 p = box.points.col(v);
+    if (p.z() == 0.0) fixed.push_back(v);
+    if (p.x() == 0.0) forces(0, v) = -0.5;
+    if (p.x() == side) forces(0, v) = 0.5;
+  }
+  const incise::material::Material material("linear", {1e4, 0.25, 0.0, 1000.0});
+  incise::cut::AugmentedCutOptions opt;
+  if (state.range(1) != 0) opt.augmented.cholmod.kind = incise::solver::CholmodKind::kSimplicialLdl;
+  opt.update_deformed = state.range(2) != 0;
+  incise::cut::AugmentedCutSession session(box, material, fixed, forces, opt);
+  if (!session.initial_report().ok()) {
+    state.SkipWithError(session.initial_report().advice.c_str());
+    return;
+  }
+  Vec3 a(0.3 * side, 0.2 * side, side + 0.37 * kH);
+  int tri = 0;
+  double cut_cpu = 0, update_cpu = 0;
+  long gmres = 0, failures = 0;
+  int m = 0;
+  double step2 = 0, step3 = 0;
+  for (auto _ : state) {
+    const Vec3 a2 = a + Vec3(0.5 * kH, 0.01 * kH, 0);
+    const Vec3 b(a.x(), a.y(), side - 2.63 * kH), b2(a2.x(), a2.y(), side - 2.63 * kH);
+    const incise::cut::AugmentedCutStepReport r =
+        (tri % 2 == 0) ? session.step(a, b, b2) : session.step(a, b2, a2);
+    cut_cpu += r.cpu_seconds_cut;
+    update_cpu += r.cpu_seconds_update;
+    gmres += r.solve.gmres.iterations;
+    failures += r.ok() ? 0 : 1;
+    m = r.solved ? r.solve.m : m;
+    step2 += r.solve.seconds_step2;
+    step3 += r.solve.seconds_step3;
+    if (tri % 2 == 1) a = a2;
+    ++tri;
+  }
+  const double steps = static_cast<double>(tri);
+  state.counters["tets"] = static_cast<double>(session.mesh().num_elements());
+  state.counters["cut_us"] = 1e6 * cut_cpu / steps;
+  state.counters["update_ms"] = 1e3 * update_cpu / steps;
+  state.counters["gmres_per_step"] = static_cast<double>(gmres) / steps;
+  state.counters["m_final"] = m;
+  state.counters["failed_steps"] = static_cast<double>(failures);
+  state.counters["setup_s"] = session.initial_report().cpu_seconds_update;
+  state.counters["gmres_wall_ms"] = 1e3 * step2 / steps;
+  state.counters["step3_wall_ms"] = 1e3 * step3 / steps;
+}
+
+// Args: cells per side, simplicial factor (0: the session's default supernodal factor),
+// deformed update. The simplicial 100k case is left out (≈ 48 s CPU to factor; docs/cutting.md).
+BENCHMARK(BM_AugmentedInteractiveStep)
+    ->Args({12, 0, 1})
+    ->Args({26, 0, 1})
+    ->Args({12, 1, 1})
+    ->Args({12, 0, 0})
+    ->Args({26, 0, 0})
+    ->Iterations(40)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
