@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -25,6 +26,25 @@ using L4 = Lanes4;
 /// kind to one generic kernel body, so every global operation is written once for both.
 template <class T>
 class Elements;
+
+/// Work arrays of the kernel calls of one sweep, constructed once per sweep and not per element:
+/// default construction zero-fills Lanes4 matrices, and a 12×12 Lanes4 matrix is 4.6 kB.
+template <class T>
+struct Scratch {
+  Mat34T<T> x, d, q, dq;  ///< nodal positions, direction, forces, K_e·d
+  Mat12T<T> k;            ///< element tangent
+};
+
+/// True when every v[0..n) is finite: x − x is 0 for finite x and NaN otherwise, and NaN
+/// propagates through the sums (four partial sums keep the loop vectorizable).
+bool all_finite(const double* v, Eigen::Index n) {
+  double s[4] = {0.0, 0.0, 0.0, 0.0};
+  Eigen::Index t = 0;
+  for (; t + 4 <= n; t += 4)
+    for (int l = 0; l < 4; ++l) s[l] += v[t + l] - v[t + l];
+  for (; t < n; ++t) s[0] += v[t] - v[t];
+  return ((s[0] + s[1]) + (s[2] + s[3])) == 0.0;
+}
 
 template <>
 class Elements<double> {
@@ -356,17 +376,21 @@ template <class Visit>
 bool ElasticProblem::sweep(Visit&& visit) const {
   const Index* cells = cells_.data();
   const int* scatter = scatter_.empty() ? nullptr : scatter_.data();
+  Scratch<double> w1;
+  Scratch<L4> w4;
   const auto element = [&](Index e) {
     const std::size_t i = static_cast<std::size_t>(e);
     return visit(Elements<double>(refs_[i], cells + 4 * i,
-                                  scatter ? scatter + kScatterPerElement * i : nullptr));
+                                  scatter ? scatter + kScatterPerElement * i : nullptr),
+                 w1);
   };
   const Index nb = num_full_blocks();
   for (Index k = 0; k < nb; ++k) {
     const std::size_t i = static_cast<std::size_t>(k);
     const RefBlock& rb = blocks_[i];
     if (visit(Elements<L4>(rb.z_inv, rb.b, rb.volume, cells + 16 * i,
-                           scatter ? scatter + 4 * kScatterPerElement * i : nullptr)))
+                           scatter ? scatter + 4 * kScatterPerElement * i : nullptr),
+              w4))
       continue;
     // Some lane is inverted: the block had no side effects; redo its elements one by one.
     for (Index e = 4 * k; e < 4 * k + 4; ++e)
@@ -382,13 +406,12 @@ EvalStatus ElasticProblem::energy(const VecX& u, double& energy) {
   const material::Lame p = material_.lame();
   double sum = 0.0;
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep([&](const auto& el) {
+    return sweep([&](const auto& el, auto& w) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
-      Mat34T<T> x;
-      el.gather(u.data(), x);
-      T w(0);
-      if (!TetKernel<decltype(m), T>::energy(p, el.z_inv(), el.volume(), x, w)) return false;
-      sum += el.sum(w);
+      el.gather(u.data(), w.x);
+      T e(0);
+      if (!TetKernel<decltype(m), T>::energy(p, el.z_inv(), el.volume(), w.x, e)) return false;
+      sum += el.sum(e);
       return true;
     });
   });
@@ -407,12 +430,11 @@ EvalStatus ElasticProblem::internal_forces(const VecX& u, VecX& f_int) {
   f_int.setZero(size());
   double* out = f_int.data();
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep([&](const auto& el) {
+    return sweep([&](const auto& el, auto& w) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
-      Mat34T<T> x, q;
-      el.gather(u.data(), x);
-      if (!TetKernel<decltype(m), T>::forces(p, el.z_inv(), el.b(), x, q)) return false;
-      el.add(q, out);
+      el.gather(u.data(), w.x);
+      if (!TetKernel<decltype(m), T>::forces(p, el.z_inv(), el.b(), w.x, w.q)) return false;
+      el.add(w.q, out);
       return true;
     });
   });
@@ -447,13 +469,12 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
   out.setZero(size());
   double* dst = out.data();
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep([&](const auto& el) {
+    return sweep([&](const auto& el, auto& w) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
-      Mat34T<T> x, dx, dq;
-      el.gather(u.data(), x);
-      el.gather(d.data(), dx);
-      if (!TetKernel<decltype(m), T>::product(p, el.z_inv(), el.b(), x, dx, dq)) return false;
-      el.add(dq, dst);
+      el.gather(u.data(), w.x);
+      el.gather(d.data(), w.d);
+      if (!TetKernel<decltype(m), T>::product(p, el.z_inv(), el.b(), w.x, w.d, w.dq)) return false;
+      el.add(w.dq, dst);
       return true;
     });
   });
@@ -471,15 +492,13 @@ bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
   diag.setZero(size());
   double* dst = diag.data();
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep([&](const auto& el) {
+    return sweep([&](const auto& el, auto& w) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
-      Mat34T<T> x, q;
-      Mat12T<T> k;
-      el.gather(u.data(), x);
-      if (!TetKernel<decltype(m), T>::forces_and_tangent(p, el.z_inv(), el.b(), el.volume(), x, q,
-                                                         k))
+      el.gather(u.data(), w.x);
+      if (!TetKernel<decltype(m), T>::forces_and_tangent(p, el.z_inv(), el.b(), el.volume(), w.x,
+                                                         w.q, w.k))
         return false;
-      el.add_diagonal(k, dst);
+      el.add_diagonal(w.k, dst);
       return true;
     });
   });
@@ -542,18 +561,16 @@ EvalStatus ElasticProblem::assemble_tangent(const VecX& u, FixedDofTreatment tre
   if (scatter_.empty() && num_elements() > 0) build_pattern();
   if (k_.rows() != size()) build_pattern();
   double* val = k_.valuePtr();
-  std::fill(val, val + k_.nonZeros(), 0.0);
+  std::memset(val, 0, sizeof(double) * static_cast<std::size_t>(k_.nonZeros()));  // +0.0
   const material::Lame p = material_.lame();
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep([&](const auto& el) {
+    return sweep([&](const auto& el, auto& w) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
-      Mat34T<T> x, q;
-      Mat12T<T> k;
-      el.gather(u.data(), x);
-      if (!TetKernel<decltype(m), T>::forces_and_tangent(p, el.z_inv(), el.b(), el.volume(), x, q,
-                                                         k))
+      el.gather(u.data(), w.x);
+      if (!TetKernel<decltype(m), T>::forces_and_tangent(p, el.z_inv(), el.b(), el.volume(), w.x,
+                                                         w.q, w.k))
         return false;
-      el.add_matrix(k, val);
+      el.add_matrix(w.k, val);
       return true;
     });
   });
@@ -569,9 +586,7 @@ EvalStatus ElasticProblem::assemble_tangent(const VecX& u, FixedDofTreatment tre
       if (cf) val[diag_[static_cast<std::size_t>(c)]] = 1.0;
     }
   }
-  for (Eigen::Index t = 0; t < k_.nonZeros(); ++t)
-    if (!std::isfinite(val[t])) return EvalStatus::kNonFinite;
-  return EvalStatus::kOk;
+  return all_finite(val, k_.nonZeros()) ? EvalStatus::kOk : EvalStatus::kNonFinite;
 }
 
 EvalStatus ElasticProblem::tangent(const VecX& u, Eigen::SparseMatrix<double>& k,
