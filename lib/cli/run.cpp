@@ -7,6 +7,7 @@
 
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
+#include <incise/cut/augmented_cut_session.hpp>
 #include <incise/io/write_mesh.hpp>
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
@@ -129,7 +130,18 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     }
   };
   // Interactive cutting run ("augmented" with tools): one line (or bar frame) per solve.
-  auto cut_observer = [&](const scene::CutStepRow& row, std::size_t total_steps) {
+  auto cut_observer = [&](const scene::CutStepRow& row, std::size_t total_steps,
+                          const cut::AugmentedCutSession& session) {
+    if (!outs.vtu.empty() && outs.vtu_every > 0 && row.step % outs.vtu_every == 0) {
+      // A frame of the cut mesh after this step (frames are numbered by step).
+      const std::string f = outs.vtu + "_" + std::to_string(row.step) + ".vtu";
+      fs::path parent = fs::path(f).parent_path();
+      if (!parent.empty()) fs::create_directories(parent);
+      const Eigen::Matrix3Xd& d = session.displacement();
+      io::write_vtu(f, scene::live_mesh_data(session.mesh()),
+                    {displacement_array(Eigen::Map<const VecX>(d.data(), d.size()))});
+      ++frames;
+    }
     if (progress == "bar") {
       const double frac = total_steps ? double(row.step) / double(total_steps) : 1.0;
       const int width = 30, filled = static_cast<int>(frac * width);
@@ -254,7 +266,9 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     io::write_vtu(tmp, built.mesh, {displacement_array(res.u)});
     fs::rename(tmp, f);
     written.push_back(f);
-    if (frames > 0) written.push_back(std::to_string(frames) + " frames " + outs.vtu + "_<it>.vtu");
+    if (frames > 0)
+      written.push_back(std::to_string(frames) + " frames " + outs.vtu +
+                        (res.cut_steps.empty() ? "_<it>.vtu" : "_<step>.vtu"));
   }
   if (!summary_json.empty()) {
     Json j;

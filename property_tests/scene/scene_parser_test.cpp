@@ -296,4 +296,47 @@ TEST(SceneParser, ShippedScenesParse) {
   EXPECT_GE(count, 1);
 }
 
+// cut_configuration (docs/scenes.md, interactive cutting run): only for "augmented" with tools.
+Json augmented_cut_scene() {
+  Json j = valid_scene();
+  j["solver"] = Json::parse(R"({"method": "augmented", "cut_configuration": "reference"})");
+  j["tools"] = Json::parse(
+      R"([{"type": "scalpel", "path": [[0.6, -0.1, 0.4], [0.6, 0.3, 0.4]], "blade": [0, 0, -0.2]}])");
+  return j;
+}
+
+TEST(SceneParser, CutConfigurationParses) {
+  const auto s = parse_scene(augmented_cut_scene().dump(), "scene.json", "");
+  EXPECT_FALSE(s.solver.cut_deformed);
+  Json j = augmented_cut_scene();
+  j["solver"].erase("cut_configuration");
+  EXPECT_TRUE(parse_scene(j.dump(), "scene.json", "").solver.cut_deformed);  // default
+}
+
+TEST(SceneParserBad, CutConfigurationOnANonAugmentedSolver) {
+  Json j = augmented_cut_scene();
+  j["solver"]["method"] = "cg";
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/solver/cut_configuration: not allowed here: only the \"augmented\" method"),
+            std::string::npos)
+      << e;
+}
+
+TEST(SceneParserBad, CutConfigurationWithoutTool) {
+  Json j = augmented_cut_scene();
+  j.erase("tools");
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/solver/cut_configuration: not allowed here: the scene names no tool"),
+            std::string::npos)
+      << e;
+}
+
+TEST(SceneParserBad, CutConfigurationUnknownValue) {
+  Json j = augmented_cut_scene();
+  j["solver"]["cut_configuration"] = "world";
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/solver/cut_configuration"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"deformed\""), std::string::npos) << e;
+}
+
 }  // namespace

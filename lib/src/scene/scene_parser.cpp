@@ -212,6 +212,14 @@ SolverSpec parse_solver(JsonObject o) {
     o.forbid("damping", why);
     o.forbid("spectral_tuning", why);
   }
+  if (s.method == SolverSpec::Method::kAugmented) {
+    s.cut_deformed =
+        o.choice("cut_configuration", {"deformed", "reference"}, "deformed") == "deformed";
+  } else {
+    o.forbid("cut_configuration",
+             "only the \"augmented\" method solves between sweep triangles (the others cut "
+             "first, in the reference configuration)");
+  }
   o.finish();
   return s;
 }
@@ -342,6 +350,10 @@ SceneSpec parse_scene(const std::string& text, const std::string& file,
     for (std::size_t i = 0; i < tools->size(); ++i)
       s.tools.push_back(parse_tool((*tools)[i], detail::child_path("/tools", i), file));
   }
+  if (s.tools.empty() && root.get("solver") && root.get("solver")->is_object() &&
+      root.get("solver")->contains("cut_configuration"))
+    fail(file, "/solver/cut_configuration",
+         "not allowed here: the scene names no tool (add a scalpel under /tools)");
   if (root.has("outputs")) {
     s.outputs = parse_outputs(root.object("outputs", "an outputs object"));
   } else {

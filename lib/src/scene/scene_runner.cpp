@@ -122,8 +122,10 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
       Eigen::Map<const Eigen::Matrix3Xd>(scene.external_force.data(), 3, n0);
 
   Timer t;
-  auto session =
-      std::make_unique<cut::AugmentedCutSession>(scene.mesh, mat, scene.fixed_nodes, forces);
+  cut::AugmentedCutOptions options;
+  options.update_deformed = spec.solver.cut_deformed;
+  auto session = std::make_unique<cut::AugmentedCutSession>(scene.mesh, mat, scene.fixed_nodes,
+                                                            forces, options);
   const cut::AugmentedCutStepReport& init = session->initial_report();
   scene.record("stiffness K0 of the uncut body (" + std::to_string(session->system().num_dofs()) +
                    " free DOFs), its CHOLMOD factor (|L| = " + std::to_string(init.solve.nnz_l) +
@@ -170,7 +172,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
       failure = stop_reason_of(r);
       failure_text = "step " + std::to_string(step) + ": " + row.status;
     }
-    if (observer) observer(row, total_steps);
+    if (observer) observer(row, total_steps, *session);
     res.cut_steps.push_back(std::move(row));
   };
   add_row(0, -1, init);
@@ -233,8 +235,9 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   rep.seconds = total.seconds();
   detail << "interactive cut with the augmented solver (Yeung et al. 2016 §3): K0 factored once "
             "(CHOLMOD, |L| = "
-         << init.solve.nnz_l << "), then per sweep triangle: cut (thesis §3.2, in the deformed "
-         << "configuration), element stiffness changes and new DOFs as replaced columns, GMRES "
+         << init.solve.nnz_l << "), then per sweep triangle: cut (thesis §3.2, in the "
+         << (spec.solver.cut_deformed ? "deformed" : "reference")
+         << " configuration), element stiffness changes and new DOFs as replaced columns, GMRES "
          << "on the Schur system; no refactorization. " << step
          << " steps, final m = " << session->system().num_replaced() << ", " << gmres_total
          << " GMRES iterations in all"

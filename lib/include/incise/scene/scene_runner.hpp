@@ -24,6 +24,10 @@
 #include <string>
 #include <vector>
 
+namespace incise::cut {
+class AugmentedCutSession;
+}  // namespace incise::cut
+
 namespace incise::scene {
 
 /// A probe's final value.
@@ -84,9 +88,11 @@ struct SceneRunResult {
 /// Called after every iteration with the solver's snapshot (u valid during the call).
 using RunObserver = std::function<void(const solver::IterationInfo&)>;
 
-/// Called after every solve of an interactive cutting run, with the row and the number of
-/// sweep triangles in the run.
-using CutStepObserver = std::function<void(const CutStepRow&, std::size_t total_steps)>;
+/// Called after every solve of an interactive cutting run, with the row, the number of sweep
+/// triangles in the run and the session (its cut mesh and displacement are those after the
+/// step; valid during the call).
+using CutStepObserver = std::function<void(const CutStepRow&, std::size_t total_steps,
+                                           const cut::AugmentedCutSession& session)>;
 
 /// Runs the scene's solver from u = 0. Numerical failure is reported in result.report.reason,
 /// never thrown. Throws UsageError only for a scene whose problem was not built.

@@ -99,6 +99,11 @@ struct SolverSpec {
   double damping = -1.0;  ///< dynamic: damping η (1/s), ≥ 0; −1 → automatic: critical damping
                           ///< 2√λ₁ (§4.1) or, with spectral_tuning, from the FFT
   bool spectral_tuning = false;  ///< dynamic: estimate damping from an FFT of the trace
+  /// Interactive cutting run ("augmented" with tools) only: whether each sweep triangle is
+  /// applied to the deformed body X + u of the last solution (true, the default: the scalpel
+  /// moves in world space, thesis §3.2) or to the reference configuration (false: the same
+  /// cut as the builder's cut-first path). Scene key `cut_configuration`.
+  bool cut_deformed = true;
 };
 
 /// A cutting tool. The scalpel is swept along a path; consecutive blade positions span the
