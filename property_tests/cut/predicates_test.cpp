@@ -4,7 +4,7 @@
 
 #include <incise/cut/cut_mesh.hpp>
 #include <incise/cut/predicates.hpp>
-#include <incise/cut/tet_shape.hpp>
+#include <incise/mesh/quality.hpp>
 
 #include <cmath>
 
@@ -64,28 +64,31 @@ TEST(CutPredicates, TriangleMeetsTetrahedronCases) {
       triangle_meets_tetrahedron(Vec3(0.1, 0.1, -1), Vec3(0.1, 0.1, 2), Vec3(0.11, 0.1, 2), t));
 }
 
-TEST(CutShape, RegularAndFlatTetrahedra) {
-  // Regular tetrahedron: height/edge = sqrt(2/3), all dihedral angles acos(1/3).
-  const std::array<Vec3, 4> reg{Vec3(1, 1, 1), Vec3(1, -1, -1), Vec3(-1, 1, -1), Vec3(-1, -1, 1)};
-  const double sign = signed_volume(reg[0], reg[1], reg[2], reg[3]) > 0 ? 1 : -1;
-  const TetShape s = tet_shape(reg);
-  EXPECT_NEAR(sign * s.aspect_ratio, std::sqrt(2.0 / 3.0), 1e-12);          // round-off only
-  for (double a : s.dihedral) EXPECT_NEAR(a, std::acos(1.0 / 3.0), 1e-12);  // round-off only
-  // Cap: apex just above the centroid of the base → three large angles (Fig. 3.8).
-  const std::array<Vec3, 4> cap{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0.3, 0.3, 1e-4)};
-  std::array<int, 6> large{};
-  int n = 0;
-  EXPECT_EQ(classify(tet_shape(cap), 0.99 * M_PI, large, n), DegeneracyShape::kCap);
-  // Sliver: two crossing edges almost in one plane → two large angles.
-  const std::array<Vec3, 4> sl{Vec3(0, 0, 0), Vec3(1, 1, 0), Vec3(1, 0, 1e-4), Vec3(0, 1, 1e-4)};
-  EXPECT_EQ(classify(tet_shape(sl), 0.99 * M_PI, large, n), DegeneracyShape::kSliver);
-  // Spindle: apex near the middle of an edge of the base, slightly off.
-  const std::array<Vec3, 4> sp{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0.5, -1e-4, 1e-4)};
-  EXPECT_EQ(classify(tet_shape(sp), 0.99 * M_PI, large, n), DegeneracyShape::kSpindle);
+/// The §3.2.3 shapes the cutter's recipes dispatch on, classified by mesh/quality.hpp (the one
+/// classification; cut::kTetEdge and mesh::kTetEdges agree, asserted in cutter.cpp).
+TEST(CutShape, RecipeShapesByTheMeshClassification) {
+  const mesh::ShapeThresholds th;  // thesis §3.3: AR < 0.01, large angle > 0.99π
+  auto cls = [&th](const std::array<Vec3, 4>& p) {
+    return mesh::classify_tetrahedron(p[0], p[1], p[2], p[3], th);
+  };
+  // Cap: apex 3 just above the centroid of the base → three large angles (Fig. 3.8), at the
+  // apex edges (0,3), (1,3), (2,3) — the cutter finds the apex as their common node.
+  const auto cap = cls({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0.3, 0.3, 1e-4)});
+  EXPECT_EQ(cap.shape, mesh::ShapeClass::kCap);
+  EXPECT_TRUE(cap.large_angle_edge[2] && cap.large_angle_edge[4] && cap.large_angle_edge[5]);
+  // Sliver: two crossing edges almost in one plane → two large angles, at (0,1) and (2,3).
+  const auto sl = cls({Vec3(0, 0, 0), Vec3(1, 1, 0), Vec3(1, 0, 1e-4), Vec3(0, 1, 1e-4)});
+  EXPECT_EQ(sl.shape, mesh::ShapeClass::kSliver);
+  EXPECT_TRUE(sl.large_angle_edge[0] && sl.large_angle_edge[5]);
+  // Spindle: node 3 near the middle of edge (0,1), slightly off → one large angle, at the
+  // opposite edge (2,3); the recipe splits (0,1), the edge opposite the large angle.
+  const auto sp = cls({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0.5, -1e-4, 1e-4)});
+  EXPECT_EQ(sp.shape, mesh::ShapeClass::kSpindle);
+  EXPECT_TRUE(sp.large_angle_edge[5]);
   // Needle: one very short edge, no large angle.
-  const std::array<Vec3, 4> nd{Vec3(0, 0, 0), Vec3(1e-3, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
-  EXPECT_EQ(classify(tet_shape(nd), 0.99 * M_PI, large, n), DegeneracyShape::kNeedle);
-  EXPECT_LT(std::abs(tet_shape(nd).aspect_ratio), 0.01);
+  const auto nd = cls({Vec3(0, 0, 0), Vec3(1e-3, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)});
+  EXPECT_EQ(nd.shape, mesh::ShapeClass::kNeedle);
+  EXPECT_LT(nd.aspect_ratio, 0.01);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include <incise/core/error.hpp>
 #include <incise/cut/cutter.hpp>
 #include <incise/cut/predicates.hpp>
+#include <incise/mesh/quality.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -99,6 +100,16 @@ class Anchor {
   Vec3 p0_ = Vec3::Zero(), p1_ = Vec3::Zero();
   int count_ = 0;
 };
+
+constexpr bool same_edge_order() {
+  for (int k = 0; k < 6; ++k) {
+    if (mesh::kTetEdges[static_cast<size_t>(k)][0] != kTetEdge[k][0] ||
+        mesh::kTetEdges[static_cast<size_t>(k)][1] != kTetEdge[k][1])
+      return false;
+  }
+  return true;
+}
+static_assert(same_edge_order(), "mesh::kTetEdges and cut::kTetEdge must list edges alike");
 
 }  // namespace
 
@@ -459,9 +470,12 @@ void Cutter::snap(const Vec3 (&tri)[3], const std::vector<std::pair<Index, int>>
 
 bool Cutter::is_degenerate(Index e) const {
   const Tet& t = mesh_.element(e);
-  const TetShape s = tet_shape(
-      {mesh_.reference(t[0]), mesh_.reference(t[1]), mesh_.reference(t[2]), mesh_.reference(t[3])});
-  return s.aspect_ratio < options_.degenerate_aspect_ratio;
+  const Vec3 &a = mesh_.reference(t[0]), &b = mesh_.reference(t[1]), &c = mesh_.reference(t[2]),
+             &d = mesh_.reference(t[3]);
+  // The thesis' aspect ratio (mesh/quality.hpp) is unsigned; an inverted element counts as
+  // degenerate whatever its shape.
+  return mesh::signed_volume(a, b, c, d) < 0 ||
+         mesh::aspect_ratio(a, b, c, d) < options_.degenerate_aspect_ratio;
 }
 
 Index Cutter::count_degenerate() const {
@@ -560,10 +574,32 @@ bool Cutter::try_recipe(Index e, CutStepReport& r) {
   const Tet t = mesh_.element(e);
   std::array<Vec3, 4> X{mesh_.reference(t[0]), mesh_.reference(t[1]), mesh_.reference(t[2]),
                         mesh_.reference(t[3])};
-  const TetShape s = tet_shape(X);
-  std::array<int, 6> large{};
+  // §3.2.3 classification by the mesh module (mesh/quality.hpp; its kTetEdges order is
+  // kTetEdge's). try_recipe is only called for degenerate elements, so every element is
+  // classified here (infinite aspect-ratio threshold; an inverted element is degenerate too).
+  const mesh::ShapeInfo info = mesh::classify_tetrahedron(
+      X[0], X[1], X[2], X[3],
+      {std::numeric_limits<double>::infinity(), options_.large_dihedral_angle});
+  const std::array<double, 6> angle = mesh::dihedral_angles(X[0], X[1], X[2], X[3]);
+  std::array<int, 6> large{};  // large-angle edges by decreasing angle
   int num_large = 0;
-  DegeneracyShape cls = classify(s, options_.large_dihedral_angle, large, num_large);
+  for (int k = 0; k < 6; ++k) {
+    if (info.large_angle_edge[static_cast<size_t>(k)]) large[static_cast<size_t>(num_large++)] = k;
+  }
+  for (int i = 1; i < num_large; ++i) {  // insertion sort by decreasing angle (≤ 6 entries)
+    for (int j = i; j > 0 && angle[static_cast<size_t>(large[static_cast<size_t>(j)])] >
+                                 angle[static_cast<size_t>(large[static_cast<size_t>(j - 1)])];
+         --j)
+      std::swap(large[static_cast<size_t>(j)], large[static_cast<size_t>(j - 1)]);
+  }
+  int shortest_edge = 0;
+  for (int k = 1; k < 6; ++k) {
+    if ((X[static_cast<size_t>(kTetEdge[k][0])] - X[static_cast<size_t>(kTetEdge[k][1])]).norm() <
+        (X[static_cast<size_t>(kTetEdge[shortest_edge][0])] -
+         X[static_cast<size_t>(kTetEdge[shortest_edge][1])])
+            .norm())
+      shortest_edge = k;
+  }
 
   auto edge_star = [&](Index a, Index b) {
     std::vector<Index> out;
@@ -583,22 +619,24 @@ bool Cutter::try_recipe(Index e, CutStepReport& r) {
     return apply_local_op(old, nt, r);
   };
   auto needle = [&]() {
-    const Index a = t[static_cast<size_t>(kTetEdge[s.shortest_edge][0])];
-    const Index b = t[static_cast<size_t>(kTetEdge[s.shortest_edge][1])];
+    const Index a = t[static_cast<size_t>(kTetEdge[shortest_edge][0])];
+    const Index b = t[static_cast<size_t>(kTetEdge[shortest_edge][1])];
     // Prefer keeping boundary nodes (a flat surface keeps its shape).
     const bool ab = mesh_.on_boundary(a), bb = mesh_.on_boundary(b);
     if (ab && !bb) return collapse(b, a) || collapse(a, b);
     return collapse(a, b) || collapse(b, a);
   };
-  // Split edge ab at the point nearest p, then collapse the new node into p (spindle).
+  // The large angle lies at edge k; a spindle's fourth node lies near the *opposite* edge ab
+  // (thesis §3.2.3: "the edge opposite the large angle is split"). Split ab at the node p of
+  // edge k nearest to line ab and collapse the split node into p.
   auto spindle = [&](int k) {
-    const Index a = t[static_cast<size_t>(kTetEdge[k][0])],
-                b = t[static_cast<size_t>(kTetEdge[k][1])];
-    Index others[2];
-    int m = 0;
-    for (Index v : t) {
-      if (v != a && v != b) others[m++] = v;
+    Index a = -1, b = -1;
+    for (int j = 0; j < 4; ++j) {
+      if (j == kTetEdge[k][0] || j == kTetEdge[k][1]) continue;
+      (a < 0 ? a : b) = t[static_cast<size_t>(j)];
     }
+    const Index others[2] = {t[static_cast<size_t>(kTetEdge[k][0])],
+                             t[static_cast<size_t>(kTetEdge[k][1])]};
     const Vec3 d = (mesh_.reference(b) - mesh_.reference(a)).normalized();
     auto dist = [&](Index v) {
       const Vec3 w = mesh_.reference(v) - mesh_.reference(a);
@@ -682,23 +720,26 @@ bool Cutter::try_recipe(Index e, CutStepReport& r) {
   };
 
   bool ok = false;
-  switch (cls) {
-    case DegeneracyShape::kNeedle: break;
-    case DegeneracyShape::kSpindle: ok = spindle(large[0]); break;
-    case DegeneracyShape::kSliver: {
+  switch (info.shape) {
+    case mesh::ShapeClass::kGood:
+    case mesh::ShapeClass::kNeedle: break;
+    case mesh::ShapeClass::kSpindle: ok = spindle(large[0]); break;
+    case mesh::ShapeClass::kSliver: {
       const int k1 = large[0], k2 = large[1];
       ok = sliver(k1, k2) || spindle(k1) || spindle(k2);
       break;
     }
-    case DegeneracyShape::kCap: {
-      // Apex: the node not on any of the three largest-angle edges.
+    case mesh::ShapeClass::kCap:
+    case mesh::ShapeClass::kFlat: {  // ≥ 3 large angles: the three largest define the cap
+      // Apex: the node near the opposite face's interior, common to the three largest-angle
+      // edges (the large angles of a cap are at the edges from the apex; Fig. 3.8).
       int apex = -1;
       for (int j = 0; j < 4 && apex < 0; ++j) {
-        bool off = true;
+        bool on_all = true;
         for (int q = 0; q < 3; ++q)
-          off = off && kTetEdge[large[static_cast<size_t>(q)]][0] != j &&
-                kTetEdge[large[static_cast<size_t>(q)]][1] != j;
-        if (off) apex = j;
+          on_all = on_all && (kTetEdge[large[static_cast<size_t>(q)]][0] == j ||
+                              kTetEdge[large[static_cast<size_t>(q)]][1] == j);
+        if (on_all) apex = j;
       }
       ok = (apex >= 0 && cap(apex)) || spindle(large[0]);
       break;

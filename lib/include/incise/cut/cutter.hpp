@@ -5,7 +5,6 @@
 /// substitution (§7.3) and degeneracy removal (§3.2.3), followed by a component check.
 
 #include <incise/cut/cut_mesh.hpp>
-#include <incise/cut/tet_shape.hpp>
 
 #include <cstdint>
 #include <memory>
