@@ -20,6 +20,9 @@ using Mat34 = Eigen::Matrix<double, 3, 4>;
 using Mat12 = Eigen::Matrix<double, 12, 12>;
 using L4 = Lanes4;
 
+/// Ints per element in the scatter map (ElasticProblem::build_pattern).
+constexpr int kScatterStride = 20;
+
 /// One element (T = double) or a block of four consecutive elements in SIMD lanes (T = Lanes4)
 /// as a kernel sees it: reference data, gather of nodal values, and scatter-add of element
 /// results into global vectors and the assembled matrix. ElasticProblem::sweep() hands either
@@ -50,7 +53,7 @@ template <>
 class Elements<double> {
  public:
   using Scalar = double;
-  /// `cell`: the element's 4 node indices; `scatter`: its 48 value indices (or null).
+  /// `cell`: the element's 4 node indices; `scatter`: its 20 scatter-map entries (or null).
   Elements(const TetReference& r, const Index* cell, const int* scatter)
       : r_(r), cell_(cell), scatter_(scatter) {}
   const Mat3& z_inv() const { return r_.z_inv; }
@@ -80,15 +83,19 @@ class Elements<double> {
       for (int i = 0; i < 3; ++i)
         out[3 * static_cast<std::ptrdiff_t>(cell_[a]) + i] += k(3 * a + i, 3 * a + i);
   }
-  /// Adds k into the values of the assembled matrix through the scatter map.
+  /// Adds k into the values of the assembled matrix through the scatter map (see
+  /// ElasticProblem::build_pattern: entry (3a + i, 3b + j) is at s[4b + a] + j·s[16 + b] + i).
   void add_matrix(const Mat12& k, double* val) const {
-    for (int c = 0; c < 12; ++c)
-      for (int a = 0; a < 4; ++a) {
-        double* dst = val + scatter_[4 * c + a];
-        dst[0] += k(3 * a, c);
-        dst[1] += k(3 * a + 1, c);
-        dst[2] += k(3 * a + 2, c);
-      }
+    for (int b = 0; b < 4; ++b) {
+      const int len = scatter_[16 + b];
+      for (int a = 0; a < 4; ++a)
+        for (int j = 0; j < 3; ++j) {
+          double* dst = val + scatter_[4 * b + a] + j * len;
+          dst[0] += k(3 * a, 3 * b + j);
+          dst[1] += k(3 * a + 1, 3 * b + j);
+          dst[2] += k(3 * a + 2, 3 * b + j);
+        }
+    }
   }
   /// The element's share of a global sum.
   static double sum(double w) { return w; }
@@ -103,7 +110,7 @@ template <>
 class Elements<L4> {
  public:
   using Scalar = L4;
-  /// `cells`: 16 node indices, element-major (4 per lane); `scatter`: 4·48 value indices.
+  /// `cells`: 16 node indices, element-major (4 per lane); `scatter`: 4·20 map entries.
   Elements(const Mat3T<L4>& z_inv, const Mat3T<L4>& b, const L4& volume, const Index* cells,
            const int* scatter)
       : z_inv_(z_inv), b_(b), volume_(volume), cells_(cells), scatter_(scatter) {}
@@ -139,15 +146,18 @@ class Elements<L4> {
     static_assert(sizeof(L4) == 4 * sizeof(double), "Lanes4 must be four packed doubles");
     const double* lanes = reinterpret_cast<const double*>(k.data());
     for (int l = 0; l < 4; ++l) {
-      const int* s = scatter_ + 48 * l;
-      for (int c = 0; c < 12; ++c)
-        for (int a = 0; a < 4; ++a) {
-          double* dst = val + s[4 * c + a];
-          const double* src = lanes + 4 * (12 * c + 3 * a) + l;
-          dst[0] += src[0];
-          dst[1] += src[4];
-          dst[2] += src[8];
-        }
+      const int* s = scatter_ + kScatterStride * l;
+      for (int b = 0; b < 4; ++b) {
+        const int len = s[16 + b];
+        for (int a = 0; a < 4; ++a)
+          for (int j = 0; j < 3; ++j) {
+            double* dst = val + s[4 * b + a] + j * len;
+            const double* src = lanes + 4 * (12 * (3 * b + j) + 3 * a) + l;
+            dst[0] += src[0];
+            dst[1] += src[4];
+            dst[2] += src[8];
+          }
+      }
     }
   }
   static double sum(const L4& w) { return (w[0] + w[1]) + (w[2] + w[3]); }
@@ -380,16 +390,16 @@ bool ElasticProblem::sweep(Visit&& visit) const {
   Scratch<L4> w4;
   const auto element = [&](Index e) {
     const std::size_t i = static_cast<std::size_t>(e);
-    return visit(Elements<double>(refs_[i], cells + 4 * i,
-                                  scatter ? scatter + kScatterPerElement * i : nullptr),
-                 w1);
+    return visit(
+        Elements<double>(refs_[i], cells + 4 * i, scatter ? scatter + kScatterStride * i : nullptr),
+        w1);
   };
   const Index nb = num_full_blocks();
   for (Index k = 0; k < nb; ++k) {
     const std::size_t i = static_cast<std::size_t>(k);
     const RefBlock& rb = blocks_[i];
     if (visit(Elements<L4>(rb.z_inv, rb.b, rb.volume, cells + 16 * i,
-                           scatter ? scatter + 4 * kScatterPerElement * i : nullptr),
+                           scatter ? scatter + 4 * kScatterStride * i : nullptr),
               w4))
       continue;
     // Some lane is inverted: the block had no side effects; redo its elements one by one.
@@ -540,17 +550,24 @@ void ElasticProblem::build_pattern() {
     const int* hi = inner + outer[c + 1];
     return static_cast<int>(std::lower_bound(lo, hi, r) - inner);
   };
-  // Per element and node pair (a, b) and column j of the 3×3 block: the value index of entry
-  // (3a, 3b + j). Rows 3a+1 and 3a+2 follow contiguously (CSC, sorted rows, and every element
-  // couples all three DOFs of its nodes), so one index serves three values.
-  scatter_.resize(static_cast<std::size_t>(num_elements()) * kScatterPerElement);
-  for (Index e = 0; e < num_elements(); ++e)
-    for (int b = 0; b < 4; ++b)
-      for (int j = 0; j < 3; ++j)
-        for (int a = 0; a < 4; ++a)
-          scatter_[static_cast<std::size_t>(e) * kScatterPerElement +
-                   static_cast<std::size_t>((3 * b + j) * 4 + a)] =
-              find(3 * cells_(a, e), 3 * cells_(b, e) + j);
+  // Scatter map, kScatterStride = 20 ints per element: s[4b + a] = value index of entry
+  // (3·node_a, 3·node_b), s[16 + b] = number of stored entries in column 3·node_b. Columns
+  // 3·node_b + j (j = 0, 1, 2) have identical row patterns (every element couples all three DOFs
+  // of its nodes) and are consecutive, and rows 3·node_a + i (i = 0, 1, 2) are consecutive in
+  // each, so entry (3·node_a + i, 3·node_b + j) is at s[4b + a] + j·s[16 + b] + i.
+  scatter_.resize(static_cast<std::size_t>(num_elements()) * kScatterStride);
+  for (Index e = 0; e < num_elements(); ++e) {
+    int* s = scatter_.data() + static_cast<std::size_t>(e) * kScatterStride;
+    for (int b = 0; b < 4; ++b) {
+      const int c = 3 * cells_(b, e);
+      s[16 + b] = outer[c + 1] - outer[c];
+      for (int a = 0; a < 4; ++a) {
+        s[4 * b + a] = find(3 * cells_(a, e), c);
+        INCISE_ASSERT(find(3 * cells_(a, e) + 2, c + 2) == s[4 * b + a] + 2 * s[16 + b] + 2,
+                      "scatter map: 3x3 node blocks not laid out as assumed");
+      }
+    }
+  }
   diag_.resize(static_cast<std::size_t>(n));
   for (Eigen::Index c = 0; c < n; ++c)
     diag_[static_cast<std::size_t>(c)] = find(static_cast<int>(c), static_cast<int>(c));

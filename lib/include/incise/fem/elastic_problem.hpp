@@ -173,8 +173,7 @@ class ElasticProblem : public Problem {
   ElementFlops element_flops_;
   std::uint64_t flops_ = 0;
   Eigen::SparseMatrix<double> k_;
-  static constexpr int kScatterPerElement = 48;
-  std::vector<int> scatter_;  ///< per element, (column 3b+j, node a): value index of (3a, 3b+j)
+  std::vector<int> scatter_;  ///< per element: 16 block value indices, 4 column lengths
   std::vector<int> diag_;     ///< value index of each diagonal entry
 };
 
