@@ -16,9 +16,13 @@ echo "demo: wrote out/liver_coarse.vtu (open it in ParaView)"
 echo "== demo: incise run reference_data/scenes/cantilever.json"
 ./build/release/lib/cli/incise run reference_data/scenes/cantilever.json \
   --summary-json out/cantilever_summary.json
+# The augmented-solver cutting demo: the solution is updated after every sweep triangle.
+echo "== demo: incise run reference_data/scenes/cube_cut_augmented.json"
+./build/release/lib/cli/incise run reference_data/scenes/cube_cut_augmented.json \
+  --summary-json out/cube_cut_augmented_summary.json --progress none
 echo "== demo: incise certify --quick"
 certify_status=0
 ./build/release/lib/cli/incise certify --quick --out out/certify || certify_status=$?
-echo "demo: scene summary in out/cantilever_summary.json"
+echo "demo: scene summaries in out/cantilever_summary.json, out/cube_cut_augmented_summary.json"
 echo "demo: certification report in $(pwd)/out/certify/index.html (summary: out/certify/summary.json)"
 exit "$certify_status"
