@@ -6,17 +6,15 @@
 /// Printed beside the thesis' numbers; see README.md for the comparison and its caveats.
 #include <gtest/gtest.h>
 
-#include <incise/cut/cutter.hpp>
-#include <incise/fem/elastic_problem.hpp>
 #include <incise/io/read_mesh.hpp>
-#include <incise/material/material.hpp>
-#include <incise/mesh/generators.hpp>
-#include <incise/solver/linear_cg.hpp>
+
+#include "ch3_common.hpp"
 
 #include <incise_test/seed.hpp>
 
 #include <cmath>
 #include <cstdio>
+#include <random>
 
 namespace incise::verify {
 namespace {
@@ -28,116 +26,15 @@ constexpr int kThesisFaces = 108, kThesisDegenerate = 143, kThesisItersWithout =
               kThesisCollapses = 99, kThesisIncollapsible = 13, kThesisElements = 3034,
               kThesisNodes = 823, kThesisItersWith = 236;
 
-constexpr double kE = 1.0e4;       // Pa (the thesis does not state E for this experiment)
-constexpr double kNu = 0.25;       // §3.3: "The material has Poisson ratio ν = 1/4"
-constexpr double kFaceLoad = 100;  // N per side face, spread over its nodes (dilating)
-
-/// Outward point loads on the four side faces x = 0, x = 1, y = 0, y = 1 (dilating, Fig. 3.12).
-std::vector<fem::PointLoad> dilating_loads(const mesh::MeshData& m) {
-  std::vector<fem::PointLoad> out;
-  const int per_face = 81;  // 9×9 nodes on each face of the 8×8×8 box
-  for (int axis = 0; axis < 2; ++axis) {
-    for (double side : {0.0, 1.0}) {
-      for (Index v : fem::nodes_on_plane(m, axis, side)) {
-        Vec3 f = Vec3::Zero();
-        f[axis] = (side > 0.5 ? 1.0 : -1.0) * kFaceLoad / per_face;
-        out.push_back({v, f});
-      }
-    }
-  }
-  return out;
-}
-
-struct Solve {
-  bool attempted = false;  ///< false when the cut left inverted elements (no FEM possible)
-  long iterations = 0;
-  bool converged = false;
-  VecX u;
-};
-
-/// Linear CG (§3.1) on the mesh of `cm` with fixed nodes from `cm`, loads on original nodes,
-/// warm start from the carried displacements x − X.
-Solve solve(const cut::CutMesh& cm, const std::vector<fem::PointLoad>& loads) {
-  std::vector<Index> map;
-  const mesh::MeshData md = cm.to_mesh_data(false, true, &map);
-  fem::ElasticProblem p(md, material::Material("linear", {kE, kNu, 0.0, 1000.0}));
-  std::vector<Index> fixed;
-  VecX u = VecX::Zero(p.size());
-  for (Index v = 0; v < cm.num_nodes(); ++v) {
-    const Index m = map[static_cast<size_t>(v)];
-    if (m < 0) continue;
-    if (cm.fixed(v)) fixed.push_back(m);
-    u.segment<3>(3 * m) = cm.deformed(v) - cm.reference(v);
-  }
-  p.fix_nodes(fixed);
-  for (const auto& l : loads) {
-    const Index m = map[static_cast<size_t>(l.node)];
-    if (m >= 0) p.add_point_load({m, l.force});
-  }
-  p.project(u);
-  solver::LinearCgOptions opt;
-  opt.stop.rule = solver::ResidualRule::kExternalForce;  // (6.8), the rule of ch. 3
-  opt.stop.epsilon = 1e-3;                               // §3.3
-  opt.budget.max_iterations = 100000;
-  const solver::SolverReport r = solver::linear_cg(p, u, opt);
-  Solve s;
-  s.attempted = true;
-  s.iterations = r.iterations;
-  s.converged = r.converged();
-  s.u = u;
-  return s;
-}
-
-struct CutOutcome {
-  cut::CutTotals totals;
-  Index degenerate_after = 0;
-  Index inverted = 0;
-  Index nodes = 0, elements = 0;
-  Solve solve;
-};
-
-/// The diagonal cut: a blade spanning the cube diagonally (xy) and tilted, swept from above
-/// the top face down to 40% of the height in `kSteps` steps of two triangles each.
+/// The diagonal cut of README.md with the given options (cube and equilibrium computed once).
 CutOutcome run(bool remove_degeneracies, bool refuse_inverting_snaps, bool remark = true) {
-  const mesh::MeshData box = mesh::make_box(8, 8, 8, 1, 1, 1, mesh::CubeSplit::kSix);
-  cut::CutMesh cm(box);
-  for (Index v : fem::nodes_on_plane(box, 2, 0.0)) cm.set_fixed(v, true);  // back face z = 0
-  const auto loads = dilating_loads(box);
-  // Equilibrium before the cut.
-  const Solve before = solve(cm, loads);
-  EXPECT_TRUE(before.converged);
-  Eigen::Matrix3Xd x = cm.reference_matrix();
-  for (Index v = 0; v < cm.num_nodes(); ++v) x.col(v) += before.u.segment<3>(3 * v);
-  cm.set_deformed(x);
-
+  static const Ch3Cube cube;
+  EXPECT_TRUE(cube.converged);
   cut::CutOptions opt;
   opt.remove_degeneracies = remove_degeneracies;
   opt.refuse_inverting_snaps = refuse_inverting_snaps;
   opt.remark_snapped_nodes = remark;
-  cut::Cutter cutter(cm, opt);
-  CutOutcome out;
-  constexpr int kSteps = 6;
-  const Vec3 a0(-0.15, 0.05, 1.25), b0(1.15, 0.85, 1.15);  // blade above the top face
-  const Vec3 down(0.05, -0.05, -0.85 / kSteps);            // blade motion per step
-  Vec3 a = a0, b = b0;
-  for (int s = 0; s < kSteps; ++s) {
-    const Vec3 a2 = a + down, b2 = b + down;
-    for (const auto& tri : {std::array<Vec3, 3>{a, b, b2}, std::array<Vec3, 3>{a, b2, a2}}) {
-      const cut::CutStepReport r = cutter.step(tri[0], tri[1], tri[2]);
-      out.totals.add(r);
-      const cut::CutMeshValidation v = cm.validate();
-      EXPECT_TRUE(v.ok()) << (v.violations.empty() ? "" : v.violations[0]);
-    }
-    a = a2;
-    b = b2;
-  }
-  out.degenerate_after = cutter.count_degenerate();
-  out.nodes = 0;
-  for (Index v = 0; v < cm.num_nodes(); ++v) out.nodes += cm.unused(v) ? 0 : 1;
-  out.elements = cm.num_elements();
-  out.inverted = cm.validate().inverted_reference;
-  if (out.inverted == 0) out.solve = solve(cm, loads);
-  return out;
+  return run_cut(cube, diagonal_blade(), opt);
 }
 
 TEST(Nienhuys2003Ch3, LargeDiagonalCutInTheCube) {
@@ -242,5 +139,101 @@ TEST(Nienhuys2003Ch3, PieCutsInAnUnstructuredMesh) {
   EXPECT_EQ(cutter.count_degenerate(), 0);
 }
 
+/// §3.3's pie cuts on a cylinder like the thesis' object (4020 elements, 891 vertices):
+/// make_cylinder(0.1, 0.03, 4, 14) — 4032 tetrahedra, 915 nodes, a structured O-grid (rings of
+/// 6k nodes, prisms split by the Dompierre rule), so its element orientations vary around the
+/// axis, unlike the cube's six, but it is not Delaunay. Three pie cuts 60° apart (offset
+/// 0.1 rad from the grid's ring nodes; slicing a pie: each through the axis, 6 pieces), each a
+/// blade parallel to the axis, longer than the cylinder, moved from 1.3 r outside across the
+/// axis to 1.3 r on the other side in 7 moves (14 sweep triangles per cut, 42 in all; the
+/// thesis used 45).
+/// Three pie cuts (see PieCutsInACylinder) on `cyl`; returns the totals.
+cut::CutTotals pie_cuts(const mesh::MeshData& cyl, Index& degenerate_left) {
+  cut::CutMesh cm(cyl);
+  cut::CutOptions opt;
+  opt.free_components = cut::FreeComponentPolicy::kReport;
+  cut::Cutter cutter(cm, opt);
+  cut::CutTotals tot;
+  const double r = 0.03;
+  constexpr int kMoves = 7;
+  for (int k = 0; k < 3; ++k) {
+    const double phi = 3.14159265358979323846 * k / 3.0 + 0.1;
+    const Vec3 d(0.0, std::cos(phi), std::sin(phi));  // radial direction (axis = x)
+    const Vec3 along(0.14, 0, 0);                     // blade length beyond the cylinder
+    Vec3 a = Vec3(-0.02, 0, 0) + 1.3 * r * d, b = a + along;
+    const Vec3 move = -(2.6 * r / kMoves) * d;
+    for (int s = 0; s < kMoves; ++s) {
+      const Vec3 a2 = a + move, b2 = b + move;
+      tot.add(cutter.step(a, b, b2));
+      tot.add(cutter.step(a, b2, a2));
+      a = a2;
+      b = b2;
+    }
+    cutter.end_incision();
+    const cut::CutMeshValidation v = cm.validate();
+    EXPECT_TRUE(v.ok()) << (v.violations.empty() ? "" : v.violations[0]);
+    EXPECT_EQ(v.inverted_reference, 0);
+  }
+  degenerate_left = cutter.count_degenerate();
+  return tot;
+}
+
+void print_pie(const char* name, const cut::CutTotals& tot) {
+  const double ratio = tot.faces_dissected > 0 ? 100.0 * tot.collapses / tot.faces_dissected : 0;
+  std::printf(
+      "%s: faces dissected %d, degenerate %d, collapses %d (%.1f%% of faces; thesis ~5%% of "
+      "873), incollapsible %d, snaps %d refused %d failed %d\n",
+      name, tot.faces_dissected, tot.degenerate_found, tot.collapses, ratio, tot.incollapsible,
+      tot.nodes_snapped, tot.snaps_refused, tot.snaps_failed);
+}
+
+TEST(Nienhuys2003Ch3, PieCutsInACylinder) {
+  const mesh::MeshData cyl = mesh::make_cylinder(0.1, 0.03, 4, 14);
+  ASSERT_EQ(cyl.num_cells(), 4032);
+  ASSERT_EQ(cyl.num_points(), 915);
+  Index left = 0;
+  const cut::CutTotals tot = pie_cuts(cyl, left);
+  print_pie("O-grid cylinder (4032 tets, 915 nodes)", tot);
+  EXPECT_GT(tot.faces_dissected, 100);
+  EXPECT_EQ(left, 0);
+
+  // The same cylinder with every interior node moved by a seeded random offset of up to 0.3 of
+  // the ring spacing in each coordinate (moves that would invert an element are undone): the
+  // element orientations lose the O-grid's regularity, closer to a Delaunay mesh of a point
+  // cloud.
+  INCISE_SEEDED_RNG(rng, 3133);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  mesh::MeshData jit = cyl;
+  const double h = 0.03 / 4, amp = 0.3 * h;
+  std::vector<std::vector<Index>> star(static_cast<size_t>(jit.num_points()));
+  for (Index e = 0; e < jit.num_cells(); ++e)
+    for (int k = 0; k < 4; ++k) star[static_cast<size_t>(jit.cells(k, e))].push_back(e);
+  auto positive = [&](Index v) {
+    for (Index e : star[static_cast<size_t>(v)]) {
+      const auto p = [&](int k) -> Vec3 { return jit.points.col(jit.cells(k, e)); };
+      if (!((p(1) - p(0)).dot((p(2) - p(0)).cross(p(3) - p(0))) > 0)) return false;
+    }
+    return true;
+  };
+  Index moved = 0;
+  for (Index v = 0; v < jit.num_points(); ++v) {
+    const Vec3 x = jit.points.col(v);
+    const bool surface = x.x() < 1e-12 || x.x() > 0.1 - 1e-12 ||
+                         std::hypot(x.y(), x.z()) > 0.03 * std::cos(3.14159265358979 / 24) - 1e-9;
+    const Vec3 off(u(rng), u(rng), u(rng));
+    if (surface) continue;
+    jit.points.col(v) = x + amp * off;
+    if (positive(v)) {
+      ++moved;
+    } else {
+      jit.points.col(v) = x;
+    }
+  }
+  const cut::CutTotals tj = pie_cuts(jit, left);
+  print_pie("jittered cylinder", tj);
+  std::printf("  (%d of %d nodes jittered)\n", moved, jit.num_points());
+  EXPECT_GT(tj.faces_dissected, 100);
+  EXPECT_EQ(left, 0);
+}
 }  // namespace
 }  // namespace incise::verify
