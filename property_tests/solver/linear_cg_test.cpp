@@ -1,11 +1,14 @@
 /// Linear CG (thesis §2.4.1, §3.1): equivalence with a dense direct solve, Jacobi variant,
 /// stopping rules (6.8)/(6.9), budgets and the indefinite status.
+#include <incise/solver/eigen_estimates.hpp>
 #include <incise/solver/linear_cg.hpp>
 #include <incise_test/seed.hpp>
 
 #include "test_problems.hpp"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 namespace incise::solver {
 namespace {
@@ -156,6 +159,34 @@ TEST(ProjectedCg, SolvesSpdSystemFromZero) {
                    VecX(), p.rhs(), x, 1e-12 * p.rhs().norm(), 1000, meter);
   ASSERT_EQ(res.reason, StopReason::kConverged);
   EXPECT_LE((x - p.direct_solution()).norm(), kDirectTol * x.norm());
+}
+
+// Lanczos extremes from the CG coefficients (Saad §6.7.3) reproduce the extreme eigenvalues of
+// the operator: random SPD matrices with spectrum exactly [1, cond] (random_spd_problem).
+TEST(LinearCg, LanczosFromCoefficientsFindsExtremeEigenvalues_Sec2_4_1) {
+  INCISE_SEEDED_RNG(rng, 47);
+  for (int trial = 0; trial < test::scaled(4); ++trial) {
+    const int n = 30 + 10 * trial;
+    const double cond = std::pow(10.0, 1 + trial);
+    QuadraticProblem p = random_spd_problem(rng, n, cond, 0);
+    VecX u = VecX::Zero(n);
+    CgCoefficients c;
+    LinearCgOptions o;
+    o.stop.rule = ResidualRule::kExternalForce;
+    o.stop.epsilon = 1e-12;
+    o.coefficients = &c;
+    const SolverReport rep = linear_cg(p, u, o);
+    ASSERT_TRUE(rep.converged()) << to_string(rep.reason);
+    ASSERT_EQ(c.alpha.size(), std::size_t(rep.iterations));
+    const LanczosExtremes l = cg_lanczos_extremes(c);
+    // A converged CG run has resolved the extreme eigenvectors: the extreme Ritz values agree
+    // with the spectrum to far better than 1e-6 (rounding in the recursions, not truncation).
+    constexpr double kRitzTol = 1e-6;
+    EXPECT_NEAR(l.smallest, 1.0, kRitzTol);
+    EXPECT_NEAR(l.largest, cond, kRitzTol * cond);
+    EXPECT_NEAR(l.condition(), cond, 2 * kRitzTol * cond);
+  }
+  EXPECT_THROW((void)cg_lanczos_extremes(CgCoefficients{}), ParameterError);
 }
 
 }  // namespace

@@ -1,4 +1,6 @@
 #include <incise/solver/eigen_estimates.hpp>
+
+#include <Eigen/Eigenvalues>
 #include <incise/solver/linear_cg.hpp>
 
 #include <cmath>
@@ -137,6 +139,29 @@ double critical_time_step(double lambda_max) {
 double critical_damping(double lambda_min) {
   INCISE_CHECK_PARAM(lambda_min > 0.0, "critical_damping: eigenvalue must be positive");
   return 2.0 * std::sqrt(lambda_min);
+}
+
+LanczosExtremes cg_lanczos_extremes(const CgCoefficients& c) {
+  const std::size_t k = c.alpha.size();
+  INCISE_CHECK_PARAM(k > 0 && c.beta.size() == k,
+                     "cg_lanczos_extremes: need equally many alpha and beta (at least one)");
+  const auto kk = static_cast<Eigen::Index>(k);
+  VecX diag(kk), sub(kk > 1 ? kk - 1 : 0);
+  for (std::size_t j = 0; j < k; ++j) {
+    diag[Eigen::Index(j)] = 1.0 / c.alpha[j] + (j > 0 ? c.beta[j - 1] / c.alpha[j - 1] : 0.0);
+    if (j + 1 < k) sub[Eigen::Index(j)] = std::sqrt(c.beta[j]) / c.alpha[j];
+  }
+  LanczosExtremes out;
+  out.steps = long(k);
+  if (k == 1) {
+    out.smallest = out.largest = diag[0];
+    return out;
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
+  es.computeFromTridiagonal(diag, sub, Eigen::EigenvaluesOnly);
+  out.smallest = es.eigenvalues().minCoeff();  // not necessarily sorted on this path
+  out.largest = es.eigenvalues().maxCoeff();
+  return out;
 }
 
 }  // namespace incise::solver

@@ -64,6 +64,10 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
   rep.residual_history.push_back(rnorm);
   rep.energy_history.push_back(energy);
 
+  if (options.coefficients) {
+    options.coefficients->alpha.clear();
+    options.coefficients->beta.clear();
+  }
   long k = 0;
   StopReason reason = StopReason::kConverged;
   while (true) {
@@ -97,6 +101,10 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
     const double rz_new = r.dot(z);
     energy -= 0.5 * alpha * rz;  // exact decrease of a quadratic along a CG step
     const double beta = rz_new / rz;
+    if (options.coefficients) {
+      options.coefficients->alpha.push_back(alpha);
+      options.coefficients->beta.push_back(beta);
+    }
     rz = rz_new;
     d = z + beta * d;
     rnorm = r.norm();

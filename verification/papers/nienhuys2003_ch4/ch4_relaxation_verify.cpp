@@ -162,13 +162,12 @@ void write_figure(const std::string& file, const std::string& title,
   o.title = title + " - vs counted flops";
   o.x_label = "MFLOP";
   std::string bottom = scene::svg_line_plot(by_flops, o);
-  // Nest both plots in one SVG document (the inner <svg> take x/y offsets).
-  const std::string tag = "<svg ";
-  bottom.replace(bottom.find(tag), tag.size(), "<svg y=\"" + std::to_string(o.height) + "\" ");
+  // Nest both plots in one SVG document, the second shifted down by one panel height.
   std::ofstream(std::string(INCISE_CH4_OUTPUT_DIR) + "/" + file)
       << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << o.width << "\" height=\""
       << 2 * o.height << "\">\n"
-      << top << bottom << "</svg>\n";
+      << top << "<g transform=\"translate(0," << o.height << ")\">\n"
+      << bottom << "</g>\n</svg>\n";
 }
 
 [[maybe_unused]] std::vector<TracedRun> subset(const std::vector<TracedRun>& runs,
@@ -236,8 +235,9 @@ CaseResult run_case(const Case& c, const RunOptions& ro = {}) {
         out.inverted.inverted_elements, farthest_from_clamp(m, out.inverted), -ref.minCoeff());
   }
 
-  // The large mesh needs more flops per iteration (7.3×) and more iterations (h is 1.7× smaller).
-  const double flop_budget = c.large ? 3000e6 : 300e6;
+  // The large mesh needs more flops per iteration (7.3×) and more iterations (h is 1.7× smaller),
+  // and the stiffening / inverting models converge slowly there: 10 GFLOP per run.
+  const double flop_budget = c.large ? 10000e6 : 300e6;
   std::vector<TracedRun>& runs = out.runs;
   auto trace_run = [&](const std::string& label, auto&& solve) {
     EnergyErrorTrace trace(p, ref);

@@ -84,10 +84,33 @@ TEST(CantileverTable3_1, ConvergesToTimoshenkoFromBelow) {
       "from Timoshenko)\n",
       rich.order, res[k - 3].nx, res[k - 2].nx, res[k - 1].nx, rich.limit,
       100 * (rich.limit - kTimoshenko) / kTimoshenko);
+  // Observed order of the compliance 1/δ (δ = average tip deflection) from the same meshes.
+  // For a Galerkin method F(δ − δ_h) = ‖u − u_h‖²_E = O(h²) (energy error, linear elements), so
+  // δ and 1/δ share the asymptotic order 2. Coarse linear tetrahedra in bending are too stiff by
+  // a factor ≈ (1 + c h²) (parasitic shear), δ_h ≈ δ/(1 + c h²): then 1/δ_h = (1 + c h²)/δ is
+  // exactly quadratic in h while δ_h carries large higher-order terms when c h² is not small
+  // (c h² ≈ 0.3 at nx = 16). That is why the displacement order is pre-asymptotic (≈ 1.4 on
+  // 16/24/32) while the compliance order is already ≈ 2 there.
+  const Richardson flex = richardson(1.0 / res[k - 3].nx, 1.0 / res[k - 3].avg_deflection,
+                                     1.0 / res[k - 2].nx, 1.0 / res[k - 2].avg_deflection,
+                                     1.0 / res[k - 1].nx, 1.0 / res[k - 1].avg_deflection);
+  ASSERT_TRUE(flex.ok);
+  std::printf(
+      "compliance 1/delta: observed order p = %.3f; Richardson limit delta = %.5e m "
+      "(%+.3f%% from Timoshenko)\n",
+      flex.order, 1.0 / flex.limit, 100 * (1.0 / flex.limit - kTimoshenko) / kTimoshenko);
+  // Measured 1.94 (16/24/32) and 1.985 (48/56/64): ±0.1 is "about 2" and rejects first order
+  // or a broken discretization; the shortfall is the small O(h⁴) remainder.
+  constexpr double kComplianceOrderTol = 0.1;
+  EXPECT_NEAR(flex.order, 2.0, kComplianceOrderTol);
+  // Its extrapolated deflection is within 0.5 % of Timoshenko already on the coarse meshes
+  // (measured +0.19 %; the 3D clamp restrains warping, which Timoshenko's κ = 5/6 ignores).
+  constexpr double kComplianceLimitTol = 0.005;
+  EXPECT_NEAR(1.0 / flex.limit, kTimoshenko, kComplianceLimitTol * kTimoshenko);
   if (!all_meshes()) {
-    // 16/24/32 are pre-asymptotic (linear tetrahedra in bending are far too stiff on coarse
-    // meshes): measured p ≈ 1.4 here, rising to ≈ 1.65 (24/32/40) and ≈ 1.9 (48/56/64). We only
-    // assert the order is positive and below the asymptotic 2 plus the slow case's margin.
+    // Displacement order on 16/24/32: pre-asymptotic (see above), measured p ≈ 1.38, rising to
+    // ≈ 1.65 (24/32/40) and ≈ 1.9 (48/56/64). Asserted only as a sanity band here; "about 2"
+    // is asserted on the compliance above and on the displacement in the slow run.
     EXPECT_GT(rich.order, 1.0);
     EXPECT_LT(rich.order, 2.25);
     return;

@@ -4,6 +4,7 @@
 /// free DOFs, which set the dynamic relaxation parameters of thesis §4.1: the critical time step
 /// Δt = 2/√λ_n and the critical damping η = 2√λ₁.
 
+#include <incise/solver/linear_cg.hpp>
 #include <incise/solver/report.hpp>
 
 namespace incise::solver {
@@ -37,6 +38,23 @@ EigenEstimate largest_eigenvalue(Problem& problem, const VecX& u, const EigenOpt
 /// free DOFs with projected_cg(). The Rayleigh quotient is an upper bound of λ₁.
 EigenEstimate smallest_eigenvalue(Problem& problem, const VecX& u,
                                   const EigenOptions& options = {});
+
+/// Extreme Ritz values of the Lanczos tridiagonal matrix implied by a CG run.
+struct [[nodiscard]] LanczosExtremes {
+  double smallest = 0.0;  ///< smallest Ritz value (≥ λ_min of the operator), operator units
+  double largest = 0.0;   ///< largest Ritz value (≤ λ_max of the operator)
+  long steps = 0;         ///< size of the tridiagonal matrix (CG steps used)
+  /// largest/smallest: a lower bound of the spectral condition number κ₂ that converges to it
+  /// as CG resolves the extreme eigenvectors (both extremes converge first, §2.4.1).
+  double condition() const { return largest / smallest; }
+};
+
+/// Extreme eigenvalue estimates of the CG operator (K for plain CG on the free DOFs — not M⁻¹K
+/// — or D⁻¹K for Jacobi-preconditioned CG) from the CG coefficients of a linear_cg() run
+/// (LinearCgOptions::coefficients), at no extra operator application: the Lanczos tridiagonal
+/// T of CgCoefficients and its eigenvalues (Eigen's tridiagonal QR). Throws ParameterError
+/// when there are no steps or the coefficient lists differ in length.
+LanczosExtremes cg_lanczos_extremes(const CgCoefficients& coefficients);
 
 /// Critical time step of explicit SS22 / central differences for eigenvalue λ_n: 2/√λ_n (§4.1).
 double critical_time_step(double lambda_max);

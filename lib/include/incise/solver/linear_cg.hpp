@@ -7,6 +7,7 @@
 #include <incise/solver/report.hpp>
 
 #include <functional>
+#include <vector>
 
 namespace incise::solver {
 
@@ -15,6 +16,14 @@ enum class Preconditioner {
   kNone,   ///< plain CG (the thesis' choice)
   kJacobi  ///< diagonal scaling by diag K(u) (Problem::hessian_diagonal); falls back to kNone
            ///< when the problem provides no diagonal or a diagonal entry is ≤ 0
+};
+
+/// The step lengths α_k and direction updates β_k of a CG run, from which the Lanczos
+/// tridiagonal matrix of the (preconditioned) operator follows (Saad, Iterative Methods §6.7.3):
+/// T_jj = 1/α_j + β_{j−1}/α_{j−1}, T_{j,j+1} = √β_j/α_j. See cg_lanczos_extremes().
+struct CgCoefficients {
+  std::vector<double> alpha;  ///< α_k = (r_k, z_k)/(d_k, K d_k), one per completed step
+  std::vector<double> beta;   ///< β_k = (r_{k+1}, z_{k+1})/(r_k, z_k), one per completed step
 };
 
 /// Options of linear_cg().
@@ -26,6 +35,8 @@ struct LinearCgOptions {
   /// residual r_{k+1} = r_k − α K d drifts from f − K u in floating point).
   bool recompute_residual = true;
   IterationObserver observer;  ///< called after every CG step with the current u
+  /// When non-null, cleared and filled with α_k, β_k of every step (for condition estimates).
+  CgCoefficients* coefficients = nullptr;
 };
 
 /// Minimizes the quadratic model Π(u₀) + ∇Π(u₀)·x + ½ xᵀK(u₀)x over x with Px = x, i.e. solves
