@@ -7,11 +7,15 @@
 ///    analyze + factorize + solve of the same beam; BM_Factor{Supernodal,Simplicial}/h — the
 ///    measurement behind the supernodal-vs-simplicial choice (docs/augmented.md).
 ///  - Per-step table (the paper's Fig. 5/7 experiments):
-///      augmented_bench --table deform|cut [--h 1024] [--steps 32] [--pcg-every 8]
+///      augmented_bench --table deform|cut [--h 1024 | --brick N | --mesh FILE|liver]
+///                      [--steps 32] [--pcg-every 8] [--pcg-seconds 20]
 ///                      [--precond none|diag|spai] [--supernodal] [--refactor]
 ///                      [--default-ordering|--amd] (K⁰ ordering; METIS by default)
+///                      [--ref-kind simplicial|supernodal] (reference refactorization)
+///                      [--csv FILE] (also write the rows as CSV, for yeung2016_plots)
 ///    prints one Markdown row per step: m, GMRES iterations, closure sizes, update time and
 ///    rate, refactorization + solve time, speed-up, Jacobi-PCG time, relative error.
+///    `--mesh liver` is reference_data/meshes/liver_coarse.mesh (mm, scaled to m).
 
 #include "yeung2016_experiment.hpp"
 
@@ -112,6 +116,7 @@ BENCHMARK(BM_FactorSimplicial)->Arg(64)->Arg(256)->Arg(1024)->Unit(benchmark::kM
 
 int run_table(int argc, char** argv) {
   Options opt;
+  std::string csv_path;
   opt.h = 1024;
   opt.steps = 32;
   opt.kind = std::strcmp(argv[2], "cut") == 0 ? Kind::kCut : Kind::kDeform;
@@ -120,6 +125,19 @@ int run_table(int argc, char** argv) {
     auto next = [&]() { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
     if (a == "--h") {
       opt.h = std::stoi(next());
+    } else if (a == "--brick") {
+      opt.geometry = incise::yeung2016::Geometry::kBrick;
+      opt.brick_n = std::stoi(next());
+    } else if (a == "--mesh") {
+      opt.geometry = incise::yeung2016::Geometry::kFile;
+      opt.mesh_file = next();
+      if (opt.mesh_file == "liver")
+        opt.mesh_file = std::string(INCISE_SOURCE_DIR) + "/reference_data/meshes/liver_coarse.mesh";
+    } else if (a == "--ref-kind") {
+      opt.reference_kind = next() == "supernodal" ? incise::solver::CholmodKind::kSupernodal
+                                                  : incise::solver::CholmodKind::kSimplicialLdl;
+    } else if (a == "--csv") {
+      csv_path = next();
     } else if (a == "--steps") {
       opt.steps = std::stoi(next());
     } else if (a == "--pcg-every") {
@@ -150,14 +168,15 @@ int run_table(int argc, char** argv) {
   }
   Info info;
   const std::vector<Row> rows = incise::yeung2016::run(opt, info);
-  std::printf("# beam 5x5x%d: %d nodes, %d tetrahedra, n0 = %d DOFs, nnz(K) = %lld, |L| = %lld\n",
-              opt.h, info.nodes, info.elements, info.n0, info.nnz_k, info.nnz_l);
+  std::printf(
+      "# %s: %d nodes, %d tetrahedra, n0 = %d DOFs, nnz(K) = %lld, |L| = %lld, s = %.4g m\n",
+      info.name.c_str(), info.nodes, info.elements, info.n0, info.nnz_k, info.nnz_l, info.spacing);
   std::printf("# assembly %.3f s, initial factorization + LDL' extraction %.3f s; blas: %s\n",
               info.t_assemble, info.t_initial_factor, incise::bench::loaded_blas().c_str());
   std::printf(
       "| step | n | m | GMRES it | clos f | clos y | clos Ja2 | clos step3 | changes ms | solve "
-      "ms (setup/1/2/3) | update Hz | refactor+solve ms | speed-up | CPU ms upd / ref | CPU "
-      "speed-up | PCG ms (it) | rel. error | "
+      "ms (setup/1/2/3) | update Hz | refactor+solve ms | speed-up | CPU ms upd / ref / num | CPU "
+      "speed-up ref / num | PCG ms wall / CPU (it) | rel. error | "
       "backward error | status |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Row& r : rows) {
@@ -165,17 +184,48 @@ int run_table(int argc, char** argv) {
     const double ref = r.t_refactor + r.t_refactor_solve;
     char pcg[64] = "-";
     if (r.t_pcg >= 0)
-      std::snprintf(pcg, sizeof pcg, "%.1f (%ld%s)", 1e3 * r.t_pcg, r.pcg_iterations,
-                    r.pcg_converged ? "" : ", not conv.");
+      std::snprintf(pcg, sizeof pcg, "%.1f / %.1f (%ld%s)", 1e3 * r.t_pcg, 1e3 * r.cpu_pcg,
+                    r.pcg_iterations, r.pcg_converged ? "" : ", not conv.");
+    char num[32] = "-", num_speed[32] = "-";
+    if (r.cpu_numeric_refactor >= 0) {
+      std::snprintf(num, sizeof num, "%.1f", 1e3 * r.cpu_numeric_refactor);
+      std::snprintf(num_speed, sizeof num_speed, "%.1f",
+                    r.cpu_update > 0 ? r.cpu_numeric_refactor / r.cpu_update : 0.0);
+    }
     std::printf(
         "| %d | %d | %d | %d | %d | %d | %d | %d | %.3f | %.2f (%.2f/%.2f/%.2f/%.2f) | %.0f | "
-        "%.1f | %.1f | %.1f / %.1f | %.1f | %s | %.1e | %.1e | %s%s |\n",
+        "%.1f | %.1f | %.2f / %.1f / %s | %.1f / %s | %s | %.1e | %.1e | %s%s |\n",
         r.step, r.n, r.m, r.gmres_iterations, r.closure_f, r.closure_y, r.closure_ja2,
         r.closure_step3, 1e3 * r.t_changes, 1e3 * r.t_solve, 1e3 * r.t_setup, 1e3 * r.t_step1,
         1e3 * r.t_step2, 1e3 * r.t_step3, upd > 0 ? 1.0 / upd : 0.0, 1e3 * ref,
-        upd > 0 ? ref / upd : 0.0, 1e3 * r.cpu_update, 1e3 * r.cpu_refactor,
-        r.cpu_update > 0 ? r.cpu_refactor / r.cpu_update : 0.0, pcg, r.rel_error, r.rel_residual,
-        r.status.c_str(), r.swapped ? " (swap)" : "");
+        upd > 0 ? ref / upd : 0.0, 1e3 * r.cpu_update, 1e3 * r.cpu_refactor, num,
+        r.cpu_update > 0 ? r.cpu_refactor / r.cpu_update : 0.0, num_speed, pcg, r.rel_error,
+        r.rel_residual, r.status.c_str(), r.swapped ? " (swap)" : "");
+  }
+  if (!csv_path.empty()) {
+    FILE* out = std::fopen(csv_path.c_str(), "w");
+    if (out == nullptr) {
+      std::fprintf(stderr, "cannot write %s\n", csv_path.c_str());
+      return 1;
+    }
+    std::fprintf(out, "# %s,%s,%d,%d,%d,%lld\n", info.name.c_str(),
+                 opt.kind == Kind::kCut ? "cut" : "deform", info.nodes, info.elements, info.n0,
+                 info.nnz_l);
+    std::fprintf(
+        out,
+        "step,n,m,gmres_it,closure_f,closure_y,closure_ja2,closure_step3,t_update,"
+        "t_setup,t_step1,t_step2,t_step3,t_refactor,cpu_update,cpu_refactor,"
+        "cpu_numeric_refactor,t_pcg,cpu_pcg,pcg_it,pcg_converged,rel_error,backward_error,ok\n");
+    for (const Row& r : rows)
+      std::fprintf(out,
+                   "%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,"
+                   "%.6g,%ld,%d,%.6g,%.6g,%d\n",
+                   r.step, r.n, r.m, r.gmres_iterations, r.closure_f, r.closure_y, r.closure_ja2,
+                   r.closure_step3, r.t_changes + r.t_solve, r.t_setup, r.t_step1, r.t_step2,
+                   r.t_step3, r.t_refactor + r.t_refactor_solve, r.cpu_update, r.cpu_refactor,
+                   r.cpu_numeric_refactor, r.t_pcg, r.cpu_pcg, r.pcg_iterations,
+                   r.pcg_converged ? 1 : 0, r.rel_error, r.rel_residual, r.status == "ok" ? 1 : 0);
+    std::fclose(out);
   }
   return 0;
 }

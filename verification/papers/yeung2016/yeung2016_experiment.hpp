@@ -1,7 +1,9 @@
 #pragma once
 /// \file yeung2016_experiment.hpp
 /// Driver of the experiments of Yeung, Crouch & Pothen 2016, §4.3 on the beam meshes of §4.2
-/// item (1) (5×5×h nodes, anchored at one end): (1) deformation of an intact mesh by
+/// item (1) (5×5×h nodes, anchored at one end), the 1×1×2 bricks of item (2) and an irregular
+/// organ mesh (the liver of reference_data, standing in for the bunny of item (3)):
+/// (1) deformation of an intact mesh by
 /// constraining one more node per step (Fig. 5, 6); (2) an advancing planar cut that
 /// duplicates one node per step, with opposing forces pulling the cut faces apart (Fig. 7, 9).
 /// Per step it records the augmented update (time, m, GMRES iterations, closure sizes, §3.3 /
@@ -15,6 +17,7 @@
 
 #include <incise/core/timer.hpp>
 #include <incise/fem/tet_kernels.hpp>
+#include <incise/io/read_mesh.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/solver/augmented_system.hpp>
@@ -34,6 +37,13 @@ namespace incise::yeung2016 {
 /// Which §4.3 experiment.
 enum class Kind { kDeform, kCut };
 
+/// Which §4.2 mesh.
+enum class Geometry {
+  kBeam,   ///< mesh::make_beam(h, spacing): 5×5×h nodes (item 1)
+  kBrick,  ///< mesh::make_brick(brick_n): 1×1×2 m, (n+1)²(2n+1) nodes (item 2)
+  kFile    ///< a tetrahedral mesh file (the liver), lowest 10% in z anchored
+};
+
 /// Parameters of one run.
 struct Options {
   Kind kind = Kind::kDeform;
@@ -49,6 +59,17 @@ struct Options {
   double pcg_seconds = 10;           ///< time budget of one PCG solve
   bool background_refactor = false;  ///< §3.6: keep a background refactorization running
   solver::CholmodOrdering ordering = solver::CholmodOrdering::kMetis;  ///< of K⁰ (augmented)
+  Geometry geometry = Geometry::kBeam;
+  int brick_n = 8;           ///< brick resolution (kBrick)
+  std::string mesh_file;     ///< kFile: path of the mesh
+  double mesh_scale = 1e-3;  ///< kFile: file units → m (the liver is in mm)
+  /// Deformation only: also time the best refactorization when the sparsity pattern is kept
+  /// (constrained rows/columns zeroed with a unit diagonal, symbolic analysis of K⁰ reused:
+  /// numerical factorization + solve only).
+  bool numeric_refactor = true;
+  /// CHOLMOD kind of the reference refactorization (its ordering is CHOLMOD's default). On
+  /// the thin beams simplicial is faster; on bricks and organ meshes supernodal (BLAS) is.
+  solver::CholmodKind reference_kind = solver::CholmodKind::kSimplicialLdl;
 };
 
 /// One row of the per-step table.
@@ -60,11 +81,13 @@ struct Row {
   double t_changes = 0;  ///< applying the K changes / constraints (s)
   double t_solve = 0;    ///< AugmentedSystem::solve (s)
   double t_step1 = 0, t_step2 = 0, t_step3 = 0, t_setup = 0;
-  double t_refactor = 0;        ///< analyze + factorize of the modified system (s)
-  double t_refactor_solve = 0;  ///< triangular solves of the refactored system (s)
-  double t_pcg = -1;            ///< Jacobi-PCG (s), −1 when not run
-  double cpu_update = 0;        ///< process CPU time of changes + solve (s)
-  double cpu_refactor = 0;      ///< process CPU time of refactorization + solve (s)
+  double t_refactor = 0;             ///< analyze + factorize of the modified system (s)
+  double t_refactor_solve = 0;       ///< triangular solves of the refactored system (s)
+  double cpu_numeric_refactor = -1;  ///< CPU s of factorize + solve with a kept pattern (−1: n/a)
+  double t_pcg = -1;                 ///< Jacobi-PCG (s), −1 when not run
+  double cpu_pcg = -1;               ///< process CPU time of the Jacobi-PCG solve (s)
+  double cpu_update = 0;             ///< process CPU time of changes + solve (s)
+  double cpu_refactor = 0;           ///< process CPU time of refactorization + solve (s)
   long pcg_iterations = 0;
   bool pcg_converged = false;
   double rel_error = -1;  ///< ‖a_aug − a_exact‖/‖a_exact‖ (−1 when not compared)
@@ -75,6 +98,8 @@ struct Row {
 
 /// Summary of the setup.
 struct Info {
+  std::string name;    ///< e.g. "beam 5x5x1024"
+  double spacing = 0;  ///< characteristic edge length s (m)
   int nodes = 0, elements = 0, n0 = 0;
   long long nnz_k = 0, nnz_l = 0;
   double t_assemble = 0, t_initial_factor = 0;
@@ -180,7 +205,33 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
   par.youngs_modulus = opt.youngs;
   par.poisson_ratio = opt.poisson;
   const material::Material mat("linear", par);
-  const mesh::MeshData mesh = mesh::make_beam(opt.h, opt.spacing);
+  mesh::MeshData mesh;
+  double s_len = opt.spacing;  // characteristic spacing s
+  if (opt.geometry == Geometry::kBeam) {
+    mesh = mesh::make_beam(opt.h, opt.spacing);
+    info.name = "beam 5x5x" + std::to_string(opt.h);
+  } else if (opt.geometry == Geometry::kBrick) {
+    mesh = mesh::make_brick(opt.brick_n);
+    s_len = 1.0 / opt.brick_n;
+    info.name = "brick 1x1x2 n=" + std::to_string(opt.brick_n);
+  } else {
+    io::ReadOptions ro;
+    ro.scale = opt.mesh_scale;
+    mesh = io::read_mesh(opt.mesh_file, ro).mesh;
+    double sum = 0;
+    for (Index e = 0; e < mesh.num_cells(); ++e)
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b)
+          sum += (mesh.points.col(mesh.cells(a, e)) - mesh.points.col(mesh.cells(b, e))).norm();
+    s_len = sum / (6.0 * std::max<Index>(mesh.num_cells(), 1));
+    info.name = opt.mesh_file.substr(opt.mesh_file.find_last_of('/') + 1);
+  }
+  info.spacing = s_len;
+  const bool structured = opt.geometry != Geometry::kFile;
+  const double zmin = mesh.points.row(2).minCoeff();
+  const double zrange = mesh.points.row(2).maxCoeff() - zmin;
+  // Anchored (removed from K⁰): the z = zmin face, or the lowest 10% of an irregular mesh.
+  const double z_anchor = structured ? zmin + 1e-9 * s_len : zmin + 0.1 * zrange;
   detail::Beam beam;
   beam.lame = mat.lame();
   beam.points = mesh.points;
@@ -188,7 +239,7 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
     beam.tets.push_back({mesh.cells(0, e), mesh.cells(1, e), mesh.cells(2, e), mesh.cells(3, e)});
   beam.node_dof.assign(static_cast<size_t>(mesh.num_points()), -1);
   for (Index v = 0; v < mesh.num_points(); ++v) {
-    if (mesh.points(2, v) > 1e-9 * opt.spacing) {  // z = 0 face anchored (removed from K⁰)
+    if (mesh.points(2, v) > z_anchor) {
       beam.node_dof[v] = beam.num_dofs;
       beam.num_dofs += 3;
     }
@@ -215,15 +266,20 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
 
   const double zmax = mesh.points.row(2).maxCoeff();
   const double ymax = mesh.points.row(1).maxCoeff();
-  const double xmid = 0.5 * mesh.points.row(0).maxCoeff();
-  const double tol = 1e-6 * opt.spacing;
+  const double xmid = 0.5 * (mesh.points.row(0).maxCoeff() + mesh.points.row(0).minCoeff());
+  const double tol = 1e-6 * s_len;
+  // Irregular meshes: the "top face" is the top 15% in y, the cut "plane" the nodes within s/2
+  // of x = xmid, the pulled "end face" the top 10% in z.
+  const double y_band = structured ? tol : 0.15 * (ymax - mesh.points.row(1).minCoeff());
+  const double x_band = structured ? tol : 0.5 * s_len;
+  const double z_band = structured ? tol : 0.1 * zrange;
   std::map<int, double> dirichlet;
   Eigen::VectorXd f = Eigen::VectorXd::Zero(beam.num_dofs);
   std::vector<int> order;  // nodes to constrain or to cut, in step order
   if (opt.kind == Kind::kDeform) {
     // Top surface nodes from the free end backwards: pressed down by 0.1 spacing (§4.3.1).
     for (Index v = 0; v < mesh.num_points(); ++v)
-      if (std::abs(mesh.points(1, v) - ymax) < tol && beam.node_dof[v] >= 0) order.push_back(v);
+      if (ymax - mesh.points(1, v) < y_band && beam.node_dof[v] >= 0) order.push_back(v);
     std::sort(order.begin(), order.end(), [&](int a, int b) {
       if (std::abs(mesh.points(2, a) - mesh.points(2, b)) > tol)
         return mesh.points(2, a) > mesh.points(2, b);
@@ -232,8 +288,9 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
   } else {
     // Planar cut x = xmid advancing from the free end (§4.3.2); opposing forces on the end face.
     for (Index v = 0; v < mesh.num_points(); ++v) {
-      if (std::abs(mesh.points(0, v) - xmid) < tol && beam.node_dof[v] >= 0) order.push_back(v);
-      if (std::abs(mesh.points(2, v) - zmax) < tol && std::abs(mesh.points(0, v) - xmid) > tol)
+      if (std::abs(mesh.points(0, v) - xmid) < x_band && beam.node_dof[v] >= 0) order.push_back(v);
+      if (zmax - mesh.points(2, v) < z_band && std::abs(mesh.points(0, v) - xmid) > x_band &&
+          beam.node_dof[v] >= 0)
         f(beam.node_dof[v]) = mesh.points(0, v) < xmid ? -1e-3 : 1e-3;
     }
     std::sort(order.begin(), order.end(), [&](int a, int b) {
@@ -243,15 +300,38 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
     });
   }
   bool refactor_started = false;
-  for (int step = 0; step <= opt.steps && step <= static_cast<int>(order.size()); ++step) {
+  // Deformation: the best refactorization keeps the pattern of K⁰ (constrained rows/columns
+  // zeroed, unit diagonal), so CHOLMOD's symbolic analysis is done once, outside the timing.
+  CholmodFactor numeric_factor({opt.reference_kind, CholmodOrdering::kDefault});
+  const bool numeric = opt.exact && opt.numeric_refactor && opt.kind == Kind::kDeform;
+  if (numeric && numeric_factor.analyze(k0, 1) != FactorStatus::kOk) return rows;
+  // A cut node is duplicated only when elements on both sides of the plane meet at it
+  // (otherwise one copy would have no stiffness); on the grids every plane node qualifies.
+  auto splits = [&](int v) {
+    if (opt.kind != Kind::kCut) return true;
+    bool left = false, right = false;
+    for (const auto& tet : beam.tets) {
+      if (std::find(tet.begin(), tet.end(), v) == tet.end()) continue;
+      double cx = 0;
+      for (int b = 0; b < 4; ++b) cx += 0.25 * beam.points(0, tet[b]);
+      (cx > xmid ? right : left) = true;
+    }
+    return left && right;
+  };
+  size_t next = 0;
+  for (int step = 0; step <= opt.steps; ++step) {
     Row row;
     row.step = step;
+    if (step > 0) {
+      while (next < order.size() && !splits(order[next])) ++next;
+      if (next == order.size()) break;
+    }
     Timer tc;
     const double cpu0 = detail::cpu_seconds();
     if (step > 0) {
-      const int p = order[static_cast<size_t>(step - 1)];
+      const int p = order[next++];
       if (opt.kind == Kind::kDeform) {
-        const double d[3] = {0.0, -0.1 * opt.spacing, 0.0};
+        const double d[3] = {0.0, -0.1 * s_len, 0.0};
         for (int i = 0; i < 3; ++i) {
           aug.impose_dirichlet(beam.node_dof[p] + i, d[i]);
           dirichlet[beam.node_dof[p] + i] = d[i];
@@ -331,7 +411,7 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
         if (red.full_to_free[i] >= 0) rhs(red.full_to_free[i]) = rhs_full(i);
       const double t_reduce = tr.seconds();
       if (opt.exact) {
-        CholmodFactor fac({opt.cholmod, CholmodOrdering::kDefault});  // CHOLMOD's ordering
+        CholmodFactor fac({opt.reference_kind, CholmodOrdering::kDefault});  // CHOLMOD's ordering
         const double cpu1 = detail::cpu_seconds();
         tr.restart();
         const FactorStatus fs = fac.compute(red.matrix, static_cast<std::uint64_t>(step + 1));
@@ -347,6 +427,19 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
         }
         row.cpu_refactor = detail::cpu_seconds() - cpu1;
       }
+      if (numeric && k.nonZeros() == k0.nonZeros()) {
+        SparseMatrix kk = k;
+        Eigen::VectorXd b = rhs_full;
+        for (int j = 0; j < kk.outerSize(); ++j)
+          for (SparseMatrix::InnerIterator it(kk, j); it; ++it)
+            if (fixed[j] || fixed[it.row()]) it.valueRef() = it.row() == j ? 1.0 : 0.0;
+        for (const auto& [dd, v] : dirichlet) b(dd) = v;
+        const double cpu1 = detail::cpu_seconds();
+        Eigen::VectorXd x;
+        if (numeric_factor.factorize(kk) == FactorStatus::kOk &&
+            numeric_factor.solve(b, x) == FactorStatus::kOk)
+          row.cpu_numeric_refactor = detail::cpu_seconds() - cpu1;
+      }
       if (opt.pcg_every > 0 && step % opt.pcg_every == 0) {
         detail::MatrixProblem prob(red.matrix, rhs);
         LinearCgOptions copt;
@@ -356,7 +449,9 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
         copt.budget.max_seconds = opt.pcg_seconds;
         VecX u = VecX::Zero(rhs.size());
         tr.restart();
+        const double cpu1 = detail::cpu_seconds();
         const SolverReport cg = linear_cg(prob, u, copt);
+        row.cpu_pcg = detail::cpu_seconds() - cpu1;
         row.t_pcg = tr.seconds();
         row.pcg_iterations = cg.iterations;
         row.pcg_converged = cg.converged();

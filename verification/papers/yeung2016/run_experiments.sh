@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Runs the Yeung, Crouch & Pothen 2016 §4.3 experiments (beams, bricks, liver; deformation and
+# cutting) with benchmarks/solver/augmented_bench and writes one Markdown table (.md) and one CSV
+# per run into OUT; then `yeung2016_plots OUT` draws the SVG figures (README.md).
+# Usage: run_experiments.sh BUILD_DIR OUT_DIR [quick]
+# Expected runtime on an idle 2-core machine: ≈ 10 min (quick: ≈ 1 min).
+set -euo pipefail
+build=${1:?build dir}
+out=${2:?output dir}
+quick=${3:-}
+bench="$build/benchmarks/solver/augmented_bench"
+mkdir -p "$out"
+export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
+run() {  # name, args...
+  local name=$1
+  shift
+  echo "== $name: augmented_bench --table $*" >&2
+  "$bench" --table "$@" --csv "$out/$name.csv" >"$out/$name.md"
+}
+if [[ "$quick" == quick ]]; then
+  beams=(16 64)
+  bricks=(4 8)
+  big_steps=8
+else
+  beams=(16 64 256 1024)
+  bricks=(4 8 12 16 20)
+  big_steps=32
+fi
+# The 25,600-node beam (Fig. 5a, 7a, 11b): long runs, Jacobi-PCG every 8th/16th step.
+h_big=${beams[-1]}
+run "beam${h_big}_deform" deform --h "$h_big" --steps "$big_steps" --pcg-every 16 --pcg-seconds 20
+run "beam${h_big}_cut" cut --h "$h_big" --steps 16 --pcg-every 8 --pcg-seconds 20
+# Size series (Fig. 6, 9, 11a): 16 steps, PCG at steps 0, 8, 16.
+for h in "${beams[@]}"; do
+  [[ "$h" == "$h_big" ]] && continue
+  run "beam${h}_deform" deform --h "$h" --steps 16 --pcg-every 8 --pcg-seconds 20
+  run "beam${h}_cut" cut --h "$h" --steps 16 --pcg-every 8 --pcg-seconds 20
+done
+# Bricks 1×1×2 at five resolutions (§4.2 item 2), supernodal reference refactorization.
+for n in "${bricks[@]}"; do
+  run "brick${n}_deform" deform --brick "$n" --steps 16 --pcg-every 4 --pcg-seconds 20 --ref-kind supernodal
+  run "brick${n}_cut" cut --brick "$n" --steps 16 --pcg-every 4 --pcg-seconds 20 --ref-kind supernodal
+done
+# The liver of reference_data (irregular organ mesh).
+run liver_deform deform --mesh liver --steps 16 --pcg-every 4 --pcg-seconds 20 --ref-kind supernodal
+run liver_cut cut --mesh liver --steps 16 --pcg-every 4 --pcg-seconds 20 --ref-kind supernodal
+echo "done: $out" >&2

@@ -1,0 +1,254 @@
+/// \file yeung2016_plots.cpp
+/// Draws the analogues of Figs. 4, 5, 7, 10a, 11a and 11b of Yeung, Crouch & Pothen 2016 as SVG
+/// files from the CSV files that run_experiments.sh writes (augmented_bench --table … --csv),
+/// with the project's own SVG writer (scene/svg_plot.hpp).
+///
+/// Usage: yeung2016_plots DIR   (reads DIR/<mesh>_<deform|cut>.csv, writes DIR/fig*.svg)
+///
+/// Rates are 1 / process CPU time of one update (resp. one refactorization + solve, one
+/// Jacobi-PCG solve): wall time on the shared measurement machine is inflated by other jobs.
+/// PCG points are drawn only for solves that reached ‖r‖ ≤ 1e-10‖f‖ within their budget.
+
+#include <incise/scene/svg_plot.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+using incise::scene::PlotOptions;
+using incise::scene::Series;
+
+struct Table {
+  std::string name;  // mesh description from the CSV's first line
+  double nodes = 0;
+  std::map<std::string, std::vector<double>> col;
+  bool ok = false;
+  const std::vector<double>& operator[](const std::string& c) const {
+    static const std::vector<double> empty;
+    auto it = col.find(c);
+    return it == col.end() ? empty : it->second;
+  }
+  size_t rows() const { return (*this)["step"].size(); }
+};
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::stringstream ss(line);
+  std::string item;
+  while (std::getline(ss, item, ',')) out.push_back(item);
+  return out;
+}
+
+Table read_table(const std::string& path) {
+  Table t;
+  std::ifstream in(path);
+  if (!in) return t;
+  std::string line;
+  if (!std::getline(in, line) || line.size() < 2 || line[0] != '#') return t;
+  const std::vector<std::string> meta = split(line.substr(2));
+  if (meta.size() >= 3) {
+    t.name = meta[0];
+    t.nodes = std::stod(meta[2]);
+  }
+  if (!std::getline(in, line)) return t;
+  const std::vector<std::string> header = split(line);
+  while (std::getline(in, line)) {
+    const std::vector<std::string> v = split(line);
+    if (v.size() != header.size()) continue;
+    for (size_t i = 0; i < v.size(); ++i) t.col[header[i]].push_back(std::stod(v[i]));
+  }
+  t.ok = t.rows() > 0;
+  return t;
+}
+
+/// y = 1/column over the steps (rates in Hz); entries ≤ 0 (not measured) are skipped.
+Series rate_series(const Table& t, const std::string& column, const std::string& label,
+                   bool only_converged_pcg = false) {
+  Series s;
+  s.label = label;
+  const auto& step = t["step"];
+  const auto& v = t[column];
+  const auto& conv = t["pcg_converged"];
+  for (size_t i = 0; i < step.size() && i < v.size(); ++i) {
+    if (!(v[i] > 0)) continue;
+    if (only_converged_pcg && (i >= conv.size() || conv[i] < 0.5)) continue;
+    s.x.push_back(step[i]);
+    s.y.push_back(1.0 / v[i]);
+  }
+  return s;
+}
+
+Series column_series(const Table& t, const std::string& column, const std::string& label,
+                     size_t first_row = 0) {
+  Series s;
+  s.label = label;
+  const auto& step = t["step"];
+  const auto& v = t[column];
+  for (size_t i = first_row; i < step.size() && i < v.size(); ++i) {
+    s.x.push_back(step[i]);
+    s.y.push_back(v[i]);
+  }
+  return s;
+}
+
+void write_svg(const std::string& path, const std::vector<Series>& series,
+               const PlotOptions& options) {
+  std::ofstream out(path);
+  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      << incise::scene::svg_line_plot(series, options) << "\n";
+  std::printf("wrote %s\n", path.c_str());
+}
+
+/// Rates of one experiment: augmented update, refactorization + solve (with analysis; and
+/// numeric only when the pattern is kept), Jacobi-PCG.
+void rate_figure(const std::string& dir, const std::string& file, const Table& t,
+                 const std::string& title, const std::string& x_label) {
+  if (!t.ok) return;
+  std::vector<Series> s;
+  s.push_back(rate_series(t, "cpu_update", "augmented update"));
+  s.push_back(rate_series(t, "cpu_refactor", "CHOLMOD analyze + factorize + solve"));
+  Series num = rate_series(t, "cpu_numeric_refactor", "CHOLMOD factorize + solve (pattern kept)");
+  if (!num.x.empty()) {
+    num.dashed = true;
+    s.push_back(num);
+  }
+  s.push_back(rate_series(t, "cpu_pcg", "Jacobi-PCG to 1e-10 (converged solves)", true));
+  PlotOptions o;
+  o.title = title + " — " + t.name + " (" + std::to_string(static_cast<long>(t.nodes)) + " nodes)";
+  o.x_label = x_label;
+  o.y_label = "update rate (Hz, 1/CPU time)";
+  o.log_y = true;
+  o.width = 640;
+  o.height = 360;
+  write_svg(dir + "/" + file, s, o);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: %s DIR (with the CSV files of run_experiments.sh)\n", argv[0]);
+    return 2;
+  }
+  const std::string dir = argv[1];
+  auto load = [&](const std::string& n) { return read_table(dir + "/" + n + ".csv"); };
+  const std::vector<int> beams = {16, 64, 256, 1024};
+  const std::vector<int> bricks = {4, 8, 12, 16, 20};
+  std::map<std::string, Table> tab;
+  for (int h : beams)
+    for (const char* k : {"deform", "cut"})
+      tab["beam" + std::to_string(h) + "_" + k] = load("beam" + std::to_string(h) + "_" + k);
+  for (int n : bricks)
+    for (const char* k : {"deform", "cut"})
+      tab["brick" + std::to_string(n) + "_" + k] = load("brick" + std::to_string(n) + "_" + k);
+  tab["liver_deform"] = load("liver_deform");
+  tab["liver_cut"] = load("liver_cut");
+  auto largest = [&](const std::string& prefix, const std::vector<int>& sizes,
+                     const std::string& kind) -> const Table& {
+    for (auto it = sizes.rbegin(); it != sizes.rend(); ++it) {
+      const Table& t = tab[prefix + std::to_string(*it) + "_" + kind];
+      if (t.ok) return t;
+    }
+    return tab[prefix + std::to_string(sizes.front()) + "_" + kind];
+  };
+  // The paper's Fig. 5b / 7b use the 9,537-node brick (n = 16).
+  auto brick_fig = [&](const std::string& kind) -> const Table& {
+    const Table& t = tab["brick16_" + kind];
+    return t.ok ? t : largest("brick", bricks, kind);
+  };
+
+  // Fig. 4: |closure_L(J a₂)| during the cutting experiments.
+  {
+    std::vector<Series> s;
+    for (const Table* t :
+         std::vector<const Table*>{&largest("beam", beams, "cut"), &brick_fig("cut"),
+                                   &largest("brick", bricks, "cut"), &tab["liver_cut"]}) {
+      if (!t->ok) continue;
+      bool dup = false;
+      for (const auto& e : s) dup = dup || e.label == t->name;
+      if (!dup) s.push_back(column_series(*t, "closure_ja2", t->name, 1));
+    }
+    PlotOptions o;
+    o.title = "Fig. 4 analogue: |closure_L(J a2)| while cutting";
+    o.x_label = "cut step (duplicated nodes)";
+    o.y_label = "positions of L";
+    o.log_y = true;
+    o.width = 640;
+    o.height = 360;
+    write_svg(dir + "/fig4_closures.svg", s, o);
+  }
+  // Fig. 5: deformation rates; Fig. 7: cutting rates; Fig. 10a analogue: the liver.
+  rate_figure(dir, "fig5a_beam_deform.svg", largest("beam", beams, "deform"),
+              "Fig. 5a analogue: deformation", "constrained nodes");
+  rate_figure(dir, "fig5b_brick_deform.svg", brick_fig("deform"), "Fig. 5b analogue: deformation",
+              "constrained nodes");
+  rate_figure(dir, "fig7a_beam_cut.svg", largest("beam", beams, "cut"), "Fig. 7a analogue: cutting",
+              "cut step (duplicated nodes)");
+  rate_figure(dir, "fig7b_brick_cut.svg", brick_fig("cut"), "Fig. 7b analogue: cutting",
+              "cut step (duplicated nodes)");
+  rate_figure(dir, "fig10a_liver_cut.svg", tab["liver_cut"], "Fig. 10a analogue: cutting",
+              "cut step (duplicated nodes)");
+  rate_figure(dir, "fig10_liver_deform.svg", tab["liver_deform"], "liver deformation",
+              "constrained nodes");
+  // Fig. 11a: maximum GMRES iterations over the 16 steps vs mesh size.
+  {
+    std::vector<Series> s;
+    for (const char* kind : {"deform", "cut"}) {
+      for (int pass = 0; pass < 2; ++pass) {
+        Series e;
+        e.label = std::string(pass == 0 ? "beams, " : "bricks, ") + kind;
+        e.dashed = pass == 1;
+        const std::vector<int>& sizes = pass == 0 ? beams : bricks;
+        for (int z : sizes) {
+          const Table& t =
+              tab[std::string(pass == 0 ? "beam" : "brick") + std::to_string(z) + "_" + kind];
+          if (!t.ok) continue;
+          const auto& it = t["gmres_it"];
+          const auto& st = t["step"];
+          double mx = 0;
+          for (size_t i = 0; i < it.size(); ++i)
+            if (st[i] <= 16) mx = std::max(mx, it[i]);
+          e.x.push_back(t.nodes);
+          e.y.push_back(mx);
+        }
+        s.push_back(e);
+      }
+    }
+    PlotOptions o;
+    o.title = "Fig. 11a analogue: max GMRES iterations (16 steps)";
+    o.x_label = "nodes";
+    o.y_label = "GMRES iterations";
+    o.log_x = true;
+    o.width = 640;
+    o.height = 360;
+    write_svg(dir + "/fig11a_gmres.svg", s, o);
+  }
+  // Fig. 11b: accuracy vs cut depth.
+  {
+    std::vector<Series> s;
+    for (const Table* t : std::vector<const Table*>{&largest("beam", beams, "cut"),
+                                                    &brick_fig("cut"), &tab["liver_cut"]}) {
+      if (!t->ok) continue;
+      s.push_back(column_series(*t, "backward_error", t->name + ": backward error", 1));
+      Series r = column_series(*t, "rel_error", t->name + ": rel. difference to refactored", 1);
+      r.dashed = true;
+      s.push_back(r);
+    }
+    PlotOptions o;
+    o.title = "Fig. 11b analogue: accuracy while cutting";
+    o.x_label = "cut step (duplicated nodes)";
+    o.y_label = "relative error";
+    o.log_y = true;
+    o.width = 640;
+    o.height = 360;
+    write_svg(dir + "/fig11b_error.svg", s, o);
+  }
+  return 0;
+}
