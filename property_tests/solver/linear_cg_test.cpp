@@ -179,6 +179,7 @@ TEST(LinearCg, LanczosFromCoefficientsFindsExtremeEigenvalues_Sec2_4_1) {
     ASSERT_TRUE(rep.converged()) << to_string(rep.reason);
     ASSERT_EQ(c.alpha.size(), std::size_t(rep.iterations));
     const LanczosExtremes l = cg_lanczos_extremes(c);
+    ASSERT_TRUE(l.converged);
     // A converged CG run has resolved the extreme eigenvectors: the extreme Ritz values agree
     // with the spectrum to far better than 1e-6 (rounding in the recursions, not truncation).
     constexpr double kRitzTol = 1e-6;

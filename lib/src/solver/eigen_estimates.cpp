@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <incise/solver/linear_cg.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -157,10 +158,15 @@ LanczosExtremes cg_lanczos_extremes(const CgCoefficients& c) {
     out.smallest = out.largest = diag[0];
     return out;
   }
+  // Eigen's tridiagonal QR deflates when (s/ε)² ≤ |d_i| + |d_{i+1}|, which presumes entries of
+  // order one (its compute() scales first; computeFromTridiagonal() does not): scale by the
+  // largest entry, solve, scale back.
+  const double scale = std::max(diag.cwiseAbs().maxCoeff(), sub.cwiseAbs().maxCoeff());
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
-  es.computeFromTridiagonal(diag, sub, Eigen::EigenvaluesOnly);
-  out.smallest = es.eigenvalues().minCoeff();  // not necessarily sorted on this path
-  out.largest = es.eigenvalues().maxCoeff();
+  es.computeFromTridiagonal(diag / scale, sub / scale, Eigen::EigenvaluesOnly);
+  out.converged = es.info() == Eigen::Success;
+  out.smallest = scale * es.eigenvalues().minCoeff();
+  out.largest = scale * es.eigenvalues().maxCoeff();
   return out;
 }
 

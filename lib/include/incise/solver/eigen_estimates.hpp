@@ -44,6 +44,7 @@ struct [[nodiscard]] LanczosExtremes {
   double smallest = 0.0;  ///< smallest Ritz value (≥ λ_min of the operator), operator units
   double largest = 0.0;   ///< largest Ritz value (≤ λ_max of the operator)
   long steps = 0;         ///< size of the tridiagonal matrix (CG steps used)
+  bool converged = true;  ///< false if the tridiagonal QR iteration did not converge
   /// largest/smallest: a lower bound of the spectral condition number κ₂ that converges to it
   /// as CG resolves the extreme eigenvectors (both extremes converge first, §2.4.1).
   double condition() const { return largest / smallest; }
