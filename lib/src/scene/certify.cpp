@@ -681,9 +681,18 @@ Measurement measure_table_4_5(const CertifyContext& ctx) {
                       fmt(row.mflop_per_iteration), fmt(iters / elapsed),
                       fmt(row.iterations_per_second), fmt(mflops), fmt(100 * mflops / baseline),
                       fmt(row.percent_peak)});
-    const std::string label = std::string(row.material) + " " + row.method +
-                              (row.line_search[0] ? std::string(" ") + row.line_search : "") +
-                              (row.large ? " (large)" : "");
+    // Short category label: material, then CG / nonlinear CG line search N(ewton) or S(ecant)
+    // / SS22, "(L)" for the large mesh.
+    const std::string mat = row.material;
+    const std::string short_mat = mat == "linear"       ? "lin"
+                                  : mat == "stvk"       ? "StVK"
+                                  : mat == "neohookean" ? "NH"
+                                                        : "VW";
+    const std::string short_method = method == "dynamic"          ? "SS22"
+                                     : row.line_search[0] == '\0' ? "CG"
+                                     : row.line_search[0] == 'n'  ? "N"
+                                                                  : "S";
+    const std::string label = short_mat + " " + short_method + (row.large ? " (L)" : "");
     po.x_categories.push_back(label);
     ours.x.push_back(k), ours.y.push_back(mflop_iter);
     ref.x.push_back(k), ref.y.push_back(row.mflop_per_iteration);
@@ -705,7 +714,8 @@ Measurement measure_table_4_5(const CertifyContext& ctx) {
   r.tables.push_back(t);
   po.title = "MFLOP per iteration (Table 4.5)";
   po.y_label = "MFLOP / iteration";
-  po.x_label = "material, method";
+  po.x_label = "material (lin, StVK, NH, VW), method (CG; nonlinear CG, N/S line search; SS22)";
+  po.width = 900;
   po.log_y = true;
   r.plots.push_back(ReportPlot{po, {ours, ref}});
   return r;
