@@ -88,8 +88,14 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
 
   out << "scene: " << scene_path << (spec.name.empty() ? "" : "  (" + spec.name + ")") << "\n";
   out << "solver: " << scene::to_string(spec.solver.method) << ", tolerance "
-      << spec.solver.tolerance << " (||r|| <= tol ||f_ext||), budget " << spec.solver.max_iterations
-      << " iterations\n";
+      << spec.solver.tolerance << " (||r|| <= tol ||f_ext||)";
+  if (spec.solver.method == scene::SolverSpec::Method::kAugmented)
+    out << (spec.tools.empty()
+                ? ", direct solve\n"
+                : ", interactive cut: " + std::to_string(built.sweep_triangles.size()) +
+                      " sweep triangles, one augmented update each\n");
+  else
+    out << ", budget " << spec.solver.max_iterations << " iterations\n";
 
   // Progress: fraction of the way (in log10 of the residual) from ||r_0|| to the threshold.
   const double threshold = spec.solver.tolerance * built.problem->external_force_norm();
