@@ -139,6 +139,8 @@ struct Family {
   int seeds = 2;
   int steps = 30;
   double fixed_fraction = 0;  ///< nodes with z < zmin + fraction·(z range) are fixed (0: z = 0)
+  /// Eq. 17 by GMRES or by the cached explicit Schur matrix (SchurSolver::kDirectCached).
+  solver::SchurSolver schur = solver::SchurSolver::kGmres;
 };
 
 void PrintTo(const Family& f, std::ostream* os) {
@@ -179,6 +181,7 @@ TEST_P(AugmentedEquivalence, RandomCutsRemovalsConstraintsEq4to17) {
     opt.gmres.restart = 300;
     opt.gmres.max_iterations = 3000;
     opt.preconditioner = fam.preconditioner;
+    opt.schur_solver = fam.schur;
     opt.cholmod.kind =
         (s % 2 == 0) ? solver::CholmodKind::kSupernodal : solver::CholmodKind::kSimplicialLdl;
     const mesh::MeshData mesh_data = fam.make();
@@ -331,7 +334,11 @@ INSTANTIATE_TEST_SUITE_P(
         Family{"brick_diag", &small_brick, SchurPreconditioner::kDiagonal},
         Family{"beam_elastic", &small_beam, SchurPreconditioner::kDiagonal, true},
         Family{"brick_elastic_spai", &small_brick, SchurPreconditioner::kTridiagonalSpai, true},
-        Family{"liver_elastic", &liver, SchurPreconditioner::kDiagonal, true, 1, 4, 0.1}),
+        Family{"liver_elastic", &liver, SchurPreconditioner::kDiagonal, true, 1, 4, 0.1},
+        Family{"beam_elastic_direct", &small_beam, SchurPreconditioner::kNone, true, 2, 30, 0,
+               solver::SchurSolver::kDirectCached},
+        Family{"brick_direct", &small_brick, SchurPreconditioner::kNone, false, 2, 30, 0,
+               solver::SchurSolver::kDirectCached}),
     [](const ::testing::TestParamInfo<Family>& p) { return std::string(p.param.name); });
 
 // Eq. 1: replacing one column (and, by symmetry, its row) by an explicit example.

@@ -193,6 +193,7 @@ FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
   if (!(diag_scale_ > 0)) diag_scale_ = 1.0;
   changed_.clear();
   dirichlet_.clear();
+  schur_base_ = nullptr;
   f_ = Eigen::VectorXd::Zero(n_);
   changed_since_snapshot_.clear();
   snapshot_active_ = false;
@@ -216,6 +217,7 @@ AugmentedSystem::Column AugmentedSystem::column_of(int j) const {
 
 void AugmentedSystem::touch_column(int j) {
   if (snapshot_active_) changed_since_snapshot_.insert(j);
+  bump_version(j);
   if (changed_.count(j) != 0) return;
   changed_.emplace(j, column_of(j));
 }
@@ -264,12 +266,13 @@ void AugmentedSystem::add_element(const std::vector<int>& dofs, const Eigen::Mat
 void AugmentedSystem::impose_dirichlet(int dof, double value) {
   INCISE_CHECK(dof >= 0 && dof < n_, "impose_dirichlet: DOF index out of range");
   INCISE_CHECK_PARAM(std::isfinite(value), "impose_dirichlet: value must be finite");
+  if (dirichlet_.count(dof) == 0) bump_version(dof);  // J column becomes e_dof
   dirichlet_[dof] = value;
 }
 
 void AugmentedSystem::release_dirichlet(int dof) {
   INCISE_CHECK(dof >= 0 && dof < n_, "release_dirichlet: DOF index out of range");
-  dirichlet_.erase(dof);
+  if (dirichlet_.erase(dof) != 0) bump_version(dof);
 }
 
 void AugmentedSystem::set_force(const Eigen::VectorXd& f) {
@@ -364,6 +367,120 @@ bool AugmentedSystem::wait_for_refactorization() {
   if (!job_.valid()) return false;
   job_.wait();
   return swap_in(job_.get(), changed_since_snapshot_);
+}
+
+// Eq. 17 by a dense LU of H R⁻¹ J, kept between calls (SchurSolver::kDirectCached). Entry
+// (i, k) = (R⁻¹ J_k) at DOF 𝓛ᵢ. Reused when the base factor, DOF 𝓛ᵢ and the version of column
+// 𝓛ₖ are unchanged; a changed/new column k costs one restricted solve R⁻¹ J_k (as one GMRES
+// operator application); a new row i for the kept columns costs one restricted solve
+// y = R⁻¹ e_{𝓛ᵢ} on the structure of those columns, then (R⁻¹ J_k)_i = yᵀ J_k (R symmetric).
+// Rows of new DOFs (≥ n_base) are rows of the identity block of R: entry = (J_k)_{𝓛ᵢ}.
+GmresStatus AugmentedSystem::solve_schur_direct(const std::vector<int>& l_list,
+                                                const std::vector<char>& is_dir,
+                                                const std::vector<const Column*>& jcols,
+                                                const std::vector<int>& l_base,
+                                                const std::vector<int>& c_y,
+                                                const Eigen::VectorXd& rhs, Eigen::VectorXd& a2,
+                                                int& solves, double& residual) {
+  const int m = static_cast<int>(l_list.size());
+  const int nb = n_base_;
+  ClosureLdlSolver& solver = *base_->solver;
+  auto for_j = [&](int k, auto&& fn) {
+    if (is_dir[k]) {
+      fn(l_list[k], 1.0);
+    } else {
+      for (const auto& [row, v] : *jcols[k]) fn(row, v);
+    }
+  };
+  std::vector<std::uint64_t> keys(m);
+  for (int k = 0; k < m; ++k) keys[k] = column_version(l_list[k]);
+  std::vector<int> old(m, -1);  // position of 𝓛ᵢ in the cached 𝓛 (both sorted)
+  if (schur_base_ == base_.get()) {
+    size_t q = 0;
+    for (int i = 0; i < m; ++i) {
+      while (q < schur_l_.size() && schur_l_[q] < l_list[i]) ++q;
+      if (q < schur_l_.size() && schur_l_[q] == l_list[i]) old[i] = static_cast<int>(q);
+    }
+  }
+  std::vector<char> col_ok(m, 0);
+  std::vector<int> new_rows;
+  for (int k = 0; k < m; ++k) {
+    col_ok[k] = old[k] >= 0 && schur_keys_[old[k]] == keys[k];
+    if (old[k] < 0) new_rows.push_back(k);
+  }
+  Eigen::MatrixXd s = Eigen::MatrixXd::Zero(m, m);
+  std::vector<int> ok_cols;
+  for (int k = 0; k < m; ++k) {
+    if (!col_ok[k]) continue;
+    ok_cols.push_back(k);
+    for (int i = 0; i < m; ++i)
+      if (old[i] >= 0) s(i, k) = schur_(old[i], old[k]);
+  }
+  solves = 0;
+  std::vector<int> idx;
+  std::vector<double> val, y;
+  // Changed and new columns: s(:, k) = H R⁻¹ J_k.
+  for (int k = 0; k < m; ++k) {
+    if (col_ok[k]) continue;
+    idx.clear();
+    val.clear();
+    for_j(k, [&](int row, double v) {
+      if (row < nb) {
+        idx.push_back(row);
+        val.push_back(v);
+      } else {
+        s(pos_in_l_[row], k) = v;
+      }
+    });
+    solver.solve_restricted(idx, val, solver.closure(idx), c_y, l_base, y);
+    ++solves;
+    int kb = 0;
+    for (int i = 0; i < m; ++i)
+      if (l_list[i] < nb) s(i, k) = y[kb++];
+  }
+  // New rows of the kept columns.
+  if (!new_rows.empty() && !ok_cols.empty()) {
+    std::vector<int> rows;  // base rows of the kept columns' structure
+    for (int k : ok_cols)
+      for_j(k, [&](int row, double v) {
+        if (row < nb)
+          rows.push_back(row);
+        else if (old[pos_in_l_[row]] < 0)
+          s(pos_in_l_[row], k) = v;
+      });
+    std::sort(rows.begin(), rows.end());
+    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+    const std::vector<int> c_rows = solver.closure(rows);
+    std::unordered_map<int, int> at;
+    at.reserve(rows.size() * 2);
+    for (size_t t = 0; t < rows.size(); ++t) at[rows[t]] = static_cast<int>(t);
+    for (int i : new_rows) {
+      if (l_list[i] >= nb) continue;  // identity block: set above
+      const std::vector<int> e{l_list[i]};
+      solver.solve_restricted(e, {1.0}, solver.closure(e), c_rows, rows, y);
+      ++solves;
+      for (int k : ok_cols) {
+        double sum = 0;
+        for_j(k, [&](int row, double v) {
+          if (row < nb) sum += y[at[row]] * v;
+        });
+        s(i, k) = sum;
+      }
+    }
+  }
+  schur_base_ = base_.get();
+  schur_l_ = l_list;
+  schur_keys_ = keys;
+  schur_ = s;
+  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(s);
+  a2 = lu.solve(rhs);
+  if (!a2.allFinite()) {
+    a2.setZero();
+    return GmresStatus::kBreakdown;  // exactly singular H R⁻¹ J
+  }
+  const double bn = rhs.norm();
+  residual = bn > 0 ? (s * a2 - rhs).norm() / bn : 0.0;
+  return GmresStatus::kConverged;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -492,7 +609,8 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
   // Preconditioner M = H S J (§3.5), m × m, LU-factored.
   Eigen::PartialPivLU<Eigen::MatrixXd> m_lu;
   bool use_m = false;
-  if (options_.preconditioner != SchurPreconditioner::kNone && m > 0) {
+  if (options_.preconditioner != SchurPreconditioner::kNone && m > 0 &&
+      options_.schur_solver == SchurSolver::kGmres) {
     Eigen::MatrixXd mm = Eigen::MatrixXd::Zero(m, m);
     auto s_entry = [&](int t, int r) -> double {  // S(t, r) for |t − r| ≤ 1
       if (t >= nb || r >= nb) return t == r ? 1.0 : 0.0;
@@ -573,10 +691,14 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
     prec = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) { out = m_lu.solve(v); };
   }
   Eigen::VectorXd a2 = Eigen::VectorXd::Zero(m);
-  if (m > 0)
+  if (m > 0 && options_.schur_solver == SchurSolver::kDirectCached) {
+    report.gmres.status = solve_schur_direct(l_list, is_dir, jcols, l_base, c_y, rhs, a2,
+                                             report.schur_solves, report.gmres.relative_residual);
+  } else if (m > 0) {
     report.gmres = gmres(op, prec, rhs, a2, options_.gmres);
-  else
+  } else {
     report.gmres.status = GmresStatus::kConverged;
+  }
   report.seconds_step2 = phase.seconds();
 
   // Step 3: a₁ = R⁻¹(f̂ − J a₂) (eq. 16).

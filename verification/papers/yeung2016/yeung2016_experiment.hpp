@@ -70,6 +70,8 @@ struct Options {
   /// CHOLMOD kind of the reference refactorization (its ordering is CHOLMOD's default). On
   /// the thin beams simplicial is faster; on bricks and organ meshes supernodal (BLAS) is.
   solver::CholmodKind reference_kind = solver::CholmodKind::kSimplicialLdl;
+  /// Eq. 17 by GMRES (the paper) or by the cached explicit Schur matrix.
+  solver::SchurSolver schur_solver = solver::SchurSolver::kGmres;
 };
 
 /// One row of the per-step table.
@@ -77,6 +79,7 @@ struct Row {
   int step = 0;
   int n = 0, m = 0;
   int gmres_iterations = 0;
+  int schur_solves = 0;  ///< SchurSolver::kDirectCached: restricted solves updating H R⁻¹ J
   int closure_f = 0, closure_y = 0, closure_ja2 = 0, closure_step3 = 0;
   double t_changes = 0;  ///< applying the K changes / constraints (s)
   double t_solve = 0;    ///< AugmentedSystem::solve (s)
@@ -254,6 +257,7 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
 
   AugmentedOptions aopt;
   aopt.preconditioner = opt.preconditioner;
+  aopt.schur_solver = opt.schur_solver;
   aopt.cholmod.kind = opt.cholmod;
   aopt.cholmod.ordering = opt.ordering;
   aopt.gmres.tolerance = 1e-12;
@@ -375,6 +379,7 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
     row.n = rep.n;
     row.m = rep.m;
     row.gmres_iterations = rep.gmres.iterations;
+    row.schur_solves = rep.schur_solves;
     row.closure_f = rep.closure_f;
     row.closure_y = rep.closure_y;
     row.closure_ja2 = rep.closure_ja2;

@@ -35,7 +35,7 @@ void check(const yeung2016::Options& opt) {
   yeung2016::Info info;
   const std::vector<yeung2016::Row> rows = yeung2016::run(opt, info);
   ASSERT_EQ(static_cast<int>(rows.size()), opt.steps + 1);
-  std::printf("beam 5x5x%d: %d nodes, n0 = %d, |L| = %lld\n", opt.h, info.nodes, info.n0,
+  std::printf("%s: %d nodes, n0 = %d, |L| = %lld\n", info.name.c_str(), info.nodes, info.n0,
               info.nnz_l);
   for (const auto& r : rows) {
     std::printf(
@@ -80,6 +80,22 @@ TEST(Yeung2016, BeamCuttingWithSpaiAndNoPreconditioner) {
     opt.h = 16;
     opt.steps = 6;
     opt.preconditioner = p;
+    check(opt);
+  }
+}
+
+// Eq. 17 by the cached explicit Schur matrix (SchurSolver::kDirectCached) instead of GMRES,
+// on both experiments and on a brick (§4.2 item 2).
+TEST(Yeung2016, DirectCachedSchurMatchesRefactorization) {
+  for (auto kind : {yeung2016::Kind::kDeform, yeung2016::Kind::kCut}) {
+    yeung2016::Options opt;
+    opt.kind = kind;
+    opt.h = 16;
+    opt.steps = 6;
+    opt.schur_solver = solver::SchurSolver::kDirectCached;
+    check(opt);
+    opt.geometry = yeung2016::Geometry::kBrick;
+    opt.brick_n = 4;
     check(opt);
   }
 }
