@@ -12,7 +12,9 @@
 #include <incise_test/seed.hpp>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace {
 
@@ -257,13 +259,25 @@ TEST_P(ProblemProperty, FlopsAccumulateCountedElementCosts) {
 }
 
 TEST_P(ProblemProperty, SimdBlocksMatchScalarElementKernels) {
-  // ElasticProblem evaluates four elements at a time (Lanes4) and the tail one by one; compare
-  // with a plain loop over the double kernels, on meshes with 5 (tail 1) and 72 elements.
+  // ElasticProblem evaluates four elements at a time (Lanes4), in its own order (sorted by
+  // smallest node index), and the tail one by one; compare with a plain loop in mesh order over
+  // the double kernels, on meshes with 5 (tail 1) and 72 elements, and 71 elements in shuffled
+  // order (tail 3; sweep order differs from mesh order).
   INCISE_SEEDED_RNG(rng, 607);
   const Material m = material();
+  incise::mesh::MeshData shuffled = small_box();
+  {
+    std::vector<incise::Index> perm(static_cast<std::size_t>(shuffled.num_cells()));
+    for (std::size_t i = 0; i < perm.size(); ++i) perm[i] = static_cast<incise::Index>(i);
+    std::shuffle(perm.begin(), perm.end(), rng);
+    const incise::mesh::MeshData box = small_box();
+    shuffled.cells.resize(4, box.num_cells() - 1);
+    for (incise::Index e = 0; e < shuffled.num_cells(); ++e)
+      shuffled.cells.col(e) = box.cells.col(perm[static_cast<std::size_t>(e)]);
+  }
   for (const auto& mesh :
-       {incise::mesh::make_box(1, 1, 1, 0.2, 0.2, 0.2, incise::mesh::CubeSplit::kFive),
-        small_box()}) {
+       {incise::mesh::make_box(1, 1, 1, 0.2, 0.2, 0.2, incise::mesh::CubeSplit::kFive), small_box(),
+        shuffled}) {
     ElasticProblem p(mesh, m);
     const VecX u = deformed_state(p, rng, 0.005);
     const VecX d = random_vector(rng, p.size(), 1.0);
@@ -300,11 +314,15 @@ TEST_P(ProblemProperty, SimdBlocksMatchScalarElementKernels) {
     ASSERT_EQ(p.hessian_product(u, d, kd), EvalStatus::kOk);
     ASSERT_EQ(p.energy(u, e), EvalStatus::kOk);
     ASSERT_EQ(p.assemble_tangent(u, FixedDofTreatment::kKeep), EvalStatus::kOk);
-    // Same operations lane-wise; Eigen may order 3-term reductions differently for double.
+    VecX diag;
+    ASSERT_TRUE(p.hessian_diagonal(u, diag));
+    // Same operations lane-wise; Eigen may order 3-term reductions differently for double, and
+    // the sums over elements run in another order.
     EXPECT_LE((f - f_ref).norm(), 1e-13 * f_ref.norm());
     EXPECT_LE((kd - kd_ref).norm(), 1e-13 * kd_ref.norm());
     EXPECT_NEAR(e, e_ref, 1e-13 * std::abs(e_ref));
     EXPECT_LE((Eigen::MatrixXd(p.tangent_matrix()) - k_ref).norm(), 1e-13 * k_ref.norm());
+    EXPECT_LE((diag - k_ref.diagonal()).norm(), 1e-13 * k_ref.diagonal().norm());
   }
 }
 

@@ -62,6 +62,8 @@ std::vector<Index> nodes_on_plane(const mesh::MeshData& mesh, int axis, double v
 std::vector<Index> nodes_in_box(const mesh::MeshData& mesh, const Vec3& lo, const Vec3& hi);
 
 /// Elastic body made of linear tetrahedra of one material. See file comment for conventions.
+/// Element loops visit the elements in an internal order (sorted by smallest node index, for
+/// memory locality) four at a time; element and node numbering seen by callers are the mesh's.
 class ElasticProblem : public Problem {
  public:
   /// Takes a 3D tetrahedral mesh (reference configuration). Throws ParameterError when the
@@ -143,7 +145,7 @@ class ElasticProblem : public Problem {
   double volume() const;
 
  private:
-  /// Reference data of four consecutive elements 4k..4k+3 in SIMD lanes (Lanes4): the kernels
+  /// Reference data of the elements at sweep positions 4k..4k+3 in SIMD lanes (Lanes4): the kernels
   /// evaluate whole blocks at once; the (num_elements mod 4) tail uses the double kernels.
   struct RefBlock {
     Mat3T<Lanes4> z_inv;
@@ -163,8 +165,10 @@ class ElasticProblem : public Problem {
   Eigen::Matrix3Xd points_;
   mesh::CellMatrix cells_;
   material::Material material_;
-  std::vector<TetReference> refs_;
-  std::vector<RefBlock> blocks_;
+  std::vector<TetReference> refs_;  ///< per element, mesh order
+  std::vector<Index> order_;        ///< sweep order: position → element (sorted by min node)
+  std::vector<Index> sweep_cells_;  ///< node indices in sweep order, 4 per position
+  std::vector<RefBlock> blocks_;    ///< sweep positions 4k..4k+3 in lanes
   std::vector<char> fixed_;
   std::vector<PointLoad> point_loads_;
   Vec3 gravity_ = Vec3::Zero();
