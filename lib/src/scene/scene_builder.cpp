@@ -332,7 +332,10 @@ BuiltScene build_scene(const SceneSpec& spec) {
     const auto& ef = b.problem->element_flop_counts();
     b.record("elastic problem: material \"" + spec.material.model + "\", " + std::to_string(m) +
                  " element references; counted flops/element: force " + std::to_string(ef.force) +
-                 ", force+K.d " + std::to_string(ef.force_and_product),
+                 ", force+K.d " + std::to_string(ef.force_and_product) +
+                 (interactive_cut ? " (uncut body: gives the load vector; the augmented run "
+                                    "assembles its own stiffness)"
+                                  : ""),
              tp.seconds(), bytes);
   }
   b.record("external load vector f_ext: " + std::to_string(spec.loads.size()) +
