@@ -7,11 +7,13 @@
 /// its coefficients (cg_lanczos_extremes; extreme Ritz values have converged when CG has).
 /// Findings (asserted):
 /// - κ ∝ h⁴, as for a slender clamped beam in bending (λ_min ∝ EI/L⁴, λ_max ∝ E·spacing);
-/// - CG stays below the bound ½√κ ln(2/ε) — but its iteration count grows far slower than √κ
-///   (≈ h^0.75 on h = 8…64 instead of h²): the small eigenvalues are the isolated bending modes
-///   λ_j ∝ (j/L)⁴, few of them below the bulk, and CG removes isolated eigenvalues at a cost of a
-///   few iterations each (§2.4.1, the same reason §4.5.6's short edge barely matters). Their
-///   number grows ∝ L, so iterations → a + b·h, not ∝ √κ.
+/// - CG always stays below the bound ½√κ ln(2/ε);
+/// - on short beams (h = 8…64) its iteration count grows far slower than √κ (log-log slope
+///   ≈ 0.37): the small eigenvalues are a few isolated bending modes λ_j ∝ (j/L)⁴ below the
+///   bulk, and CG removes isolated eigenvalues at a few iterations each (§2.4.1 — the same
+///   reason §4.5.6's short edge barely matters);
+/// - as the beam lengthens the low end of the spectrum fills with bending modes and CG
+///   approaches the √κ scaling: local slope ≈ 0.8–0.9 for h = 128…1024 (slow run).
 /// - Dynamic relaxation (SS22, Δt = 0.9·2/√λ_n, η = 2√λ₁ of M⁻¹K; §4.1, §4.6) has no such
 ///   mechanism: its step count is ∝ √κ(M⁻¹K) ("the number of iterations is proportional to
 ///   √cond₂(M⁻¹K)", §4.6), which we measure as a log-log slope ≈ 1.
@@ -127,12 +129,26 @@ TEST(LongBeam, CgIterationsVsLanczosCondition_Sec2_4_1) {
       "CG log-log slopes: iterations vs sqrt(kappa) %.3f, kappa vs h %.3f (bending: 4), "
       "iterations vs h %.3f\n",
       s_its, s_kappa, s_h);
-  // κ ∝ h⁴: measured 3.97 on 8…64. The shortest beam (h = 8, 2:1) is not slender yet; ±0.3.
+  // κ ∝ h⁴: measured 3.97 on 8…64 (h = 8, a 2:1 block, is not slender yet); ±0.3.
   EXPECT_NEAR(s_kappa, 4.0, 0.3);
-  // CG iterations grow much slower than √κ (measured slope 0.37 on 8…64): below 0.6, far from
-  // the √κ scaling (slope 1) a spectrum without isolated low eigenvalues would give.
-  EXPECT_LT(s_its, 0.6);
-  EXPECT_GT(s_its, 0.1);  // but they do grow (more bending modes to resolve)
+  // Short beams (h = 8…64): iterations grow much slower than √κ (measured slope 0.37): below
+  // 0.6, far from the slope 1 of a spectrum without isolated low eigenvalues; but they grow.
+  const std::vector<double> short_its(its.begin(), its.begin() + 4);
+  const std::vector<double> short_sqrt(sqrt_kappa.begin(), sqrt_kappa.begin() + 4);
+  const double s_short = log_slope(short_sqrt, short_its);
+  EXPECT_LT(s_short, 0.6);
+  EXPECT_GT(s_short, 0.1);
+  if (hs.size() >= 7) {
+    // Long beams (the three longest run): the bending modes fill the low spectrum and CG
+    // approaches √κ scaling. Measured local slopes 0.80 (64→128), 0.88, 0.86 (256→512); we
+    // require [0.7, 1.1] on the three longest (1 would be exact √κ scaling).
+    const std::size_t n = hs.size();
+    const double s_long = log_slope({sqrt_kappa[n - 3], sqrt_kappa[n - 2], sqrt_kappa[n - 1]},
+                                    {its[n - 3], its[n - 2], its[n - 1]});
+    std::printf("CG slope on the three longest beams: %.3f\n", s_long);
+    EXPECT_GT(s_long, 0.7);
+    EXPECT_LT(s_long, 1.1);
+  }
 }
 
 TEST(LongBeam, DynamicRelaxationStepsScaleWithSqrtCondition_Sec4_6) {
