@@ -256,6 +256,12 @@ TEST_P(ProblemProperty, FlopsAccumulateCountedElementCosts) {
   ASSERT_EQ(p.internal_forces(VecX::Zero(p.size()), g), EvalStatus::kOk);
   // Counted element force plus the 12 scatter additions, per element.
   EXPECT_EQ(p.flops() - before, (c.force + 12) * static_cast<std::uint64_t>(p.num_elements()));
+  // Assembly evaluates the tangent without the forces, plus 144 scatter additions per element.
+  EXPECT_GT(c.force_and_tangent, c.tangent);
+  const std::uint64_t before_assembly = p.flops();
+  ASSERT_EQ(p.assemble_tangent(VecX::Zero(p.size())), EvalStatus::kOk);
+  EXPECT_EQ(p.flops() - before_assembly,
+            (c.tangent + 144) * static_cast<std::uint64_t>(p.num_elements()));
 }
 
 TEST_P(ProblemProperty, SimdBlocksMatchScalarElementKernels) {

@@ -220,6 +220,11 @@ ElementFlops element_flops(const material::Material& material) {
       ok = K::forces_and_tangent(p, zi, b, Counted(ref.volume), x, q, k) && ok;
       out.force_and_tangent = s.flops();
     }
+    {
+      FlopScope s;
+      ok = K::tangent(p, zi, b, Counted(ref.volume), x, k) && ok;
+      out.tangent = s.flops();
+    }
     INCISE_CHECK(ok, "flop-count deformation unexpectedly inverted");
     return out;
   });
@@ -525,14 +530,13 @@ bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
     return sweep([&](const auto& el, auto& w) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
-      if (!TetKernel<decltype(m), T>::forces_and_tangent(p, el.z_inv(), el.b(), el.volume(), w.x,
-                                                         w.q, w.k))
+      if (!TetKernel<decltype(m), T>::tangent(p, el.z_inv(), el.b(), el.volume(), w.x, w.k))
         return false;
       el.add_diagonal(w.k, dst);
       return true;
     });
   });
-  flops_ += (element_flops_.force_and_tangent + 12) * static_cast<std::uint64_t>(num_elements());
+  flops_ += (element_flops_.tangent + 12) * static_cast<std::uint64_t>(num_elements());
   if (!ok) return false;
   for (Eigen::Index i = 0; i < diag.size(); ++i)
     if (fixed_[static_cast<std::size_t>(i)]) diag[i] = 1.0;
@@ -606,14 +610,13 @@ EvalStatus ElasticProblem::assemble_tangent(const VecX& u, FixedDofTreatment tre
     return sweep([&](const auto& el, auto& w) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
-      if (!TetKernel<decltype(m), T>::forces_and_tangent(p, el.z_inv(), el.b(), el.volume(), w.x,
-                                                         w.q, w.k))
+      if (!TetKernel<decltype(m), T>::tangent(p, el.z_inv(), el.b(), el.volume(), w.x, w.k))
         return false;
       el.add_matrix(w.k, val);
       return true;
     });
   });
-  flops_ += (element_flops_.force_and_tangent + 144) * static_cast<std::uint64_t>(num_elements());
+  flops_ += (element_flops_.tangent + 144) * static_cast<std::uint64_t>(num_elements());
   if (!ok) return EvalStatus::kInverted;
   if (treatment == FixedDofTreatment::kIdentity) {
     const int* outer = k_.outerIndexPtr();

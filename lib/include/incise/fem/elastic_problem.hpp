@@ -36,6 +36,7 @@ struct ElementFlops {
   std::uint64_t force_and_product = 0;  ///< q and K_e·d ((4.3)+(4.4), Table 4.3 "Derivative")
   std::uint64_t product = 0;            ///< K_e·d alone (matrix-free product)
   std::uint64_t force_and_tangent = 0;  ///< q and the full 12×12 K_e
+  std::uint64_t tangent = 0;            ///< the 12×12 K_e alone (assembly, diagonal)
 };
 
 /// Counts the flops of every kernel for `material` at a generic, non-inverted deformation

@@ -222,12 +222,30 @@ struct TetKernel {
                                                       const Mat3T<T>& z_inv, const Mat3T<T>& b,
                                                       const T& volume, const Mat34T<T>& x,
                                                       Mat34T<T>& q, Mat12T<T>& k) {
+    return tangent_impl<true>(p, z_inv, b, volume, x, &q, k);
+  }
+
+  /// The 12×12 element tangent alone (as forces_and_tangent, without the forces: what the
+  /// assembly of K(u) needs). Returns false when inverted.
+  static INCISE_KERNEL_INLINE bool tangent(const material::Lame& p, const Mat3T<T>& z_inv,
+                                           const Mat3T<T>& b, const T& volume, const Mat34T<T>& x,
+                                           Mat12T<T>& k) {
+    return tangent_impl<false>(p, z_inv, b, volume, x, nullptr, k);
+  }
+
+ private:
+  template <bool kForces>
+  static INCISE_KERNEL_INLINE bool tangent_impl(const material::Lame& p, const Mat3T<T>& z_inv,
+                                                const Mat3T<T>& b, const T& volume,
+                                                const Mat34T<T>& x, Mat34T<T>* q, Mat12T<T>& k) {
     State st;
     if (!kinematics(p, z_inv, x, st)) return false;
-    if constexpr (Model::kLinearGeometry) {
-      nodal_from_piola(st.s, b, q);
-    } else {
-      nodal_from_piola(material::detail::mul(st.f, st.s), b, q);
+    if constexpr (kForces) {
+      if constexpr (Model::kLinearGeometry) {
+        nodal_from_piola(st.s, b, *q);
+      } else {
+        nodal_from_piola(material::detail::mul(st.f, st.s), b, *q);
+      }
     }
     const material::TangentModuli<T> m = Model::moduli(p, st.m);
     const T& v = volume;
