@@ -294,7 +294,6 @@ struct TetKernel {
     if constexpr (!Model::kLinearGeometry) ag = material::detail::mul(am, gt);
     for (int a = 0; a < 3; ++a) {
       for (int bn = a; bn < 3; ++bn) {
-        Mat3T<T> blk;
         T gg(0);
         if constexpr (Model::kHasIsotropicTerms)
           gg = gt(0, a) * gt(0, bn) + gt(1, a) * gt(1, bn) + gt(2, a) * gt(2, bn);
@@ -321,20 +320,22 @@ struct TetKernel {
             if constexpr (!Model::kLinearGeometry) {
               if (i == kk) acc(s);
             }
-            blk(i, kk) = e;
+            k(3 * a + i, 3 * bn + kk) = e;
+            if (bn != a) k(3 * bn + kk, 3 * a + i) = e;
           }
-        k.template block<3, 3>(3 * a, 3 * bn) = blk;
-        if (bn != a) k.template block<3, 3>(3 * bn, 3 * a) = blk.transpose();
       }
     }
-    for (int a = 0; a < 3; ++a) {
-      const Mat3T<T> blk = -(k.template block<3, 3>(3 * a, 0) + k.template block<3, 3>(3 * a, 3) +
-                             k.template block<3, 3>(3 * a, 6));
-      k.template block<3, 3>(3 * a, 9) = blk;
-      k.template block<3, 3>(9, 3 * a) = blk.transpose();
-    }
-    k.template block<3, 3>(9, 9) = -(k.template block<3, 3>(0, 9) + k.template block<3, 3>(3, 9) +
-                                     k.template block<3, 3>(6, 9));
+    // Node-4 blocks: K_a4 = −(K_a1 + K_a2 + K_a3), K_4a = K_a4ᵀ, K_44 = −(K_14 + K_24 + K_34).
+    for (int a = 0; a < 3; ++a)
+      for (int i = 0; i < 3; ++i)
+        for (int kk = 0; kk < 3; ++kk) {
+          const T e = -((k(3 * a + i, kk) + k(3 * a + i, 3 + kk)) + k(3 * a + i, 6 + kk));
+          k(3 * a + i, 9 + kk) = e;
+          k(9 + kk, 3 * a + i) = e;
+        }
+    for (int i = 0; i < 3; ++i)
+      for (int kk = 0; kk < 3; ++kk)
+        k(9 + i, 9 + kk) = -((k(i, 9 + kk) + k(3 + i, 9 + kk)) + k(6 + i, 9 + kk));
     return true;
   }
 };
