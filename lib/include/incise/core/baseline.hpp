@@ -16,7 +16,9 @@ double thread_cpu_seconds();
 
 /// Measured vector-add baseline in MFLOP/s (one flop per element add): best of 5 trials of
 /// about 20 ms thread CPU time each (the thesis used the best sustained rate). Computed on the
-/// first call (≈ 0.1 s) and cached for the life of the process; thread-safe.
+/// first call (≈ 0.1 s) and cached for the life of the process; thread-safe. The source is
+/// compiled with -falign-loops=64 (lib/src/core/CMakeLists.txt): unaligned, the same loop ran
+/// at half speed in some links.
 double vector_add_mflops();
 
 }  // namespace incise
