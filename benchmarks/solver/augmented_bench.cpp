@@ -22,6 +22,8 @@
 
 #include "yeung2016_experiment.hpp"
 
+#include <incise/solver/ldl_closure_solver.hpp>
+
 #include <incise_bench/context.hpp>
 
 #include <benchmark/benchmark.h>
@@ -116,6 +118,92 @@ void BM_FactorSimplicial(benchmark::State& s) {
 }
 BENCHMARK(BM_FactorSupernodal)->Arg(64)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FactorSimplicial)->Arg(64)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond);
+
+// Step 3 of §3.2 in isolation: one restricted forward + full backward substitution
+// (ClosureLdlSolver::solve_sparse_rhs) with the METIS LDLᵀ factor of the beam, beside one full
+// CHOLMOD solve with the factor of CHOLMOD's own ordering (the solve inside the refactorization
+// route) and CHOLMOD's numerical refactorization alone. Counters: |L|, bytes of L read.
+void BM_Step3FullBackward(benchmark::State& state) {
+  const int h = static_cast<int>(state.range(0));
+  incise::material::Parameters par;
+  const incise::material::Material mat("linear", par);
+  const incise::mesh::MeshData mesh = incise::mesh::make_beam(h, 0.01);
+  incise::yeung2016::detail::Beam beam;
+  beam.lame = mat.lame();
+  beam.points = mesh.points;
+  for (incise::Index e = 0; e < mesh.num_cells(); ++e)
+    beam.tets.push_back({mesh.cells(0, e), mesh.cells(1, e), mesh.cells(2, e), mesh.cells(3, e)});
+  beam.node_dof.assign(static_cast<size_t>(mesh.num_points()), -1);
+  for (incise::Index v = 0; v < mesh.num_points(); ++v)
+    if (mesh.points(2, v) > 1e-12) {
+      beam.node_dof[v] = beam.num_dofs;
+      beam.num_dofs += 3;
+    }
+  const incise::solver::SparseMatrix k = beam.assemble();
+  incise::solver::CholmodFactor f(
+      {incise::solver::CholmodKind::kSimplicialLdl, incise::solver::CholmodOrdering::kMetis});
+  if (f.compute(k, 1) != incise::solver::FactorStatus::kOk) {
+    state.SkipWithError("factorization failed");
+    return;
+  }
+  incise::solver::ClosureLdlSolver solver(f.extract_ldl());
+  const std::vector<int> b_idx{beam.num_dofs - 2};
+  const std::vector<double> b_val{1.0};
+  const std::vector<int> fwd = solver.closure(b_idx);
+  Eigen::VectorXd x;
+  for (auto _ : state) {
+    solver.solve_sparse_rhs(b_idx, b_val, fwd, x);
+    benchmark::DoNotOptimize(x.data());
+  }
+  state.counters["nnz_L"] = static_cast<double>(solver.factor().nnz_l());
+  state.counters["supernodes"] = solver.num_supernodes();
+  state.counters["MB_L_values"] = 8e-6 * static_cast<double>(solver.factor().values.size());
+}
+BENCHMARK(BM_Step3FullBackward)->Arg(1024)->Unit(benchmark::kMillisecond);
+
+void refactor_parts(benchmark::State& state, int part) {
+  const int h = static_cast<int>(state.range(0));
+  incise::material::Parameters par;
+  const incise::material::Material mat("linear", par);
+  const incise::mesh::MeshData mesh = incise::mesh::make_beam(h, 0.01);
+  incise::yeung2016::detail::Beam beam;
+  beam.lame = mat.lame();
+  beam.points = mesh.points;
+  for (incise::Index e = 0; e < mesh.num_cells(); ++e)
+    beam.tets.push_back({mesh.cells(0, e), mesh.cells(1, e), mesh.cells(2, e), mesh.cells(3, e)});
+  beam.node_dof.assign(static_cast<size_t>(mesh.num_points()), -1);
+  for (incise::Index v = 0; v < mesh.num_points(); ++v)
+    if (mesh.points(2, v) > 1e-12) {
+      beam.node_dof[v] = beam.num_dofs;
+      beam.num_dofs += 3;
+    }
+  const incise::solver::SparseMatrix k = beam.assemble();
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(k.rows());
+  incise::solver::CholmodFactor f(
+      {incise::solver::CholmodKind::kSimplicialLdl, incise::solver::CholmodOrdering::kDefault});
+  if (f.compute(k, 1) != incise::solver::FactorStatus::kOk) {
+    state.SkipWithError("factorization failed");
+    return;
+  }
+  Eigen::VectorXd x;
+  for (auto _ : state) {
+    if (part == 0) {
+      (void)f.factorize(k);  // numerical refactorization, analysis cached
+    } else {
+      (void)f.solve(b, x);
+      benchmark::DoNotOptimize(x.data());
+    }
+  }
+  state.counters["nnz_L"] = static_cast<double>(f.nnz_l());
+}
+void BM_CholmodNumericRefactor(benchmark::State& s) {
+  refactor_parts(s, 0);
+}
+void BM_CholmodSolve(benchmark::State& s) {
+  refactor_parts(s, 1);
+}
+BENCHMARK(BM_CholmodNumericRefactor)->Arg(1024)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CholmodSolve)->Arg(1024)->Unit(benchmark::kMillisecond);
 
 int run_table(int argc, char** argv) {
   Options opt;

@@ -3,7 +3,7 @@
 # cutting) with benchmarks/solver/augmented_bench and writes one Markdown table (.md) and one CSV
 # per run into OUT; then `yeung2016_plots OUT` draws the SVG figures (README.md).
 # Usage: run_experiments.sh BUILD_DIR OUT_DIR [quick]
-# Expected runtime on an idle 2-core machine: ≈ 10 min (quick: ≈ 1 min).
+# Expected runtime: ≈ 15 min on the shared (loaded) 2-core machine, less when idle; quick ≈ 2 min.
 set -euo pipefail
 build=${1:?build dir}
 out=${2:?output dir}
@@ -44,4 +44,13 @@ done
 # The liver of reference_data (irregular organ mesh).
 run liver_deform deform --mesh liver --steps 16 --pcg-every 4 --pcg-seconds 20 --ref-kind supernodal
 run liver_cut cut --mesh liver --steps 16 --pcg-every 4 --pcg-seconds 20 --ref-kind supernodal
+# Eq. 17 with the cached Schur matrix as GMRES preconditioner (SchurSolver::kDirectCached).
+if [[ "$quick" != quick ]]; then
+  run direct_beam1024_deform deform --h 1024 --steps 32 --schur direct
+  run direct_beam1024_cut cut --h 1024 --steps 16 --schur direct
+  run direct_brick16_deform deform --brick 16 --steps 16 --schur direct --ref-kind supernodal
+  run direct_brick16_cut cut --brick 16 --steps 16 --schur direct --ref-kind supernodal
+fi
+run direct_liver_deform deform --mesh liver --steps 16 --schur direct --ref-kind supernodal
+run direct_liver_cut cut --mesh liver --steps 16 --schur direct --ref-kind supernodal
 echo "done: $out" >&2

@@ -109,10 +109,13 @@ void write_svg(const std::string& path, const std::vector<Series>& series,
 /// Rates of one experiment: augmented update, refactorization + solve (with analysis; and
 /// numeric only when the pattern is kept), Jacobi-PCG.
 void rate_figure(const std::string& dir, const std::string& file, const Table& t,
-                 const std::string& title, const std::string& x_label) {
+                 const std::string& title, const std::string& x_label,
+                 const Table* direct = nullptr) {
   if (!t.ok) return;
   std::vector<Series> s;
-  s.push_back(rate_series(t, "cpu_update", "augmented update"));
+  s.push_back(rate_series(t, "cpu_update", "augmented update (GMRES, HSJ)"));
+  if (direct != nullptr && direct->ok)
+    s.push_back(rate_series(*direct, "cpu_update", "augmented update (cached Schur precond.)"));
   s.push_back(rate_series(t, "cpu_refactor", "CHOLMOD analyze + factorize + solve"));
   Series num = rate_series(t, "cpu_numeric_refactor", "CHOLMOD factorize + solve (pattern kept)");
   if (!num.x.empty()) {
@@ -150,6 +153,10 @@ int main(int argc, char** argv) {
       tab["brick" + std::to_string(n) + "_" + k] = load("brick" + std::to_string(n) + "_" + k);
   tab["liver_deform"] = load("liver_deform");
   tab["liver_cut"] = load("liver_cut");
+  // SchurSolver::kDirectCached runs (run_experiments.sh, "direct_" prefix).
+  for (const char* n : {"beam1024_deform", "beam1024_cut", "brick16_deform", "brick16_cut",
+                        "liver_deform", "liver_cut"})
+    tab[std::string("direct_") + n] = load(std::string("direct_") + n);
   auto largest = [&](const std::string& prefix, const std::vector<int>& sizes,
                      const std::string& kind) -> const Table& {
     for (auto it = sizes.rbegin(); it != sizes.rend(); ++it) {
