@@ -360,6 +360,70 @@ TEST(AugmentedEquivalence, SingleElementRemovalEq1) {
   EXPECT_EQ(r.norm(), 0.0);
 }
 
+// 𝓛 pruning (AugmentedOptions::prune_unchanged_columns): element matrices rounded to multiples
+// of 2⁻²⁰, so K⁰ and every update are exact sums and removing then re-adding an element gives K
+// bitwise equal to R again: its columns must leave 𝓛 (m back to |𝓓|), and every solution must
+// still equal a fresh factorization (eqs. 4–17 with the smaller 𝓛).
+TEST(AugmentedEquivalence, UndoneChangesArePrunedFromL) {
+  CutModel m = CutModel::from_mesh(mesh::make_box(2, 2, 3, 1, 1, 1.5));
+  m.use_linear_elastic(1e4, 0.3);
+  auto rounded = [&](int e) -> Eigen::MatrixXd {
+    const Eigen::MatrixXd k = m.element_matrix(e);
+    return ((k * 1048576.0).array().round() / 1048576.0).matrix();
+  };
+  auto assemble = [&]() {
+    std::vector<Eigen::Triplet<double>> t;
+    for (int e = 0; e < static_cast<int>(m.tets.size()); ++e) {
+      if (!m.active[e]) continue;
+      const std::vector<int> d = m.dofs(e);
+      const Eigen::MatrixXd k = rounded(e);
+      for (size_t a = 0; a < d.size(); ++a) {
+        for (size_t b = 0; b < d.size(); ++b) {
+          if (d[a] >= 0 && d[b] >= 0)
+            t.emplace_back(d[a], d[b],
+                           k(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)));
+        }
+      }
+    }
+    solver::SparseMatrix k(m.num_dofs, m.num_dofs);
+    k.setFromTriplets(t.begin(), t.end());
+    return k;
+  };
+  AugmentedSystem aug;
+  ASSERT_EQ(aug.initialize(assemble()), solver::FactorStatus::kOk);
+  const Eigen::VectorXd f = Eigen::VectorXd::LinSpaced(m.num_dofs, -1, 1);
+  aug.set_force(f);
+  std::map<int, double> dirichlet{{m.num_dofs - 1, 0.01}};
+  aug.impose_dirichlet(m.num_dofs - 1, 0.01);
+  int pruned = 0;
+  auto check = [&](int expected_m, const char* what) {
+    Eigen::VectorXd a, r;
+    const solver::AugmentedReport rep = aug.solve(a, r);
+    pruned = rep.pruned_columns;
+    ASSERT_TRUE(rep.ok()) << what << ": " << rep.advice;
+    if (expected_m >= 0) {
+      EXPECT_EQ(rep.m, expected_m) << what;
+    }
+    const ReferenceSolution ref = reference_solve(assemble(), f, dirichlet);
+    ASSERT_TRUE(ref.ok);
+    EXPECT_LE((a - ref.a).norm(), kRelTol * ref.a.norm()) << what;
+    EXPECT_LE((r - ref.r).norm(), kRelTol * std::max(ref.r.norm(), 1e-300)) << what;
+  };
+  check(1, "constraint only");
+  const int e = static_cast<int>(m.tets.size()) / 2;
+  aug.add_element(m.dofs(e), rounded(e), -1.0);
+  m.active[e] = 0;
+  check(-1, "element removed");
+  EXPECT_GT(aug.num_replaced(), 1);
+  aug.add_element(m.dofs(e), rounded(e), +1.0);
+  m.active[e] = 1;
+  check(1, "element added back: its columns pruned");
+  EXPECT_GE(pruned, 9);  // the element's free DOFs (at least 3 of its 4 nodes are free)
+  aug.release_dirichlet(m.num_dofs - 1);
+  dirichlet.clear();
+  check(0, "constraint released");
+}
+
 // Failure as status (issue 5): a DOF without stiffness (all its elements removed).
 TEST(AugmentedFailure, DofWithoutStiffnessIsSingularStatus) {
   CutModel m = CutModel::from_mesh(mesh::make_box(1, 1, 2, 1, 1, 2));

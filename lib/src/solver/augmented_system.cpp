@@ -321,6 +321,44 @@ SparseMatrix AugmentedSystem::current_matrix() const {
                                         outer.data(), inner.data(), values.data());
 }
 
+// Drops changed columns whose entries equal the base column again (bitwise; missing entries
+// count as 0). Not while a snapshot is pending: swap_in() relies on changed_ for the columns
+// changed since the snapshot.
+int AugmentedSystem::prune_unchanged_columns() {
+  if (snapshot_active_) return 0;
+  int pruned = 0;
+  for (auto it = changed_.begin(); it != changed_.end();) {
+    const int j = it->first;
+    bool same = j < n_base_;
+    if (same) {
+      const Column& c = it->second;
+      SparseMatrix::InnerIterator b(base_->matrix, j);
+      size_t k = 0;
+      while (same && (b || k < c.size())) {
+        if (b && (k == c.size() || b.row() < c[k].first)) {
+          same = b.value() == 0;
+          ++b;
+        } else if (!b || c[k].first < b.row()) {
+          same = c[k].second == 0;
+          ++k;
+        } else {
+          same = b.value() == c[k].second;
+          ++b;
+          ++k;
+        }
+      }
+    }
+    if (same) {
+      bump_version(j);
+      it = changed_.erase(it);
+      ++pruned;
+    } else {
+      ++it;
+    }
+  }
+  return pruned;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Background refactorization (§3.6).
 
@@ -499,6 +537,7 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
     report.advice = "the force vector has NaN/Inf entries";
     return report;
   }
+  if (options_.prune_unchanged_columns) report.pruned_columns = prune_unchanged_columns();
   Timer phase;
   const int n = n_;
   const int nb = n_base_;

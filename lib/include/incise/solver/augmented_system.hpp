@@ -65,6 +65,10 @@ struct AugmentedOptions {
   SchurPreconditioner preconditioner = SchurPreconditioner::kDiagonal;
   /// Solver of eq. 17 (GMRES by default, as in the paper).
   SchurSolver schur_solver = SchurSolver::kGmres;
+  /// At the start of solve(), drop from 𝓛 every changed column that is again *exactly* equal
+  /// to its column of R (e.g. an element removed and added back with exactly representable
+  /// sums); skipped while a background refactorization snapshot is pending (§3.6 bookkeeping).
+  bool prune_unchanged_columns = true;
   /// Numerical-singularity guard: a solution with amplification
   /// max|K_ii|·‖a‖₂ / (‖f̂‖₂ + max|K_ii|·‖ā‖₂) above this is reported as
   /// kSingularModifiedSystem (GMRES can "converge" on a numerically singular eq. 17, e.g. after
@@ -90,12 +94,13 @@ const char* to_string(AugmentedStatus status);
 /// Report of one augmented solve (one "update step" of the paper).
 struct [[nodiscard]] AugmentedReport {
   AugmentedStatus status = AugmentedStatus::kNoFactor;
-  std::string advice;    ///< what the caller can do when status != kOk
-  int n = 0;             ///< current number of DOFs
-  int m = 0;             ///< replaced columns |𝓛| (changed columns + Dirichlet DOFs)
-  int dirichlet = 0;     ///< |𝓓|
-  GmresReport gmres;     ///< step 2 (kGmres; with kDirectCached: iterations 0, the LU residual)
-  int schur_solves = 0;  ///< kDirectCached: restricted solves spent updating H R⁻¹ J
+  std::string advice;      ///< what the caller can do when status != kOk
+  int n = 0;               ///< current number of DOFs
+  int m = 0;               ///< replaced columns |𝓛| (changed columns + Dirichlet DOFs)
+  int dirichlet = 0;       ///< |𝓓|
+  GmresReport gmres;       ///< step 2 (kGmres; with kDirectCached: iterations 0, the LU residual)
+  int schur_solves = 0;    ///< kDirectCached: restricted solves spent updating H R⁻¹ J
+  int pruned_columns = 0;  ///< columns dropped from 𝓛 because K equals R there again
   // Closure sizes (positions of L touched), §3.3 / Fig. 4 of the paper.
   int closure_f = 0;       ///< |closure_L(f̂)| (step 1 forward)
   int closure_y = 0;       ///< |closure_L(ŷ)| = |closure_L(𝓛)| (backward, steps 1–2)
@@ -210,6 +215,7 @@ class AugmentedSystem {
                                const std::vector<const Column*>& jcols,
                                const std::vector<int>& l_base, const std::vector<int>& c_y,
                                int& solves);
+  int prune_unchanged_columns();
   void bump_version(int j) { column_version_[j] = ++version_counter_; }
   std::uint64_t column_version(int j) const {
     auto it = column_version_.find(j);
