@@ -32,8 +32,17 @@
 /// several scalar types and models in one translation unit; without it GCC keeps helpers such as
 /// the 3×3 product out of line, and returning 3×3 Lanes4 matrices through memory costs as much
 /// as the arithmetic (measured: ElasticProblem::internal_forces 1.5× slower). No effect on
-/// results.
-#if defined(__GNUC__) || defined(__clang__)
+/// results. Not applied in sanitizer builds: instrumenting the fully inlined element loops takes
+/// minutes and gigabytes per translation unit, and speed does not matter there.
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define INCISE_SANITIZED_BUILD 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define INCISE_SANITIZED_BUILD 1
+#endif
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(INCISE_SANITIZED_BUILD)
 #define INCISE_KERNEL_INLINE inline __attribute__((always_inline))
 #else
 #define INCISE_KERNEL_INLINE inline
