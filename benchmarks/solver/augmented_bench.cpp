@@ -1,11 +1,14 @@
 /// \file augmented_bench.cpp
-/// Augmented-matrix updates (Yeung, Crouch & Pothen 2016) on the paper's beams (5×5×h nodes).
+/// Augmented-matrix updates (Yeung, Crouch & Pothen 2016) on the paper's beams (5×5×h nodes),
+/// bricks and the liver.
 ///
 /// Two modes:
-///  - Google Benchmark (default): BM_AugmentedDeformStep/h — one deformation update (impose a
-///    constraint, solve) on beams of h = 16 … 1024 nodes, with m ≈ 48; BM_Refactor/h — CHOLMOD
-///    analyze + factorize + solve of the same beam; BM_Factor{Supernodal,Simplicial}/h — the
-///    measurement behind the supernodal-vs-simplicial choice (docs/augmented.md).
+///  - Google Benchmark (default): BM_AugmentedDeformStep/h — mean deformation update over a
+///    16-step run on beams of h = 16 … 1024 nodes; BM_Factor{Supernodal,Simplicial}/h — analyze +
+///    factorize + solve, the measurement behind the supernodal-vs-simplicial choice
+///    (docs/augmented.md); BM_Step3FullBackward/1024 — step 3 of §3.2 alone (restricted forward +
+///    full backward substitution, METIS LDLᵀ); BM_CholmodNumericRefactor/1024 and
+///    BM_CholmodSolve/1024 — the parts of the refactorization route (CHOLMOD's ordering).
 ///  - Per-step table (the paper's Fig. 5/7 experiments):
 ///      augmented_bench --table deform|cut [--h 1024 | --brick N | --mesh FILE|liver]
 ///                      [--steps 32] [--pcg-every 8] [--pcg-seconds 20]
