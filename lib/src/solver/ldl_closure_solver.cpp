@@ -3,6 +3,9 @@
 
 #include <algorithm>
 #include <cstring>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <utility>
 
 namespace incise::solver {
@@ -13,7 +16,23 @@ namespace {
 // serial chain of floating-point additions, latency-bound; this changes only the round-off),
 // summed from the end: the backward substitution visits columns in descending order, so
 // reading each column descending makes the whole pass one descending memory stream, which the
-// hardware prefetcher follows (3.6× faster than ascending columns on the 25,600-node beam).
+// hardware prefetcher follows (3.6× faster than ascending columns on the 25,600-node beam; SSE2
+// another 4–17%).
+#if defined(__SSE2__)
+inline double dot(const double* a, const double* b, int len) {
+  // SSE2 (baseline on x86-64): two 2-lane accumulators over pairs in descending order.
+  __m128d v0 = _mm_setzero_pd(), v1 = _mm_setzero_pd();
+  int k = len;
+  for (; k >= 4; k -= 4) {
+    v0 = _mm_add_pd(v0, _mm_mul_pd(_mm_loadu_pd(a + k - 2), _mm_loadu_pd(b + k - 2)));
+    v1 = _mm_add_pd(v1, _mm_mul_pd(_mm_loadu_pd(a + k - 4), _mm_loadu_pd(b + k - 4)));
+  }
+  double s0 = 0;
+  for (; k > 0; --k) s0 += a[k - 1] * b[k - 1];
+  const __m128d v = _mm_add_pd(v0, v1);
+  return s0 + (_mm_cvtsd_f64(v) + _mm_cvtsd_f64(_mm_unpackhi_pd(v, v)));
+}
+#else
 inline double dot(const double* a, const double* b, int len) {
   double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
   int k = len;
@@ -26,6 +45,7 @@ inline double dot(const double* a, const double* b, int len) {
   for (; k > 0; --k) s0 += a[k - 1] * b[k - 1];
   return (s0 + s1) + (s2 + s3);
 }
+#endif
 
 }  // namespace
 
