@@ -54,7 +54,7 @@ struct AugmentedCutOptions {
   }
   CutOptions cut;  ///< the cutter's options (thesis defaults)
   /// The augmented solver's options; the factorization of K⁰ is *supernodal* here (METIS
-  /// ordering kept): on the bulky 105k-tet box it took 3.4–4.7 s CPU (two runs) against 48 s for
+  /// ordering kept): on the bulky 105k-tet box it took 2.4–4.7 s CPU (four runs) against 48 s for
   /// the simplicial LDLᵀ that AugmentedOptions defaults to (thin beams), with equal step cost
   /// (docs/cutting.md, cut_bench BM_AugmentedInteractiveStep).
   solver::AugmentedOptions augmented = supernodal_defaults();
