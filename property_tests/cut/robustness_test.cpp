@@ -7,6 +7,7 @@
 #include <incise/cut/cutter.hpp>
 #include <incise/io/read_mesh.hpp>
 #include <incise/mesh/generators.hpp>
+#include <incise/mesh/quality.hpp>
 #include <incise_test/seed.hpp>
 
 #include <algorithm>
@@ -435,6 +436,89 @@ TEST(CutRobustness, RandomSweepSequencesOnTheLiver) {
             << ", snapped " << tot.nodes_snapped << ", refused " << tot.snaps_refused
             << ", degenerate " << tot.degenerate_found << ", collapses " << tot.collapses
             << ", incollapsible " << tot.incollapsible << "\n";
+}
+
+}  // namespace
+}  // namespace incise::cut
+
+namespace incise::cut {
+namespace {
+
+/// §3.2.3 recipes on a single flat element e = (a, b, c, d) of a jittered 4³ box, made by
+/// moving its interior node d (reference = deformed) just off the opposite face abc: near the
+/// centroid of abc it is a cap, removed by splitting abc and collapsing into d — e and its
+/// neighbour across abc become the neighbour's three pieces: +1 element; near the midpoint of
+/// edge ab it makes two spindles (e and its neighbour across dab, both containing d and ab),
+/// removed by one split of ab at d — the k elements around ab become 2(k − 2) pieces: k − 4
+/// more. A needle collapse or a fallback would change the count
+/// differently, so the counts pin down which recipe ran (both recipes were inverted before).
+TEST(CutRobustness, CapAndSpindleRecipesRemoveSingleFlatElements) {
+  for (const bool cap : {true, false}) {
+    // Interior nodes jittered (seeded, ≤ 0.15 h per coordinate; all elements stay positive)
+    // so that no other node is coplanar with the flattened element's faces.
+    INCISE_SEEDED_RNG(rng, 3211);
+    std::uniform_real_distribution<double> jitter(-0.15, 0.15);
+    const double h = 1.0 / 4;
+    mesh::MeshData box = mesh::make_box(4, 4, 4, 1, 1, 1);
+    for (Index v = 0; v < box.num_points(); ++v) {
+      const Vec3 x = box.points.col(v);
+      if ((x.array() > 1e-9).all() && (x.array() < 1 - 1e-9).all())
+        box.points.col(v) += h * Vec3(jitter(rng), jitter(rng), jitter(rng));
+    }
+    CutMesh m(box);
+    ASSERT_EQ(m.validate().inverted_reference, 0);
+    auto flat = [&m](Index f) {
+      const Tet& t = m.element(f);
+      return mesh::aspect_ratio(m.reference(t[0]), m.reference(t[1]), m.reference(t[2]),
+                                m.reference(t[3])) < 0.01;  // the §3.3 threshold
+    };
+    Index k_ab = -1, flat_element = -1;
+    for (Index e = 0; e < m.element_capacity() && flat_element < 0; ++e) {
+      for (int j = 0; j < 4 && flat_element < 0; ++j) {
+        const Index d = m.element(e)[static_cast<size_t>(j)];
+        if (m.on_boundary(d) || m.neighbor(e, j) < 0) continue;  // interior d, interior face
+        const Index ia = m.element(e)[static_cast<size_t>(kTetFace[j][0])];
+        const Index ib = m.element(e)[static_cast<size_t>(kTetFace[j][1])];
+        const Index ic = m.element(e)[static_cast<size_t>(kTetFace[j][2])];
+        const Vec3 a = m.reference(ia), b = m.reference(ib), c = m.reference(ic);
+        Vec3 n = (b - a).cross(c - a).normalized();
+        if (n.dot(m.reference(d) - a) < 0) n = -n;  // towards d: inside e
+        const Vec3 target =
+            cap ? Vec3((a + b + c) / 3 + 1e-3 * h * n)
+                : Vec3(0.5 * (a + b) + 1e-3 * h * (n + (c - 0.5 * (a + b)).normalized()));
+        const Vec3 X = m.reference(d);
+        m.set_position(d, target, target);
+        int flats = 0;
+        for (Index f : m.star(d)) flats += flat(f) ? 1 : 0;
+        bool positive = true;
+        for (Index f : m.star(d)) positive = positive && m.reference_volume(m.element(f)) > 0;
+        // A cap flattens e alone; a node near the middle of edge ab flattens both elements
+        // of its star that contain ab (e and its neighbour across face dab).
+        if (flats != (cap ? 1 : 2) || !flat(e) || !positive) {
+          m.set_position(d, X, X);
+          continue;
+        }
+        const Tet& t = m.element(e);
+        const mesh::ShapeInfo info = mesh::classify_tetrahedron(
+            m.reference(t[0]), m.reference(t[1]), m.reference(t[2]), m.reference(t[3]));
+        ASSERT_EQ(info.shape, cap ? mesh::ShapeClass::kCap : mesh::ShapeClass::kSpindle);
+        k_ab = 0;
+        for (Index f : m.star(ia)) k_ab += m.local_index(f, ib) >= 0 ? 1 : 0;
+        flat_element = e;
+      }
+    }
+    ASSERT_GE(flat_element, 0) << "no single flat element could be made";
+    Cutter cutter(m);
+    ASSERT_EQ(cutter.count_degenerate(), cap ? 1 : 2);
+    const Index before = m.num_elements();
+    CutStepReport r;
+    cutter.remove_degeneracies_everywhere(r);
+    EXPECT_EQ(r.collapses, 1);
+    EXPECT_EQ(r.incollapsible, 0);
+    EXPECT_EQ(cutter.count_degenerate(), 0);
+    EXPECT_EQ(m.num_elements() - before, cap ? 1 : k_ab - 4) << (cap ? "cap" : "spindle");
+    expect_valid(m, cap ? "cap" : "spindle");
+  }
 }
 
 }  // namespace
