@@ -705,10 +705,10 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
       }
     }
   };
+  std::vector<double> yb;  // reused by every operator application (no per-iteration allocation)
   GmresOperator op = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) {
     apply_j(v);
     for (size_t k = 0; k < j_struct.size(); ++k) jv_val[k] = wbuf(j_struct[k]);
-    std::vector<double> yb;
     solver.solve_restricted(j_struct, jv_val, c_j, c_y, l_base, yb);
     out.resize(m);
     int kb = 0;
