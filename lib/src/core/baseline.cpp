@@ -26,8 +26,14 @@ double vector_add_mflops() {
   static const double cached = [] {
     constexpr int kN = 1024;  // thesis §4.5.2: "repeated adds of a 1024-double vector"
     std::vector<double> a(kN, 1.0), b(kN, 1e-9);
+    // Best of 25 trials of 20 ms (0.5 s): on the 2-vCPU KVM guest we measure on, this loop's
+    // rate drops from ~7,000 to ~3,500–4,500 MFLOP/s for stretches of 50–300 ms (same binary,
+    // same addresses; contention on the host we cannot see). A short window can fall entirely
+    // inside such a stretch; the best over a longer one is the machine's sustained rate, and it
+    // makes every "% of baseline" conservative.
+    constexpr int kTrials = 25;
     double best = 0.0;
-    for (int trial = 0; trial < 5; ++trial) {
+    for (int trial = 0; trial < kTrials; ++trial) {
       long reps = 0;
       const double start = thread_cpu_seconds();
       double elapsed = 0.0;

@@ -14,11 +14,10 @@ namespace incise {
 /// CPU time consumed by the calling thread, in seconds (CLOCK_THREAD_CPUTIME_ID).
 double thread_cpu_seconds();
 
-/// Measured vector-add baseline in MFLOP/s (one flop per element add): best of 5 trials of
-/// about 20 ms thread CPU time each (the thesis used the best sustained rate). Computed on the
-/// first call (≈ 0.1 s) and cached for the life of the process; thread-safe. The source is
-/// compiled with -falign-loops=64 (lib/src/core/CMakeLists.txt): unaligned, the same loop ran
-/// at half speed in some links.
+/// Measured vector-add baseline in MFLOP/s (one flop per element add): best of 25 trials of
+/// about 20 ms thread CPU time each (the thesis used the best sustained rate; on our VM the
+/// rate dips by up to 2x for stretches of 50-300 ms, see baseline.cpp). Computed on the first
+/// call (about 0.5 s) and cached for the life of the process; thread-safe.
 double vector_add_mflops();
 
 }  // namespace incise
