@@ -1,6 +1,5 @@
 #include <incise/core/baseline.hpp>
 
-#include <ctime>
 #include <vector>
 
 namespace incise {
@@ -15,12 +14,6 @@ inline void clobber_memory(const double* p) {
 }
 
 }  // namespace
-
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 double vector_add_mflops() {
   static const double cached = [] {

@@ -4,20 +4,8 @@
 #include <incise/fem/tet_kernels.hpp>
 
 #include <algorithm>
-#include <ctime>
 
 namespace incise::cut {
-
-namespace {
-
-/// CPU time of the calling thread (s).
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-}  // namespace
 
 const char* to_string(CutSolveStatus status) {
   switch (status) {

@@ -9,10 +9,9 @@
 /// machine does not inflate every "% of baseline" figure; they are measurements, never used in
 /// assertions.
 
-namespace incise {
+#include <incise/core/timer.hpp>
 
-/// CPU time consumed by the calling thread, in seconds (CLOCK_THREAD_CPUTIME_ID).
-double thread_cpu_seconds();
+namespace incise {
 
 /// Measured vector-add baseline in MFLOP/s (one flop per element add): best of 25 trials of
 /// about 20 ms thread CPU time each (the thesis used the best sustained rate; on our VM the
