@@ -144,6 +144,15 @@ std::vector<std::array<Vec3, 3>> sweep_triangles(const ToolSpec& tool) {
   return tris;
 }
 
+material::Material make_material(const MaterialSpec& spec) {
+  material::Parameters mp;
+  mp.youngs_modulus = spec.E;
+  mp.poisson_ratio = spec.nu;
+  mp.gamma = spec.gamma;
+  mp.density = spec.rho;
+  return material::Material(spec.model, mp);
+}
+
 Vec3 probe_value(const ResolvedProbe& probe, const VecX& u) {
   Vec3 s = Vec3::Zero();
   for (Index i : probe.nodes) s += u.segment<3>(3 * static_cast<Eigen::Index>(i));
@@ -312,13 +321,7 @@ BuiltScene build_scene(const SceneSpec& spec) {
   // The elastic problem: material, constraints, loads.
   {
     Timer tp;
-    material::Parameters mp;
-    mp.youngs_modulus = spec.material.E;
-    mp.poisson_ratio = spec.material.nu;
-    mp.gamma = spec.material.gamma;
-    mp.density = spec.material.rho;
-    const material::Material mat(spec.material.model, mp);
-    b.problem = std::make_unique<fem::ElasticProblem>(b.mesh, mat);
+    b.problem = std::make_unique<fem::ElasticProblem>(b.mesh, make_material(spec.material));
     b.problem->fix_nodes(b.fixed_nodes);
     for (Index i = 0; i < n; ++i) {
       const Vec3 f = b.external_force.segment<3>(3 * i);

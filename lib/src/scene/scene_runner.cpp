@@ -110,12 +110,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
                        std::ostringstream& detail) {
   const SceneSpec& spec = scene.spec;
   Timer total;
-  material::Parameters mp;
-  mp.youngs_modulus = spec.material.E;
-  mp.poisson_ratio = spec.material.nu;
-  mp.gamma = spec.material.gamma;
-  mp.density = spec.material.rho;
-  const material::Material mat(spec.material.model, mp);
+  const material::Material mat = make_material(spec.material);
   const Index n0 = scene.mesh.num_points();
   // The loads of the uncut body, held as nodal forces during the cut (new nodes carry none).
   const Eigen::Matrix3Xd forces =

@@ -10,6 +10,7 @@
 
 #include <incise/cut/cut_mesh.hpp>
 #include <incise/fem/elastic_problem.hpp>
+#include <incise/material/material.hpp>
 #include <incise/mesh/mesh_data.hpp>
 #include <incise/scene/scene_spec.hpp>
 
@@ -75,6 +76,10 @@ std::vector<std::array<Vec3, 3>> sweep_triangles(const ToolSpec& tool);
 /// indices are those of the CutMesh), reference positions (m), cells in element-handle order,
 /// no tags.
 mesh::MeshData live_mesh_data(const cut::CutMesh& cut_mesh);
+
+/// The material a scene names (model and SI parameters E, ν, γ, ρ); throws ParameterError for
+/// out-of-range parameters (material::Material's checks).
+material::Material make_material(const MaterialSpec& spec);
 
 /// Mean displacement (m) over the probe's nodes; u holds 3 DOFs per node.
 Vec3 probe_value(const ResolvedProbe& probe, const VecX& u);
