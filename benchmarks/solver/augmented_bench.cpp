@@ -84,17 +84,8 @@ void factor_bench(benchmark::State& state, incise::solver::CholmodKind kind) {
   incise::material::Parameters par;
   const incise::material::Material mat("linear", par);
   const incise::mesh::MeshData mesh = incise::mesh::make_beam(h, opt.spacing);
-  incise::yeung2016::detail::Beam beam;
-  beam.lame = mat.lame();
-  beam.points = mesh.points;
-  for (incise::Index e = 0; e < mesh.num_cells(); ++e)
-    beam.tets.push_back({mesh.cells(0, e), mesh.cells(1, e), mesh.cells(2, e), mesh.cells(3, e)});
-  beam.node_dof.assign(static_cast<size_t>(mesh.num_points()), -1);
-  for (incise::Index v = 0; v < mesh.num_points(); ++v)
-    if (mesh.points(2, v) > 1e-12) {
-      beam.node_dof[v] = beam.num_dofs;
-      beam.num_dofs += 3;
-    }
+  // Anchored at z = 0 (the bottom face of make_beam).
+  const auto beam = incise::yeung2016::detail::anchored_beam(mesh, mat.lame(), 1e-12);
   const incise::solver::SparseMatrix k = beam.assemble();
   const Eigen::VectorXd b = Eigen::VectorXd::Ones(k.rows());
   incise::solver::CholmodOptions co;
@@ -131,17 +122,8 @@ void BM_Step3FullBackward(benchmark::State& state) {
   incise::material::Parameters par;
   const incise::material::Material mat("linear", par);
   const incise::mesh::MeshData mesh = incise::mesh::make_beam(h, 0.01);
-  incise::yeung2016::detail::Beam beam;
-  beam.lame = mat.lame();
-  beam.points = mesh.points;
-  for (incise::Index e = 0; e < mesh.num_cells(); ++e)
-    beam.tets.push_back({mesh.cells(0, e), mesh.cells(1, e), mesh.cells(2, e), mesh.cells(3, e)});
-  beam.node_dof.assign(static_cast<size_t>(mesh.num_points()), -1);
-  for (incise::Index v = 0; v < mesh.num_points(); ++v)
-    if (mesh.points(2, v) > 1e-12) {
-      beam.node_dof[v] = beam.num_dofs;
-      beam.num_dofs += 3;
-    }
+  // Anchored at z = 0 (the bottom face of make_beam).
+  const auto beam = incise::yeung2016::detail::anchored_beam(mesh, mat.lame(), 1e-12);
   const incise::solver::SparseMatrix k = beam.assemble();
   incise::solver::CholmodFactor f(
       {incise::solver::CholmodKind::kSimplicialLdl, incise::solver::CholmodOrdering::kMetis});
@@ -169,17 +151,8 @@ void refactor_parts(benchmark::State& state, int part) {
   incise::material::Parameters par;
   const incise::material::Material mat("linear", par);
   const incise::mesh::MeshData mesh = incise::mesh::make_beam(h, 0.01);
-  incise::yeung2016::detail::Beam beam;
-  beam.lame = mat.lame();
-  beam.points = mesh.points;
-  for (incise::Index e = 0; e < mesh.num_cells(); ++e)
-    beam.tets.push_back({mesh.cells(0, e), mesh.cells(1, e), mesh.cells(2, e), mesh.cells(3, e)});
-  beam.node_dof.assign(static_cast<size_t>(mesh.num_points()), -1);
-  for (incise::Index v = 0; v < mesh.num_points(); ++v)
-    if (mesh.points(2, v) > 1e-12) {
-      beam.node_dof[v] = beam.num_dofs;
-      beam.num_dofs += 3;
-    }
+  // Anchored at z = 0 (the bottom face of make_beam).
+  const auto beam = incise::yeung2016::detail::anchored_beam(mesh, mat.lame(), 1e-12);
   const incise::solver::SparseMatrix k = beam.assemble();
   const Eigen::VectorXd b = Eigen::VectorXd::Ones(k.rows());
   incise::solver::CholmodFactor f(

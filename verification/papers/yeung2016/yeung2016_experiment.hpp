@@ -167,6 +167,24 @@ struct Beam {
   }
 };
 
+/// The Beam of `mesh` with every node above `z_anchor` free (3 DOFs each, numbered in node
+/// order) and the nodes at or below it anchored, i.e. removed from K⁰.
+inline Beam anchored_beam(const mesh::MeshData& mesh, const material::Lame& lame, double z_anchor) {
+  Beam beam;
+  beam.lame = lame;
+  beam.points = mesh.points;
+  for (Index e = 0; e < mesh.num_cells(); ++e)
+    beam.tets.push_back({mesh.cells(0, e), mesh.cells(1, e), mesh.cells(2, e), mesh.cells(3, e)});
+  beam.node_dof.assign(static_cast<size_t>(mesh.num_points()), -1);
+  for (Index v = 0; v < mesh.num_points(); ++v) {
+    if (mesh.points(2, v) > z_anchor) {
+      beam.node_dof[v] = beam.num_dofs;
+      beam.num_dofs += 3;
+    }
+  }
+  return beam;
+}
+
 /// Jacobi-PCG problem on a reduced SPD matrix (solver::linear_cg needs an incise::Problem).
 class MatrixProblem : public Problem {
  public:
@@ -235,18 +253,7 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
   const double zrange = mesh.points.row(2).maxCoeff() - zmin;
   // Anchored (removed from K⁰): the z = zmin face, or the lowest 10% of an irregular mesh.
   const double z_anchor = structured ? zmin + 1e-9 * s_len : zmin + 0.1 * zrange;
-  detail::Beam beam;
-  beam.lame = mat.lame();
-  beam.points = mesh.points;
-  for (Index e = 0; e < mesh.num_cells(); ++e)
-    beam.tets.push_back({mesh.cells(0, e), mesh.cells(1, e), mesh.cells(2, e), mesh.cells(3, e)});
-  beam.node_dof.assign(static_cast<size_t>(mesh.num_points()), -1);
-  for (Index v = 0; v < mesh.num_points(); ++v) {
-    if (mesh.points(2, v) > z_anchor) {
-      beam.node_dof[v] = beam.num_dofs;
-      beam.num_dofs += 3;
-    }
-  }
+  detail::Beam beam = detail::anchored_beam(mesh, mat.lame(), z_anchor);
   info.nodes = mesh.num_points();
   info.elements = mesh.num_cells();
   Timer t;
