@@ -10,6 +10,7 @@
 #include <incise/io/read_mesh.hpp>
 #include <incise/mesh/connectivity.hpp>
 #include <incise/mesh/generators.hpp>
+#include <incise/mesh/quality.hpp>
 #include <incise/mesh/validate.hpp>
 #include <incise/scene/scene_builder.hpp>
 #include <incise/scene/scene_parser.hpp>
@@ -26,12 +27,10 @@ namespace {
 
 const double kPi = 3.14159265358979323846;
 
+/// Signed volume (m³) of cell c of a tetrahedral mesh (mesh::signed_volume).
 double tet_volume(const mesh::MeshData& m, Index c) {
-  const Vec3 a = m.points.col(m.cells(0, c));
-  return (m.points.col(m.cells(1, c)) - a)
-             .cross(m.points.col(m.cells(2, c)) - a)
-             .dot(m.points.col(m.cells(3, c)) - a) /
-         6.0;
+  return mesh::signed_volume(m.points.col(m.cells(0, c)), m.points.col(m.cells(1, c)),
+                             m.points.col(m.cells(2, c)), m.points.col(m.cells(3, c)));
 }
 
 }  // namespace
