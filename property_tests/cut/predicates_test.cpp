@@ -65,7 +65,7 @@ TEST(CutPredicates, TriangleMeetsTetrahedronCases) {
 }
 
 /// The §3.2.3 shapes the cutter's recipes dispatch on, classified by mesh/quality.hpp (the one
-/// classification; cut::kTetEdge and mesh::kTetEdges agree, asserted in cutter.cpp).
+/// classification; cut::kTetEdge and mesh::kTetEdges agree, asserted in cutter_recipes.cpp).
 TEST(CutShape, RecipeShapesByTheMeshClassification) {
   const mesh::ShapeThresholds th;  // thesis §3.3: AR < 0.01, large angle > 0.99π
   auto cls = [&th](const std::array<Vec3, 4>& p) {
