@@ -143,7 +143,7 @@ TEST(SceneBuilderBad, RegionSelectingNoNode) {
     FAIL() << "expected ParseError";
   } catch (const incise::ParseError& e) {
     EXPECT_NE(
-        std::string(e.what()).find("scene.json: /fixed/0: region selects no node of the mesh"),
+        std::string(e.what()).find("scene.json:1: /fixed/0: region selects no node of the mesh"),
         std::string::npos)
         << e.what();
   }

@@ -315,4 +315,83 @@ Json parse_strict(const std::string& text, const std::string& file) {
   }
 }
 
+std::map<std::string, long> value_lines(const std::string& text) {
+  struct Level {
+    bool is_array;
+    std::string path;
+    std::size_t count = 0;  // elements begun (arrays)
+    bool want_key = true;   // objects: the next string is a key
+    std::string key;        // objects: the current member's key
+    long key_line = 0;      // objects: the line of that key
+  };
+  std::map<std::string, long> lines;
+  std::vector<Level> st;
+  long line = 1;
+  // A value begins at the current position: record its pointer and line.
+  auto begin_value = [&]() -> std::string {
+    if (st.empty()) {
+      lines.emplace("", line);
+      return "";
+    }
+    Level& l = st.back();
+    const std::string p = l.is_array ? child_path(l.path, l.count++) : child_path(l.path, l.key);
+    lines.emplace(p, l.is_array ? line : l.key_line);
+    return p;
+  };
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+    } else if (c == '{' || c == '[') {
+      const std::string p = begin_value();
+      st.push_back(Level{c == '[', p, 0, true, {}, 0});
+    } else if (c == '}' || c == ']') {
+      if (!st.empty()) st.pop_back();
+    } else if (c == ',') {
+      if (!st.empty() && !st.back().is_array) st.back().want_key = true;
+    } else if (c == '"') {
+      std::size_t end = i + 1;  // the closing quote (no raw newline can occur in a string)
+      while (end < text.size() && text[end] != '"') end += text[end] == '\\' ? 2 : 1;
+      if (!st.empty() && !st.back().is_array && st.back().want_key) {
+        st.back().key = Json::parse(text.substr(i, end - i + 1)).get<std::string>();
+        st.back().key_line = line;
+        st.back().want_key = false;
+      } else {
+        begin_value();
+      }
+      i = end;
+    } else if (c == '-' || (c >= '0' && c <= '9') || c == 't' || c == 'f' || c == 'n') {
+      begin_value();  // number or literal: skip to its end
+      while (i + 1 < text.size() &&
+             std::string(",]} \t\r\n").find(text[i + 1]) == std::string::npos)
+        ++i;
+    }
+  }
+  return lines;
+}
+
+long line_of(const std::map<std::string, long>& lines, const std::string& path) {
+  std::string p = path;
+  while (true) {
+    const auto it = lines.find(p);
+    if (it != lines.end()) return it->second;
+    if (p.empty()) return 0;
+    p.erase(p.rfind('/') == std::string::npos ? 0 : p.rfind('/'));
+  }
+}
+
+ParseError with_line(const ParseError& e, const std::string& file,
+                     const std::map<std::string, long>& lines) {
+  if (e.line() > 0 || e.file() != file || e.message().empty() || e.message()[0] != '/') return e;
+  // The path is the longest prefix followed by ": " that names a value (a key may hold ": ").
+  const std::string& m = e.message();
+  std::string path;
+  for (std::size_t at = m.find(": "); at != std::string::npos; at = m.find(": ", at + 1)) {
+    const std::string candidate = m.substr(0, at);
+    if (path.empty() || lines.count(candidate)) path = candidate;
+  }
+  const std::string key = path == "/" ? "" : path;  // fail() writes the root as "/"
+  return ParseError(file, line_of(lines, key), m);
+}
+
 }  // namespace incise::scene::detail

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -98,5 +99,17 @@ Vec3 as_vec3(const Json& j, const std::string& file, const std::string& path);
 
 /// Parses JSON text strictly: syntax errors report line and column, duplicate keys are errors.
 Json parse_strict(const std::string& text, const std::string& file);
+
+/// Line (1-based) of every value of `text` by JSON pointer ("" is the root); for an object member
+/// the line of its key. Precondition: parse_strict accepted `text`.
+std::map<std::string, long> value_lines(const std::string& text);
+
+/// Line of `path` in `lines`, or of its nearest ancestor listed there; 0 when none is.
+long line_of(const std::map<std::string, long>& lines, const std::string& path);
+
+/// `e` with the line of the JSON path its message starts with ("<path>: ...", as fail() writes
+/// it) when `e` names `file` without a line; otherwise `e` unchanged.
+ParseError with_line(const ParseError& e, const std::string& file,
+                     const std::map<std::string, long>& lines);
 
 }  // namespace incise::scene::detail

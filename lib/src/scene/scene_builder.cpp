@@ -11,6 +11,8 @@
 #include <map>
 #include <sstream>
 
+#include "json_reader.hpp"
+
 namespace incise::scene {
 
 void BuiltScene::record(std::string what, double seconds, std::size_t bytes, std::int64_t flops) {
@@ -33,7 +35,8 @@ std::string bbox_str(const mesh::MeshData& m) {
 
 [[noreturn]] void region_error(const SceneSpec& spec, const std::string& path,
                                const std::string& what, const mesh::MeshData& m) {
-  throw ParseError(spec.file, 0, path + ": " + what + " (" + bbox_str(m) + ")");
+  throw ParseError(spec.file, detail::line_of(spec.lines, path),
+                   path + ": " + what + " (" + bbox_str(m) + ")");
 }
 
 std::size_t matrix_bytes(const mesh::MeshData& m) {
@@ -181,7 +184,7 @@ BuiltScene build_scene(const SceneSpec& spec) {
   std::string what;
   b.mesh = make_mesh(spec.mesh, what);
   if (b.mesh.dimension != 3)
-    throw ParseError(spec.file, 0,
+    throw ParseError(spec.file, detail::line_of(spec.lines, "/mesh"),
                      "/mesh: expected a tetrahedral (3D) mesh, got dimension " +
                          std::to_string(b.mesh.dimension));
   what += " -> " + std::to_string(b.mesh.num_cells()) + " tets, " +

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -299,11 +300,7 @@ OutputSpec parse_outputs(JsonObject o) {
   return out;
 }
 
-}  // namespace
-
-SceneSpec parse_scene(const std::string& text, const std::string& file,
-                      const std::string& base_dir) {
-  const Json root_json = detail::parse_strict(text, file);
+SceneSpec parse_root(const Json& root_json, const std::string& file, const std::string& base_dir) {
   JsonObject root(root_json, "", file, "a scene object {\"mesh\": ..., \"material\": ..., ...}");
   SceneSpec s;
   s.file = file;
@@ -361,6 +358,21 @@ SceneSpec parse_scene(const std::string& text, const std::string& file,
   }
   root.finish();
   return s;
+}
+
+}  // namespace
+
+SceneSpec parse_scene(const std::string& text, const std::string& file,
+                      const std::string& base_dir) {
+  const Json root_json = detail::parse_strict(text, file);
+  std::map<std::string, long> lines = detail::value_lines(text);
+  try {
+    SceneSpec s = parse_root(root_json, file, base_dir);
+    s.lines = std::move(lines);
+    return s;
+  } catch (const ParseError& e) {
+    throw detail::with_line(e, file, lines);  // "<file>:<line>: <path>: ..."
+  }
 }
 
 SceneSpec load_scene(const std::string& path) {

@@ -10,6 +10,7 @@
 #include <incise/core/types.hpp>
 #include <incise/mesh/generators.hpp>
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -147,6 +148,10 @@ struct SceneSpec {
   SolverSpec solver;
   std::vector<ToolSpec> tools;
   OutputSpec outputs;
+  /// Line (1-based) in `file` of each JSON value by JSON pointer ("/fixed/0"; an object member:
+  /// the line of its key), so that errors found later (the builder's) can name it; empty for
+  /// specs made in code.
+  std::map<std::string, long> lines;
 };
 
 /// Names used in scene files for enums ("cg", "nonlinear-cg", ...).

@@ -1,0 +1,136 @@
+// Scene errors name the file, the line and the JSON path of the offending value, then what was
+// expected (docs/scenes.md, "Errors"): "scene.json:<line>: <path>: expected ..., got ...". The
+// line is that of the value, or for an object member that of its key; for a missing key that of
+// the enclosing object. Errors the builder finds after parsing (a region selecting no node) carry
+// the line too.
+
+#include <incise/core/error.hpp>
+#include <incise/scene/scene_builder.hpp>
+#include <incise/scene/scene_parser.hpp>
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace {
+
+using incise::ParseError;
+using incise::scene::build_scene;
+using incise::scene::parse_scene;
+
+// A valid scene, one key per line where it matters; line numbers are counted from 1.
+const char* const kScene = R"({
+  "version": 1,
+  "name": "a {[\"quoted\"]} name: with / and ~",
+  "mesh": {"type": "box", "nx": 2, "ny": 1, "nz": 1,
+           "lx": 1.2, "ly": 0.2, "lz": 0.3},
+  "material": {
+    "model": "linear",
+    "E": 1e6,
+    "nu": 0.0
+  },
+  "fixed": [
+    {"type": "plane", "axis": "x", "value": 0.0},
+    {"type": "plane",
+     "axis": "y", "value": 0.0}
+  ],
+  "loads": [{"type": "point", "at": [1.2, 0.2, 0.3], "force": [0, -1, 0]}],
+  "solver": {"method": "cg"}
+}
+)";
+
+// kScene with `from` replaced by `to` (once; `from` must occur).
+std::string edited(const std::string& from, const std::string& to) {
+  std::string s = kScene;
+  const auto at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) s.replace(at, from.size(), to);
+  return s;
+}
+
+std::string parse_error(const std::string& text) {
+  try {
+    (void)parse_scene(text, "scene.json", "");
+  } catch (const ParseError& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+TEST(SceneErrorLines, ValidSceneRecordsTheLineOfEveryValue) {
+  const auto s = parse_scene(kScene, "scene.json", "");
+  EXPECT_EQ(s.lines.at(""), 1);
+  EXPECT_EQ(s.lines.at("/name"), 3);  // a string holding braces, quotes and ": " is skipped whole
+  EXPECT_EQ(s.lines.at("/mesh/nx"), 4);
+  EXPECT_EQ(s.lines.at("/mesh/lz"), 5);
+  EXPECT_EQ(s.lines.at("/material"), 6);  // an object member: the line of its key
+  EXPECT_EQ(s.lines.at("/material/nu"), 9);
+  EXPECT_EQ(s.lines.at("/fixed/1"), 13);  // an array element: the line where it begins
+  EXPECT_EQ(s.lines.at("/fixed/1/axis"), 14);
+  EXPECT_EQ(s.lines.at("/loads/0/at/2"), 16);
+  EXPECT_EQ(s.lines.at("/solver/method"), 17);
+}
+
+TEST(SceneErrorLines, OutOfRangeValueNamesItsLine) {
+  EXPECT_EQ(parse_error(edited("\"nu\": 0.0", "\"nu\": 0.7")),
+            "scene.json:9: /material/nu: expected a number in (-1, 0.5), got 0.7");
+}
+
+TEST(SceneErrorLines, WrongTypeInANestedArrayNamesItsLine) {
+  EXPECT_EQ(parse_error(edited("\"axis\": \"y\"", "\"axis\": 1")),
+            "scene.json:14: /fixed/1/axis: expected one of \"x\", \"y\", \"z\", got 1");
+}
+
+TEST(SceneErrorLines, UnknownKeyNamesTheLineOfTheKey) {
+  const std::string e = parse_error(edited("\"E\": 1e6,", "\"E\": 1e6, \"poisson\": 0.3,"));
+  EXPECT_EQ(e.rfind("scene.json:8: /material/poisson: unknown key \"poisson\"", 0), 0u) << e;
+}
+
+TEST(SceneErrorLines, KeyHoldingColonAndSlashIsFoundByItsEscapedPointer) {
+  // The JSON pointer escapes "/" as "~1"; the message's path is itself followed by ": ".
+  const std::string e = parse_error(edited("\"version\": 1,", "\"version\": 1,\n  \"a: b/c\": 2,"));
+  EXPECT_EQ(e.rfind("scene.json:3: /a: b~1c: unknown key \"a: b/c\"", 0), 0u) << e;
+}
+
+TEST(SceneErrorLines, MissingKeyNamesTheEnclosingObject) {
+  const std::string e = parse_error(edited("    \"E\": 1e6,\n", ""));
+  EXPECT_EQ(e.rfind("scene.json:6: /material: missing required key \"E\"", 0), 0u) << e;
+}
+
+TEST(SceneErrorLines, RootNotAnObjectIsLineOfTheRoot) {
+  EXPECT_EQ(parse_error("\n\n  [1, 2]\n").rfind("scene.json:3: /: expected a scene object", 0), 0u);
+}
+
+TEST(SceneErrorLines, SyntaxErrorKeepsItsOwnLineAndColumn) {
+  const std::string e = parse_error(edited("\"nu\": 0.0", "\"nu\": 0.0,"));
+  EXPECT_EQ(e.rfind("scene.json:10: invalid JSON at column", 0), 0u) << e;
+}
+
+TEST(SceneErrorLines, BuilderErrorNamesTheLineOfTheRegion) {
+  const auto spec = parse_scene(
+      edited("\"axis\": \"y\", \"value\": 0.0", "\"axis\": \"y\", \"value\": 5"), "scene.json", "");
+  try {
+    (void)build_scene(spec);
+    FAIL() << "expected ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.line(), 13);
+    EXPECT_EQ(std::string(e.what()).rfind("scene.json:13: /fixed/1: region selects no node", 0), 0u)
+        << e.what();
+  }
+}
+
+TEST(SceneErrorLines, SpecMadeInCodeHasNoLine) {
+  auto spec = parse_scene(kScene, "scene.json", "");
+  spec.lines.clear();
+  spec.fixed[1].value = 5.0;
+  try {
+    (void)build_scene(spec);
+    FAIL() << "expected ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.line(), 0);
+    EXPECT_EQ(std::string(e.what()).rfind("scene.json: /fixed/1: region selects no node", 0), 0u)
+        << e.what();
+  }
+}
+
+}  // namespace
