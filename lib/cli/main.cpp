@@ -19,9 +19,11 @@ int version(const Args&, std::ostream& out, std::ostream&) {
 const Command kCommands[] = {
     {"version", "print the version", &version},
     {"mesh", "mesh check FILE [--vtu OUT]: load, report quality, validate (7.1)-(7.5)", &run_mesh},
-    {"run", "run SCENE [--summary-json PATH]: run a scene file (docs/scenes.md)",
+    {"run", "run SCENE [--summary-json PATH] [--progress MODE]: run a scene file (docs/scenes.md)",
      &run_scene_command},
-    {"certify", "certify [--quick] [--out DIR]: run the verification catalogue, write a report",
+    {"certify",
+     "certify [--quick] [--out DIR] [--filter RE] [--data DIR]: run the verification "
+     "catalogue, write a report",
      &run_certify_command},
     {"bench", "bench [--filter RE] [--out DIR]: run benchmarks, update the dashboard",
      &run_bench_command},

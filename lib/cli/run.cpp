@@ -76,7 +76,9 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
       throw UsageError("expected one scene file, got '" + scene_path + "' and '" + a + "'");
     }
   }
-  if (scene_path.empty()) throw UsageError("usage: incise run SCENE.json [--summary-json PATH]");
+  if (scene_path.empty())
+    throw UsageError(
+        "usage: incise run SCENE.json [--summary-json PATH] [--progress auto|bar|lines|none]");
   if (progress == "auto")
     progress = (&out == &std::cout && isatty(STDOUT_FILENO)) ? "bar" : "lines";
 
