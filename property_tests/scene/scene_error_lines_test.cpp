@@ -119,6 +119,34 @@ TEST(SceneErrorLines, BuilderErrorNamesTheLineOfTheRegion) {
   }
 }
 
+TEST(SceneErrorLines, ProbeNameOutsideTheCsvAlphabetNamesItsLine) {
+  // docs/scenes.md, outputs: probe names become CSV column names.
+  const std::string text =
+      edited("  \"solver\": {\"method\": \"cg\"}\n",
+             "  \"solver\": {\"method\": \"cg\"},\n  \"outputs\": {\"probes\": [\n"
+             "    {\"name\": \"tip probe\", \"at\": [1.2, 0.2, 0.3]}]}\n");
+  EXPECT_EQ(parse_error(text).rfind("scene.json:19: /outputs/probes/0/name: expected a name of "
+                                    "letters, digits, '_', '.', '-', got string \"tip probe\"",
+                                    0),
+            0u)
+      << parse_error(text);
+}
+
+TEST(SceneErrorLines, ProbeOutsideTheMeshNamesTheLineOfItsLocation) {
+  const std::string text =
+      edited("  \"solver\": {\"method\": \"cg\"}\n",
+             "  \"solver\": {\"method\": \"cg\"},\n  \"outputs\": {\"probes\": [\n"
+             "    {\"name\": \"far\",\n     \"at\": [5, 0, 0]}]}\n");
+  try {
+    (void)build_scene(parse_scene(text, "scene.json", ""));
+    FAIL() << "expected ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("scene.json:20: /outputs/probes/0/at: probe location", 0),
+              0u)
+        << e.what();
+  }
+}
+
 TEST(SceneErrorLines, SpecMadeInCodeHasNoLine) {
   auto spec = parse_scene(kScene, "scene.json", "");
   spec.lines.clear();
