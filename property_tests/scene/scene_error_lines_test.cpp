@@ -57,6 +57,28 @@ std::string parse_error(const std::string& text) {
   return "<no error>";
 }
 
+// The builder's error for `spec`: its line and message ("<no error>" when it builds).
+struct BuildError {
+  long line = -1;
+  std::string what = "<no error>";
+};
+
+BuildError build_error(const incise::scene::SceneSpec& spec) {
+  try {
+    (void)build_scene(spec);
+  } catch (const ParseError& e) {
+    return {e.line(), e.what()};
+  }
+  return {};
+}
+
+// kScene with an outputs object holding one probe (`probe`, the text of its JSON object).
+std::string with_probe(const std::string& probe) {
+  return edited(
+      "  \"solver\": {\"method\": \"cg\"}\n",
+      "  \"solver\": {\"method\": \"cg\"},\n  \"outputs\": {\"probes\": [\n    " + probe + "]}\n");
+}
+
 TEST(SceneErrorLines, ValidSceneRecordsTheLineOfEveryValue) {
   const auto s = parse_scene(kScene, "scene.json", "");
   EXPECT_EQ(s.lines.at(""), 1);
@@ -109,22 +131,14 @@ TEST(SceneErrorLines, SyntaxErrorKeepsItsOwnLineAndColumn) {
 TEST(SceneErrorLines, BuilderErrorNamesTheLineOfTheRegion) {
   const auto spec = parse_scene(
       edited("\"axis\": \"y\", \"value\": 0.0", "\"axis\": \"y\", \"value\": 5"), "scene.json", "");
-  try {
-    (void)build_scene(spec);
-    FAIL() << "expected ParseError";
-  } catch (const ParseError& e) {
-    EXPECT_EQ(e.line(), 13);
-    EXPECT_EQ(std::string(e.what()).rfind("scene.json:13: /fixed/1: region selects no node", 0), 0u)
-        << e.what();
-  }
+  const BuildError e = build_error(spec);
+  EXPECT_EQ(e.line, 13);
+  EXPECT_EQ(e.what.rfind("scene.json:13: /fixed/1: region selects no node", 0), 0u) << e.what;
 }
 
 TEST(SceneErrorLines, ProbeNameOutsideTheCsvAlphabetNamesItsLine) {
   // docs/scenes.md, outputs: probe names become CSV column names.
-  const std::string text =
-      edited("  \"solver\": {\"method\": \"cg\"}\n",
-             "  \"solver\": {\"method\": \"cg\"},\n  \"outputs\": {\"probes\": [\n"
-             "    {\"name\": \"tip probe\", \"at\": [1.2, 0.2, 0.3]}]}\n");
+  const std::string text = with_probe("{\"name\": \"tip probe\", \"at\": [1.2, 0.2, 0.3]}");
   EXPECT_EQ(parse_error(text).rfind("scene.json:19: /outputs/probes/0/name: expected a name of "
                                     "letters, digits, '_', '.', '-', got string \"tip probe\"",
                                     0),
@@ -133,32 +147,19 @@ TEST(SceneErrorLines, ProbeNameOutsideTheCsvAlphabetNamesItsLine) {
 }
 
 TEST(SceneErrorLines, ProbeOutsideTheMeshNamesTheLineOfItsLocation) {
-  const std::string text =
-      edited("  \"solver\": {\"method\": \"cg\"}\n",
-             "  \"solver\": {\"method\": \"cg\"},\n  \"outputs\": {\"probes\": [\n"
-             "    {\"name\": \"far\",\n     \"at\": [5, 0, 0]}]}\n");
-  try {
-    (void)build_scene(parse_scene(text, "scene.json", ""));
-    FAIL() << "expected ParseError";
-  } catch (const ParseError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("scene.json:20: /outputs/probes/0/at: probe location", 0),
-              0u)
-        << e.what();
-  }
+  const std::string text = with_probe("{\"name\": \"far\",\n     \"at\": [5, 0, 0]}");
+  const BuildError e = build_error(parse_scene(text, "scene.json", ""));
+  EXPECT_EQ(e.line, 20);
+  EXPECT_EQ(e.what.rfind("scene.json:20: /outputs/probes/0/at: probe location", 0), 0u) << e.what;
 }
 
 TEST(SceneErrorLines, SpecMadeInCodeHasNoLine) {
   auto spec = parse_scene(kScene, "scene.json", "");
   spec.lines.clear();
   spec.fixed[1].value = 5.0;
-  try {
-    (void)build_scene(spec);
-    FAIL() << "expected ParseError";
-  } catch (const ParseError& e) {
-    EXPECT_EQ(e.line(), 0);
-    EXPECT_EQ(std::string(e.what()).rfind("scene.json: /fixed/1: region selects no node", 0), 0u)
-        << e.what();
-  }
+  const BuildError e = build_error(spec);
+  EXPECT_EQ(e.line, 0);
+  EXPECT_EQ(e.what.rfind("scene.json: /fixed/1: region selects no node", 0), 0u) << e.what;
 }
 
 }  // namespace
