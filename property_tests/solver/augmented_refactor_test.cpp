@@ -122,10 +122,13 @@ TEST(AugmentedRefactor, SwapDropsMToChangesSinceStartSec3_6) {
 
 // Updates and solves keep running in the foreground while background jobs start and finish
 // (polled in solve()); every solution equals a fresh factorization. The ThreadSanitizer build
-// of this test is the data-race check of §3.6.
+// of this test is the data-race check of §3.6. Step 3 runs its backward pass on two threads
+// (AugmentedOptions::solve_threads) meanwhile, so three threads share the factor data.
 TEST(AugmentedRefactor, ConcurrentUpdatesAndSolvesWhileFactoring) {
   CutModel m = CutModel::from_mesh(mesh::make_beam(10, 0.1));
-  solver::AugmentedSystem aug;
+  solver::AugmentedOptions options;
+  options.solve_threads = 2;
+  solver::AugmentedSystem aug(options);
   ASSERT_EQ(aug.initialize(m.assemble()), solver::FactorStatus::kOk);
   Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.1);
   std::map<int, double> dir;

@@ -158,7 +158,7 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
     base->message = "could not convert the factor to LDL'";
     return base;
   }
-  base->solver = std::make_unique<ClosureLdlSolver>(base->ldl);
+  base->solver = std::make_unique<ClosureLdlSolver>(base->ldl, options.solve_threads);
   const int n = base->ldl->n;
   base->s_diag.resize(n);
   for (int i = 0; i < n; ++i) base->s_diag(i) = 1.0 / base->ldl->d[base->ldl->inverse_perm[i]];
@@ -168,7 +168,9 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
   return base;
 }
 
-AugmentedSystem::AugmentedSystem(AugmentedOptions options) : options_(options) {}
+AugmentedSystem::AugmentedSystem(AugmentedOptions options) : options_(options) {
+  INCISE_CHECK_PARAM(options_.solve_threads >= 1, "AugmentedOptions::solve_threads must be >= 1");
+}
 
 AugmentedSystem::~AugmentedSystem() {
   if (job_.valid()) job_.wait();
@@ -743,17 +745,17 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
   // Step 3: a₁ = R⁻¹(f̂ − J a₂) (eq. 16).
   phase.restart();
   apply_j(a2);
-  Eigen::VectorXd b3 = fhat - wbuf;
-  clear_j();
+  // f̂ − J a₂ is needed only on its structure s3 (base rows) and on the new DOFs (identity
+  // block of R: a₁ there is the right-hand side itself); a₁ on the base rows is written
+  // straight into the displacement.
   std::vector<double> b3_val(s3.size());
-  for (size_t k = 0; k < s3.size(); ++k) b3_val[k] = b3(s3[k]);
-  Eigen::VectorXd a1_base;
-  solver.solve_sparse_rhs(s3, b3_val, c_3, a1_base);
+  for (size_t k = 0; k < s3.size(); ++k) b3_val[k] = fhat(s3[k]) - wbuf(s3[k]);
+  for (int i = nb; i < n; ++i) displacement(i) = fhat(i) - wbuf(i);
+  clear_j();
+  solver.solve_sparse_rhs(s3, b3_val, c_3, displacement.data());
   report.seconds_step3 = phase.seconds();
 
-  // Eqs. 8, 9: scatter a₁ and a₂ into displacements and reactions.
-  displacement.head(nb) = a1_base;
-  for (int i = nb; i < n; ++i) displacement(i) = b3(i);
+  // Eqs. 8, 9: scatter a₂ into displacements and reactions.
   for (int i = 0; i < m; ++i) {
     const int j = l_list[i];
     if (is_dir[i]) {

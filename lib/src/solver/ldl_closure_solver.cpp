@@ -6,6 +6,8 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#include <system_error>
+#include <thread>
 #include <utility>
 
 namespace incise::solver {
@@ -49,9 +51,10 @@ inline double dot(const double* a, const double* b, int len) {
 
 }  // namespace
 
-ClosureLdlSolver::ClosureLdlSolver(std::shared_ptr<const LdlFactorData> factor)
+ClosureLdlSolver::ClosureLdlSolver(std::shared_ptr<const LdlFactorData> factor, int threads)
     : factor_(std::move(factor)) {
   INCISE_CHECK(factor_ != nullptr, "ClosureLdlSolver needs a factor");
+  INCISE_CHECK(threads >= 1, "ClosureLdlSolver needs threads >= 1");
   const LdlFactorData& f = *factor_;
   work_.assign(static_cast<size_t>(f.n), 0.0);
   mark_.assign(static_cast<size_t>(f.n), 0);
@@ -77,6 +80,7 @@ ClosureLdlSolver::ClosureLdlSolver(std::shared_ptr<const LdlFactorData> factor)
     max_len = std::max(max_len, cp[j + 1] - cp[j]);
   }
   gather_.assign(static_cast<size_t>(max_len) + 1, 0.0);
+  acc_.assign(static_cast<size_t>(max_len) + 1, 0.0);
   // Row sets R of the supernodes, concatenated in ascending column order (one compact stream
   // for the backward pass instead of a scattered read of row_idx).
   super_row_ptr_.assign(static_cast<size_t>(f.n) + 1, 0);
@@ -93,6 +97,90 @@ ClosureLdlSolver::ClosureLdlSolver(std::shared_ptr<const LdlFactorData> factor)
     total += static_cast<size_t>(cp[j + 1] - cp[j]);
   }
   super_row_ptr_[f.n] = static_cast<std::int64_t>(total);
+  if (threads > 1) plan_threads(threads);
+}
+
+// Work split of the full backward pass. In a postordered elimination forest the subtree of
+// position c is the contiguous range [c − size(c) + 1, c], and the backward substitution of a
+// subtree reads x only on the subtree and its ancestors. Starting from the roots, the subtree
+// with the most entries of L is repeatedly replaced by its children (its root moving to the
+// serial part) while the serial part stays below a quarter of L; the frontier subtrees are
+// packed into the threads largest-first, and the split with the smallest serial + busiest
+// thread work is kept.
+void ClosureLdlSolver::plan_threads(int threads) {
+  const LdlFactorData& f = *factor_;
+  const int n = f.n;
+  const int* cp = f.col_ptr.data();
+  std::vector<int> size(static_cast<size_t>(n), 0), first(static_cast<size_t>(n));
+  std::vector<double> work(static_cast<size_t>(n), 0.0);
+  std::vector<int> head(static_cast<size_t>(n), -1), next(static_cast<size_t>(n), -1);
+  std::vector<int> frontier;
+  for (int j = 0; j < n; ++j) first[j] = j;
+  for (int j = 0; j < n; ++j) {  // children precede parents (parent > child)
+    size[j] += 1;
+    work[j] += 1.0 + (cp[j + 1] - cp[j]);
+    const int p = f.parent[j];
+    if (p < 0) {
+      frontier.push_back(j);
+      continue;
+    }
+    if (p <= j || p >= n) return;  // not an elimination forest in this ordering: stay serial
+    size[p] += size[j];
+    work[p] += work[j];
+    first[p] = std::min(first[p], first[j]);
+    next[j] = head[p];
+    head[p] = j;
+  }
+  double total = 0;
+  for (int r : frontier) total += work[r];
+  for (int j = 0; j < n; ++j)
+    if (size[j] != j - first[j] + 1) return;  // not postordered: stay serial
+  std::vector<int> serial;
+  double serial_work = 0;
+  double best = total;
+  std::vector<int> best_serial;
+  std::vector<std::vector<std::pair<int, int>>> best_bins;
+  std::vector<int> order;
+  for (;;) {
+    if (static_cast<int>(frontier.size()) >= threads && frontier.size() <= 4096) {
+      order = frontier;
+      std::sort(order.begin(), order.end(), [&](int a, int b) { return work[a] > work[b]; });
+      std::vector<double> load(static_cast<size_t>(threads), 0.0);
+      std::vector<std::vector<std::pair<int, int>>> bins(static_cast<size_t>(threads));
+      for (int r : order) {
+        const auto t =
+            static_cast<size_t>(std::min_element(load.begin(), load.end()) - load.begin());
+        load[t] += work[r];
+        bins[t].emplace_back(first[r], r);
+      }
+      const double cost = serial_work + *std::max_element(load.begin(), load.end());
+      if (cost < best) {
+        best = cost;
+        best_serial = serial;
+        best_bins = std::move(bins);
+        max_bin_fraction_ = *std::max_element(load.begin(), load.end()) / total;
+        serial_fraction_ = serial_work / total;
+      }
+    }
+    if (frontier.empty()) break;
+    const auto it = std::max_element(frontier.begin(), frontier.end(),
+                                     [&](int a, int b) { return work[a] < work[b]; });
+    const int r = *it;
+    const double own = 1.0 + (cp[r + 1] - cp[r]);
+    if (serial_work + own > 0.25 * total) break;
+    frontier.erase(it);
+    serial.push_back(r);
+    serial_work += own;
+    for (int c = head[r]; c >= 0; c = next[c]) frontier.push_back(c);
+  }
+  if (best_bins.empty() || best > 0.9 * total) {  // no useful split
+    serial_fraction_ = max_bin_fraction_ = 1.0;
+    return;
+  }
+  std::sort(best_serial.begin(), best_serial.end());
+  serial_ = std::move(best_serial);
+  bins_ = std::move(best_bins);
+  thread_gather_.assign(bins_.size() - 1, std::vector<double>(gather_.size(), 0.0));
 }
 
 std::vector<int> ClosureLdlSolver::closure(const std::vector<int>& original_indices) {
@@ -113,30 +201,54 @@ std::vector<int> ClosureLdlSolver::closure(const std::vector<int>& original_indi
   return out;
 }
 
-// Column j of L D⁻¹-free forward substitution: x[rows of column j] −= L(:, j) x[j]. The rows
-// j+1 … j₁ of the supernode are contiguous; the rest use the (shared, cache-resident) row list
-// of the supernode's last column.
-inline void ClosureLdlSolver::forward_column(int j, double* x) const {
+// Forward substitution (without D⁻¹) through columns j … j₁ of the supernode with last column
+// j₁: x[rows] −= L(:, c) x[c] for c = j … j₁. The rows c+1 … j₁ are contiguous positions and
+// are updated in place (they are the next columns' pivots); the common row set R = pattern(j₁)
+// is accumulated in a contiguous buffer (one vectorizable axpy per column) and scattered into
+// x[R] once per supernode instead of once per column.
+inline void ClosureLdlSolver::forward_supernode(int j, int j1, double* x) {
   const LdlFactorData& f = *factor_;
-  const double xj = x[j];
-  if (xj == 0) return;
   const int* cp = f.col_ptr.data();
-  const int j1 = super_last_[j];
-  const int w = j1 - j;
-  const double* v = f.values.data() + cp[j];
-  double* xs = x + j + 1;
-  for (int k = 0; k < w; ++k) xs[k] -= v[k] * xj;
-  const int* rows = f.row_idx.data() + cp[j1];
   const int r = cp[j1 + 1] - cp[j1];
-  v += w;
-  for (int k = 0; k < r; ++k) x[rows[k]] -= v[k] * xj;
+  double* acc = acc_.data();
+  bool any = false;
+  for (int c = j; c <= j1; ++c) {
+    const double xc = x[c];
+    if (xc == 0) continue;
+    any = true;
+    const int w = j1 - c;
+    const double* v = f.values.data() + cp[c];
+    double* xs = x + c + 1;
+    for (int k = 0; k < w; ++k) xs[k] -= v[k] * xc;
+    v += w;
+    for (int k = 0; k < r; ++k) acc[k] += v[k] * xc;
+  }
+  if (!any) return;
+  const int* rows = f.row_idx.data() + cp[j1];
+  for (int k = 0; k < r; ++k) {
+    x[rows[k]] -= acc[k];
+    acc[k] = 0;
+  }
 }
 
-void ClosureLdlSolver::forward(const std::vector<int>& closure_positions) {
+// Positions sorted ascending, containing the closure of the right-hand side's structure.
+// Entering a supernode at column j processes j … j₁: those of its columns that are in the
+// closure follow j in the list (they are ancestors of j), and any other column holds an exact
+// zero (Thm. 1) and is skipped.
+template <typename Positions>
+inline void ClosureLdlSolver::forward(const Positions& positions, size_t count) {
   const LdlFactorData& f = *factor_;
   double* x = work_.data();
-  for (int j : closure_positions) forward_column(j, x);
-  for (int j : closure_positions) x[j] /= f.d[j];
+  for (size_t t = 0; t < count;) {
+    const int j = positions(t);
+    const int j1 = super_last_[j];
+    forward_supernode(j, j1, x);
+    while (t < count && positions(t) <= j1) ++t;
+  }
+  for (size_t t = 0; t < count; ++t) {
+    const int j = positions(t);
+    x[j] /= f.d[j];
+  }
 }
 
 // Backward substitution x ← L⁻ᵀ x over the positions [first, last) of `positions` taken in
@@ -146,15 +258,14 @@ void ClosureLdlSolver::forward(const std::vector<int>& closure_positions) {
 // two contiguous dot products (8 bytes of L per entry instead of 12 with the row index), and
 // all of L is read as one descending stream (columns descending, each column from its end).
 template <typename Positions>
-inline void ClosureLdlSolver::backward(const Positions& positions, size_t count) {
+inline void ClosureLdlSolver::backward(const Positions& positions, size_t count, double* gend) {
   const LdlFactorData& f = *factor_;
   const int* cp = f.col_ptr.data();
   const double* lv = f.values.data();
   double* x = work_.data();
   // Column j of a supernode with last column j₁ holds rows j+1 … j₁, then R = pattern(j₁).
-  // The buffer ends with x[R]; each finished x[j] is written just before the part column j
-  // used, so column j − 1 finds x[j … j₁], x[R] contiguous in front of the buffer's end.
-  double* gend = gather_.data() + gather_.size();
+  // The buffer (ending at gend) ends with x[R]; each finished x[j] is written just before the
+  // part column j used, so column j − 1 finds x[j … j₁], x[R] contiguous in front of gend.
   int current = -1;
   for (size_t t = count; t-- > 0;) {
     const int j = positions(t);
@@ -165,6 +276,9 @@ inline void ClosureLdlSolver::backward(const Positions& positions, size_t count)
       const int* rows = super_rows_.data() + super_row_ptr_[j1];
       double* gr = gend - r;
       for (int k = r; k-- > 0;) gr[k] = x[rows[k]];
+      // Entering the supernode below its last column (a thread's subtree may start there):
+      // its columns j+1 … j₁ were finished by the serial part.
+      for (int k = j1 - j; k-- > 0;) gr[k - (j1 - j)] = x[j + 1 + k];
     }
     const int len = cp[j + 1] - cp[j];
     const double xj = x[j] - dot(lv + cp[j], gend - len, len);
@@ -182,12 +296,14 @@ void ClosureLdlSolver::solve_restricted(const std::vector<int>& b_indices,
   const LdlFactorData& f = *factor_;
   double* x = work_.data();
   for (size_t k = 0; k < b_indices.size(); ++k) x[f.inverse_perm[b_indices[k]]] += b_values[k];
-  forward(forward_closure);
+  const int* fc = forward_closure.data();
+  forward([fc](size_t t) { return fc[t]; }, forward_closure.size());
   // Entries of the forward result outside backward_closure are never read below, so only the
   // backward closure needs a consistent value: positions in it but not in the forward closure
   // hold 0, which is the exact forward result there (Thm. 1).
   const int* bc = backward_closure.data();
-  backward([bc](size_t t) { return bc[t]; }, backward_closure.size());
+  backward([bc](size_t t) { return bc[t]; }, backward_closure.size(),
+           gather_.data() + gather_.size());
   x_wanted.resize(wanted.size());
   for (size_t k = 0; k < wanted.size(); ++k) x_wanted[k] = x[f.inverse_perm[wanted[k]]];
   for (int j : forward_closure) x[j] = 0;
@@ -198,14 +314,63 @@ void ClosureLdlSolver::solve_sparse_rhs(const std::vector<int>& b_indices,
                                         const std::vector<double>& b_values,
                                         const std::vector<int>& forward_closure,
                                         Eigen::VectorXd& x_out) {
+  x_out.resize(factor_->n);
+  solve_sparse_rhs(b_indices, b_values, forward_closure, x_out.data());
+}
+
+void ClosureLdlSolver::solve_sparse_rhs(const std::vector<int>& b_indices,
+                                        const std::vector<double>& b_values,
+                                        const std::vector<int>& forward_closure, double* x_out) {
   const LdlFactorData& f = *factor_;
   double* x = work_.data();
   for (size_t k = 0; k < b_indices.size(); ++k) x[f.inverse_perm[b_indices[k]]] += b_values[k];
-  forward(forward_closure);
-  backward([](size_t t) { return static_cast<int>(t); }, static_cast<size_t>(f.n));
-  x_out.resize(f.n);
-  for (int p = 0; p < f.n; ++p) {
-    x_out[f.perm[p]] = x[p];
+  const int* fc = forward_closure.data();
+  forward([fc](size_t t) { return fc[t]; }, forward_closure.size());
+  backward_full_to(x_out);
+}
+
+void ClosureLdlSolver::backward_full_to(double* x_out) {
+  const LdlFactorData& f = *factor_;
+  double* x = work_.data();
+  const int* perm = f.perm.data();
+  if (bins_.empty()) {
+    backward([](size_t t) { return static_cast<int>(t); }, static_cast<size_t>(f.n),
+             gather_.data() + gather_.size());
+    for (int p = 0; p < f.n; ++p) {
+      x_out[perm[p]] = x[p];
+      x[p] = 0;
+    }
+    return;
+  }
+  // Root side first, then the subtrees of each bin concurrently (they write disjoint
+  // positions of work_ and x_out and read only their own positions and the finished root
+  // side); the root side is permuted out and cleared after the join.
+  const int* sp = serial_.data();
+  backward([sp](size_t t) { return sp[t]; }, serial_.size(), gather_.data() + gather_.size());
+  auto run_bin = [this, x, x_out, perm](size_t b, double* gend) {
+    for (const auto& [lo, hi] : bins_[b]) {
+      backward([lo = lo](size_t t) { return lo + static_cast<int>(t); },
+               static_cast<size_t>(hi - lo + 1), gend);
+      for (int p = lo; p <= hi; ++p) {
+        x_out[perm[p]] = x[p];
+        x[p] = 0;
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(bins_.size() - 1);
+  for (size_t b = 1; b < bins_.size(); ++b) {
+    double* gend = thread_gather_[b - 1].data() + thread_gather_[b - 1].size();
+    try {
+      pool.emplace_back(run_bin, b, gend);
+    } catch (const std::system_error&) {  // no thread available: run the bin here
+      run_bin(b, gend);
+    }
+  }
+  run_bin(0, gather_.data() + gather_.size());
+  for (std::thread& t : pool) t.join();
+  for (int p : serial_) {
+    x_out[perm[p]] = x[p];
     x[p] = 0;
   }
 }
@@ -215,14 +380,9 @@ void ClosureLdlSolver::solve_dense(const Eigen::VectorXd& b, Eigen::VectorXd& x_
   INCISE_CHECK(b.size() == f.n, "solve_dense: size mismatch");
   double* x = work_.data();
   for (int p = 0; p < f.n; ++p) x[p] = b[f.perm[p]];
-  for (int j = 0; j < f.n; ++j) forward_column(j, x);
-  for (int j = 0; j < f.n; ++j) x[j] /= f.d[j];
-  backward([](size_t t) { return static_cast<int>(t); }, static_cast<size_t>(f.n));
+  forward([](size_t t) { return static_cast<int>(t); }, static_cast<size_t>(f.n));
   x_out.resize(f.n);
-  for (int p = 0; p < f.n; ++p) {
-    x_out[f.perm[p]] = x[p];
-    x[p] = 0;
-  }
+  backward_full_to(x_out.data());
 }
 
 }  // namespace incise::solver

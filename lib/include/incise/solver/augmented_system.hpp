@@ -76,6 +76,12 @@ struct AugmentedOptions {
   /// by κ(K) for a nonsingular K, so this must exceed the condition number of legitimate
   /// systems (the paper's longest beam: κ ≈ 3.3e12).
   double max_amplification = 1e14;
+  /// Threads of step 3's full backward substitution (ClosureLdlSolver): 1 = serial. The pass
+  /// streams all of L and is memory-bound; a second core adds memory bandwidth (on the
+  /// measured 2-core machine 1.5× for a pure stream). The result is bit-identical for any
+  /// value. Leave at 1 when the core is needed elsewhere, e.g. by a background
+  /// refactorization (§3.6) or the rest of the simulator.
+  int solve_threads = 1;
 };
 
 /// Outcome of AugmentedSystem::solve().

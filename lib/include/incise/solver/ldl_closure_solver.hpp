@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace incise::solver {
@@ -18,10 +19,18 @@ namespace incise::solver {
 /// Solver working on an immutable LdlFactorData (P A Pᵀ = L D Lᵀ). Holds a dense workspace of
 /// size n kept at zero between calls; not thread-safe (one object per thread), but several
 /// objects may share the same factor.
+///
+/// With `threads` > 1 the full backward substitution (solve_sparse_rhs, solve_dense) runs on
+/// that many threads: the positions near the root of the elimination forest are processed
+/// first, then disjoint subtrees — which need only x on their ancestors — concurrently
+/// (planned once at construction; requires the postordered forest CHOLMOD produces, else the
+/// pass stays serial). The arithmetic of every entry is unchanged, so the result is
+/// bit-identical to the serial pass. The pass is memory-bound (it streams all of L), so the
+/// wall-clock gain is bounded by the memory bandwidth that a second core adds (docs/augmented.md).
 class ClosureLdlSolver {
  public:
-  /// Precondition: factor != nullptr.
-  explicit ClosureLdlSolver(std::shared_ptr<const LdlFactorData> factor);
+  /// Precondition: factor != nullptr, threads ≥ 1.
+  explicit ClosureLdlSolver(std::shared_ptr<const LdlFactorData> factor, int threads = 1);
 
   /// The factor in use.
   const LdlFactorData& factor() const { return *factor_; }
@@ -46,6 +55,10 @@ class ClosureLdlSolver {
   /// "Sparsity of Solution Step 3"). `x` is resized to n (original ordering).
   void solve_sparse_rhs(const std::vector<int>& b_indices, const std::vector<double>& b_values,
                         const std::vector<int>& forward_closure, Eigen::VectorXd& x);
+  /// As above, writing the n entries (original ordering) to `x` (not resized; must not alias
+  /// the solver's workspace).
+  void solve_sparse_rhs(const std::vector<int>& b_indices, const std::vector<double>& b_values,
+                        const std::vector<int>& forward_closure, double* x);
 
   /// Dense solve A x = b (full forward and backward substitution).
   void solve_dense(const Eigen::VectorXd& b, Eigen::VectorXd& x);
@@ -55,20 +68,43 @@ class ClosureLdlSolver {
   /// solves use them: one row list per supernode, contiguous dot products in the backward pass.
   int num_supernodes() const { return num_supernodes_; }
 
+  /// Threads the full backward substitution actually uses (1 when the forest could not be
+  /// split, e.g. a single chain, or when 1 was requested).
+  int backward_threads() const {
+    return static_cast<int>(bins_.size()) > 1 ? static_cast<int>(bins_.size()) : 1;
+  }
+  /// Fraction of the entries of L that the serial part (root side) of a threaded backward
+  /// pass reads, and that the busiest thread reads afterwards; their sum bounds the
+  /// wall-clock cost relative to the serial pass (1.0 / 1.0 without threads).
+  double backward_serial_fraction() const { return serial_fraction_; }
+  double backward_max_bin_fraction() const { return max_bin_fraction_; }
+
  private:
-  void forward_column(int j, double* x) const;
-  void forward(const std::vector<int>& closure_positions);
+  void forward_supernode(int j, int j1, double* x);
   template <typename Positions>
-  void backward(const Positions& positions, size_t count);
+  void forward(const Positions& positions, size_t count);
+  template <typename Positions>
+  void backward(const Positions& positions, size_t count, double* gather_end);
+  void plan_threads(int threads);
+  // Full backward substitution of work_, then x_out[perm[p]] = work_[p] and work_ = 0.
+  void backward_full_to(double* x_out);
   std::shared_ptr<const LdlFactorData> factor_;
   std::vector<double> work_;  // permuted positions, zero between calls
   std::vector<int> mark_;
   int stamp_ = 0;
   std::vector<int> super_last_;  // position → last column of its fundamental supernode
   std::vector<double> gather_;   // x on a supernode's row set (backward substitution)
+  std::vector<double> acc_;      // updates of a supernode's row set (forward), zero between uses
   std::vector<int> super_rows_;  // row set of each supernode (at its last column), concatenated
   std::vector<std::int64_t> super_row_ptr_;  // column j₁ → start in super_rows_ (size n + 1)
   int num_supernodes_ = 0;
+  // Threaded full backward pass: positions processed serially first (ascending; walked
+  // descending), then one list of position ranges [first, last] (whole subtrees) per thread.
+  std::vector<int> serial_;
+  std::vector<std::vector<std::pair<int, int>>> bins_;
+  std::vector<std::vector<double>> thread_gather_;  // gather buffers of threads 1, 2, …
+  double serial_fraction_ = 1.0;
+  double max_bin_fraction_ = 1.0;
 };
 
 }  // namespace incise::solver
