@@ -295,9 +295,14 @@ int run_table(int argc, char** argv) {
       std::fprintf(stderr, "cannot write %s\n", csv_path.c_str());
       return 1;
     }
-    std::fprintf(out, "# %s,%s,%d,%d,%d,%lld\n", info.name.c_str(),
-                 opt.kind == Kind::kCut ? "cut" : "deform", info.nodes, info.elements, info.n0,
-                 info.nnz_l);
+    std::fprintf(
+        out, "# %s,%s,%d,%d,%d,%lld,threads=%d,schur=%s,precond=%s\n", info.name.c_str(),
+        opt.kind == Kind::kCut ? "cut" : "deform", info.nodes, info.elements, info.n0, info.nnz_l,
+        opt.solve_threads,
+        opt.schur_solver == incise::solver::SchurSolver::kDirectCached ? "direct" : "gmres",
+        opt.preconditioner == incise::solver::SchurPreconditioner::kNone       ? "none"
+        : opt.preconditioner == incise::solver::SchurPreconditioner::kDiagonal ? "diag"
+                                                                               : "spai");
     std::fprintf(
         out,
         "step,n,m,gmres_it,closure_f,closure_y,closure_ja2,closure_step3,t_update,"

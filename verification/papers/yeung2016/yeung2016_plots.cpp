@@ -4,6 +4,10 @@
 /// with the project's own SVG writer (scene/svg_plot.hpp).
 ///
 /// Usage: yeung2016_plots DIR   (reads DIR/<mesh>_<deform|cut>.csv, writes DIR/fig*.svg)
+///        yeung2016_plots --table FILE.csv [MAX_M]
+///          prints FILE's per-step Markdown table (update and refactorization + solve in wall
+///          and process-CPU time, their ratios) and the range and median of both speed-ups
+///          over the steps ≥ 1 with m ≤ MAX_M (default 100) — the tables of README.md.
 ///
 /// Rates are 1 / process CPU time of one update (resp. one refactorization + solve, one
 /// Jacobi-PCG solve): wall time on the shared measurement machine is inflated by other jobs.
@@ -27,6 +31,7 @@ using incise::scene::Series;
 
 struct Table {
   std::string name;  // mesh description from the CSV's first line
+  std::string meta;  // the whole first line (mesh, kind, sizes, solver settings)
   double nodes = 0;
   std::map<std::string, std::vector<double>> col;
   bool ok = false;
@@ -52,6 +57,7 @@ Table read_table(const std::string& path) {
   if (!in) return t;
   std::string line;
   if (!std::getline(in, line) || line.size() < 2 || line[0] != '#') return t;
+  t.meta = line.substr(2);
   const std::vector<std::string> meta = split(line.substr(2));
   if (meta.size() >= 3) {
     t.name = meta[0];
@@ -135,9 +141,64 @@ void rate_figure(const std::string& dir, const std::string& file, const Table& t
 
 }  // namespace
 
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t k = v.size() / 2;
+  return v.size() % 2 == 1 ? v[k] : 0.5 * (v[k - 1] + v[k]);
+}
+
+int print_table(const std::string& path, int max_m) {
+  const Table t = read_table(path);
+  if (!t.ok) {
+    std::fprintf(stderr, "%s: no rows (expected the CSV of augmented_bench --table ... --csv)\n",
+                 path.c_str());
+    return 1;
+  }
+  std::printf("`%s`: %s\n\n", path.c_str(), t.meta.c_str());
+  std::printf(
+      "| step | n | m | GMRES it | update ms wall / CPU | rate Hz (wall) | refactor + solve ms "
+      "wall / CPU | speed-up wall / CPU | numeric refactor CPU ms | rel. error | backward error "
+      "| ok |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::vector<double> sw, sc;
+  for (size_t i = 0; i < t.rows(); ++i) {
+    const double tu = t["t_update"][i], cu = t["cpu_update"][i];
+    const double tr = t["t_refactor"][i], cr = t["cpu_refactor"][i];
+    const double num = t["cpu_numeric_refactor"][i];
+    char numtxt[32] = "-";
+    if (num > 0) std::snprintf(numtxt, sizeof numtxt, "%.1f", 1e3 * num);
+    std::printf(
+        "| %d | %d | %d | %d | %.2f / %.2f | %.0f | %.1f / %.1f | %.1f / %.1f | %s | %.1e | %.1e | "
+        "%s |\n",
+        static_cast<int>(t["step"][i]), static_cast<int>(t["n"][i]), static_cast<int>(t["m"][i]),
+        static_cast<int>(t["gmres_it"][i]), 1e3 * tu, 1e3 * cu, tu > 0 ? 1 / tu : 0.0, 1e3 * tr,
+        1e3 * cr, tu > 0 ? tr / tu : 0.0, cu > 0 ? cr / cu : 0.0, numtxt, t["rel_error"][i],
+        t["backward_error"][i], t["ok"][i] > 0 ? "ok" : "FAIL");
+    if (t["step"][i] >= 1 && t["m"][i] <= max_m && tu > 0 && cu > 0) {
+      sw.push_back(tr / tu);
+      sc.push_back(cr / cu);
+    }
+  }
+  if (!sw.empty()) {
+    std::printf(
+        "\nSteps ≥ 1 with m ≤ %d (%zu): speed-up over refactorization + solve, wall %.1f–%.1f "
+        "(median %.1f), CPU %.1f–%.1f (median %.1f).\n",
+        max_m, sw.size(), *std::min_element(sw.begin(), sw.end()),
+        *std::max_element(sw.begin(), sw.end()), median(sw),
+        *std::min_element(sc.begin(), sc.end()), *std::max_element(sc.begin(), sc.end()),
+        median(sc));
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
+  if (argc >= 3 && std::string(argv[1]) == "--table")
+    return print_table(argv[2], argc >= 4 ? std::stoi(argv[3]) : 100);
   if (argc != 2) {
-    std::fprintf(stderr, "usage: %s DIR (with the CSV files of run_experiments.sh)\n", argv[0]);
+    std::fprintf(stderr,
+                 "usage: %s DIR (with the CSV files of run_experiments.sh)\n"
+                 "       %s --table FILE.csv [MAX_M]\n",
+                 argv[0], argv[0]);
     return 2;
   }
   const std::string dir = argv[1];
