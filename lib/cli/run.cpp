@@ -327,6 +327,8 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
                  {"gmres_iterations", c.gmres_iterations},
                  {"gmres_relative_residual", c.gmres_relative_residual},
                  {"nnz_l", c.nnz_l},
+                 {"refactorization_started", c.refactorization_started},
+                 {"refactorization_swapped", c.refactorization_swapped},
                  {"cut_seconds", c.seconds_cut},
                  {"update_seconds", c.seconds_update},
                  {"update_cpu_seconds", c.cpu_seconds_update}};

@@ -341,4 +341,50 @@ TEST(SceneParserBad, CutConfigurationUnknownValue) {
   EXPECT_NE(e.find("\"deformed\""), std::string::npos) << e;
 }
 
+// refactor_at_m (docs/scenes.md, interactive cutting run; augmented paper §3.6).
+TEST(SceneParser, RefactorAtMParses) {
+  Json j = augmented_cut_scene();
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.refactor_at_m, 0);  // default: never
+  j["solver"]["refactor_at_m"] = 300;
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.refactor_at_m, 300);
+}
+
+TEST(SceneParserBad, RefactorAtMNegative) {
+  Json j = augmented_cut_scene();
+  j["solver"]["refactor_at_m"] = -5;
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("scene.json:"), std::string::npos) << e;
+  EXPECT_NE(e.find("/solver/refactor_at_m: expected an integer in [0, "), std::string::npos) << e;
+  EXPECT_NE(e.find("got -5"), std::string::npos) << e;
+}
+
+TEST(SceneParserBad, RefactorAtMNotAnInteger) {
+  Json j = augmented_cut_scene();
+  j["solver"]["refactor_at_m"] = 12.5;
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/solver/refactor_at_m: expected an integer in [0, "), std::string::npos) << e;
+}
+
+TEST(SceneParserBad, RefactorAtMOnANonAugmentedSolver) {
+  Json j = augmented_cut_scene();
+  j["solver"].erase("cut_configuration");
+  j["solver"]["method"] = "cg";
+  j["solver"]["refactor_at_m"] = 100;
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/solver/refactor_at_m: not allowed here: only the \"augmented\" method"),
+            std::string::npos)
+      << e;
+}
+
+TEST(SceneParserBad, RefactorAtMWithoutTool) {
+  Json j = augmented_cut_scene();
+  j["solver"].erase("cut_configuration");
+  j["solver"]["refactor_at_m"] = 100;
+  j.erase("tools");
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/solver/refactor_at_m: not allowed here: the scene names no tool"),
+            std::string::npos)
+      << e;
+}
+
 }  // namespace

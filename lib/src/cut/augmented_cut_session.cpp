@@ -27,6 +27,8 @@ AugmentedCutSession::AugmentedCutSession(const mesh::MeshData& mesh,
                      "AugmentedCutSession needs the \"linear\" material (the augmented solver "
                      "solves the linear static problem K a = f), got \"" +
                          material_.name() + "\"");
+  INCISE_CHECK_PARAM(options_.refactor_at_m >= 0,
+                     "AugmentedCutOptions::refactor_at_m must be >= 0 (0 = never refactor)");
   mesh_ = std::make_unique<CutMesh>(mesh);
   const Index n = mesh_->num_nodes();
   INCISE_CHECK_PARAM(node_forces.cols() == n, "node_forces needs one column per mesh node");
@@ -75,6 +77,7 @@ AugmentedCutSession::AugmentedCutSession(const mesh::MeshData& mesh,
   solver::SparseMatrix k0(dofs, dofs);
   k0.setFromTriplets(triplets.begin(), triplets.end());
   k0.makeCompressed();
+  if (dofs > 0 && k0.diagonal().mean() > 0) constraint_spring_ = k0.diagonal().mean();
   const double cpu0 = thread_cpu_seconds();
   const Timer timer;
   const solver::FactorStatus fs = system_->initialize(k0);
@@ -128,9 +131,12 @@ void AugmentedCutSession::constrain(Index v, Index& counter) {
   const int d = node_dof_[static_cast<size_t>(v)];
   if (d < 0) return;
   const Vec3 u = mesh_->deformed(v) - mesh_->reference(v);
+  const Eigen::Matrix<double, 1, 1> spring =
+      Eigen::Matrix<double, 1, 1>::Constant(constraint_spring_);
   for (int i = 0; i < 3; ++i) {
     if (system_->is_constrained(d + i)) continue;
     system_->impose_dirichlet(d + i, u(i));
+    system_->add_element({d + i}, spring);  // keeps K positive definite (file comment)
     ++counter;
   }
 }
@@ -217,6 +223,7 @@ AugmentedCutStepReport AugmentedCutSession::step(const Vec3& a, const Vec3& b, c
     solve_into(r);
   } else {
     // Nothing changed: the last solution stands.
+    r.m_before_solve = r.m_after_solve = system_->num_replaced();
     r.status = last_.status;
     r.advice = last_.advice;
     r.free_components = last_.free_components;
@@ -249,6 +256,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
   r.free_components = free_components_;
   r.inverted_elements = inverted_;
   r.solved = false;
+  r.m_before_solve = r.m_after_solve = system_->num_replaced();
   if (free_components_ > 0) {
     r.status = CutSolveStatus::kFreeComponent;
     r.advice =
@@ -267,8 +275,20 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
     }
     system_->set_force(f);
     Eigen::VectorXd a, reaction;
-    r.solve = system_->solve(a, reaction);
+    r.solve = system_->solve(a, reaction);  // swaps in a finished background factor first
     r.solved = true;
+    r.refactorization_swapped = r.solve.refactorization_swapped;
+    r.m_after_solve = system_->num_replaced();
+    // §3.6: bound m by refactoring the current K in the background once the columns a
+    // refactorization can remove (m − |𝓓|: Dirichlet DOFs stay in 𝓛) reach the threshold; the
+    // next solve that finds the job finished swaps it in.
+    // Not in the solve that dropped a failed job (its snapshot was not positive definite): the
+    // next solve makes the next attempt, so a stuck K costs one factorization every other solve.
+    if (options_.refactor_at_m > 0 && r.solve.status != solver::AugmentedStatus::kNoFactor &&
+        r.solve.refactorization_status == solver::FactorStatus::kOk &&
+        r.m_after_solve - r.solve.dirichlet >= options_.refactor_at_m &&
+        !system_->refactorization_pending())
+      r.refactorization_started = system_->start_refactorization();
     if (!r.solve.ok()) {
       r.status = CutSolveStatus::kSolverFailed;
       r.advice = std::string(solver::to_string(r.solve.status)) + ": " + r.solve.advice;

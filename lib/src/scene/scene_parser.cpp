@@ -216,10 +216,14 @@ SolverSpec parse_solver(JsonObject o) {
   if (s.method == SolverSpec::Method::kAugmented) {
     s.cut_deformed =
         o.choice("cut_configuration", {"deformed", "reference"}, "deformed") == "deformed";
+    s.refactor_at_m = o.integer("refactor_at_m", 0, std::numeric_limits<int>::max(), 0);
   } else {
     o.forbid("cut_configuration",
              "only the \"augmented\" method solves between sweep triangles (the others cut "
              "first, in the reference configuration)");
+    o.forbid("refactor_at_m",
+             "only the \"augmented\" method has a factorization to refactor (§3.6 of Yeung et "
+             "al. 2016)");
   }
   o.finish();
   return s;
@@ -351,6 +355,11 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
       root.get("solver")->contains("cut_configuration"))
     fail(file, "/solver/cut_configuration",
          "not allowed here: the scene names no tool (add a scalpel under /tools)");
+  if (s.tools.empty() && root.get("solver") && root.get("solver")->is_object() &&
+      root.get("solver")->contains("refactor_at_m"))
+    fail(file, "/solver/refactor_at_m",
+         "not allowed here: the scene names no tool, so the augmented run solves once and "
+         "never refactors (add a scalpel under /tools)");
   if (root.has("outputs")) {
     s.outputs = parse_outputs(root.object("outputs", "an outputs object"));
   } else {

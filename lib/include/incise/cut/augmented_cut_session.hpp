@@ -17,7 +17,12 @@
 ///   fixed from the start stay fixed (no DOFs, zero displacement);
 /// - nodes fixed by the component policy (`fixed_nodes`, FreeComponentPolicy::kFixOnFace) and
 ///   nodes left without elements (`removed_nodes`) are held at their current displacement by
-///   Dirichlet constraints (impose_dirichlet), so no DOF is left without stiffness;
+///   Dirichlet constraints (impose_dirichlet), so no DOF is left without stiffness. Each
+///   constrained DOF d also gets a diagonal spring K_dd += k̄ (k̄ = mean diagonal of K⁰): it
+///   changes no displacement (a prescribed DOF's own diagonal enters only its reaction, which
+///   the session does not use), but keeps the current K positive definite — a piece held only
+///   by constraints, or a node without elements, would otherwise make K singular and every
+///   §3.6 refactorization of it fail;
 /// - then AugmentedSystem::solve() gives the new static displacement without refactoring.
 ///
 /// DOF numbering: nodes fixed at construction have no DOFs (removed from K⁰,
@@ -63,6 +68,21 @@ struct AugmentedCutOptions {
   /// (the cutter's boundary search grid is rebuilt); false keeps x = X (cutting in the
   /// reference configuration).
   bool update_deformed = true;
+  /// §3.6 of the augmented paper (automatic background refactorization), in replaced columns
+  /// (a count). After a step's (or solve()'s) augmented solve, when the replaced columns that
+  /// a refactorization can remove — m − |𝓓|, m = |𝓛|; the Dirichlet DOFs 𝓓 stay in 𝓛 after
+  /// any refactorization, so counting them would restart a useless job after every solve once
+  /// |𝓓| reached the threshold — number at least `refactor_at_m` and no refactorization is
+  /// pending, the session starts one (AugmentedSystem::start_refactorization(): the current K
+  /// is factored in a background thread). The next solve() that finds it finished swaps it in,
+  /// and m drops to m′ + |𝓓|, m′ the columns changed since the job started. 0 = never (m grows
+  /// for the whole cut). Why (§3.6): the update cost grows with m (GMRES on the m × m Schur
+  /// system, eq. 17, and the closures of its columns) while a factorization costs about the
+  /// same at any m, so the paper bounds m "by periodically re-computing a full LDLᵀ
+  /// factorization of K in a process that runs concurrently with the simulation loop"; a
+  /// threshold near the m at which the accumulated extra update time has reached one
+  /// factorization time follows its argument. The job wants a second core. Must be ≥ 0.
+  int refactor_at_m = 0;
 };
 
 /// Outcome of the solver update of one step.
@@ -92,6 +112,16 @@ struct [[nodiscard]] AugmentedCutStepReport {
   Index inverted_elements = 0;    ///< live elements with reference volume ≤ 0 (current)
   bool solved = false;            ///< whether AugmentedSystem::solve() ran
   solver::AugmentedReport solve;  ///< m = |𝓛|, GMRES iterations, closures, solver timings
+  // §3.6 background refactorization (AugmentedCutOptions::refactor_at_m).
+  int m_before_solve = 0;  ///< m = |𝓛| after this step's column replacements, before the solve
+  int m_after_solve = 0;   ///< m after the solve (after a swap, if any; unchanged without one)
+  /// The solve swapped in a finished background factorization (m_after_solve then counts only
+  /// the columns changed since it started, plus 𝓓); solve.refactorization_status tells whether
+  /// a finished job failed (it is then dropped: the old factor stays in use).
+  bool refactorization_swapped = false;
+  /// After the solve, m ≥ refactor_at_m with no job pending: a background refactorization of
+  /// the current K was started.
+  bool refactorization_started = false;
   // Timings (seconds). CPU = CLOCK_THREAD_CPUTIME_ID of the calling thread.
   double seconds_cut = 0;         ///< wall time of Cutter::step
   double seconds_update = 0;      ///< wall time of the column replacements (no solve)
@@ -143,7 +173,8 @@ class AugmentedCutSession {
   AugmentedCutStepReport solve();
 
   /// §3.6 of the augmented paper: refactors the current K in a background thread; later
-  /// solves swap it in and m drops. Returns false if a job is already running.
+  /// solves swap it in and m drops. Returns false if a job is already running. Started
+  /// automatically when AugmentedCutOptions::refactor_at_m > 0.
   bool start_refactorization() { return system_->start_refactorization(); }
 
   /// The cut mesh (reference and deformed positions, connectivity).
@@ -191,6 +222,7 @@ class AugmentedCutSession {
   Eigen::Matrix3Xd displacement_;
   Index free_components_ = 0;
   Index inverted_ = 0;
+  double constraint_spring_ = 1;  // k̄ (N/m): K_dd += k̄ at each constrained DOF d (file comment)
   AugmentedCutStepReport initial_;
   LastSolve last_;
 };

@@ -63,12 +63,14 @@ struct CutStepRow {
   int m = 0;                        ///< replaced columns |𝓛| after the step (Yeung et al. §3)
   int dirichlet = 0;                ///< |𝓓|: constrained DOFs among them
   int gmres_iterations = 0;         ///< GMRES iterations on the Schur system (eq. 17)
-  double gmres_relative_residual = 0;  ///< its relative residual at exit
-  std::int64_t nnz_l = 0;              ///< |L| of the factor in use (constant: no refactoring)
-  double seconds_cut = 0;              ///< wall time of the cut (Cutter::step)
-  double seconds_update = 0;           ///< wall time of column replacements + augmented solve
-  double cpu_seconds_update = 0;       ///< thread CPU time of the same
-  std::vector<Vec3> probes;            ///< probe values after the step (m)
+  double gmres_relative_residual = 0;    ///< its relative residual at exit
+  std::int64_t nnz_l = 0;                ///< |L| of the factor in use (changes at a swap)
+  bool refactorization_started = false;  ///< §3.6 job started after this solve (refactor_at_m)
+  bool refactorization_swapped = false;  ///< this solve swapped in a finished job (m dropped)
+  double seconds_cut = 0;                ///< wall time of the cut (Cutter::step)
+  double seconds_update = 0;             ///< wall time of column replacements + augmented solve
+  double cpu_seconds_update = 0;         ///< thread CPU time of the same
+  std::vector<Vec3> probes;              ///< probe values after the step (m)
 };
 
 /// Outcome of run_scene().

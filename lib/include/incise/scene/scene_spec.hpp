@@ -105,6 +105,10 @@ struct SolverSpec {
   /// moves in world space, thesis §3.2) or to the reference configuration (false: the same
   /// cut as the builder's cut-first path). Scene key `cut_configuration`.
   bool cut_deformed = true;
+  /// Interactive cutting run only: cut::AugmentedCutOptions::refactor_at_m, the augmented
+  /// paper's §3.6 background refactorization — started after a solve once m − |𝓓| replaced
+  /// columns (a count) have accumulated; 0 = never. Scene key `refactor_at_m`.
+  int refactor_at_m = 0;
 };
 
 /// A cutting tool. The scalpel is swept along a path; consecutive blade positions span the
