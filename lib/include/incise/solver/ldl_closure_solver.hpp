@@ -31,6 +31,9 @@ class ClosureLdlSolver {
  public:
   /// Precondition: factor != nullptr, threads ≥ 1.
   explicit ClosureLdlSolver(std::shared_ptr<const LdlFactorData> factor, int threads = 1);
+  ~ClosureLdlSolver();
+  ClosureLdlSolver(const ClosureLdlSolver&) = delete;
+  ClosureLdlSolver& operator=(const ClosureLdlSolver&) = delete;
 
   /// The factor in use.
   const LdlFactorData& factor() const { return *factor_; }
@@ -103,6 +106,8 @@ class ClosureLdlSolver {
   std::vector<int> serial_;
   std::vector<std::vector<std::pair<int, int>>> bins_;
   std::vector<std::vector<double>> thread_gather_;  // gather buffers of threads 1, 2, …
+  class Workers;
+  std::unique_ptr<Workers> workers_;  // threads 1, 2, … (waiting between passes)
   double serial_fraction_ = 1.0;
   double max_bin_fraction_ = 1.0;
 };
