@@ -26,10 +26,25 @@ else
   bricks=(4 8 12 16 20)
   big_steps=32
 fi
+# A run and its --no-exact twin (NAME_upd): the same steps without the reference
+# refactorization in between, whose update times the README's speed-ups use
+# (yeung2016_plots --table NAME.csv --update-times NAME_upd.csv).
+twin() {  # name, args...
+  local name=$1
+  shift
+  run "$name" "$@"
+  run "${name}_upd" "$@" --no-exact --pcg-every 0
+}
 # The 25,600-node beam (Fig. 5a, 7a, 11b): long runs, Jacobi-PCG every 8th/16th step.
 h_big=${beams[-1]}
-run "beam${h_big}_deform" deform --h "$h_big" --steps "$big_steps" --pcg-every 16 --pcg-seconds 20
-run "beam${h_big}_cut" cut --h "$h_big" --steps 16 --pcg-every 8 --pcg-seconds 20
+twin "beam${h_big}_deform" deform --h "$h_big" --steps "$big_steps" --pcg-every 16 --pcg-seconds 20
+twin "beam${h_big}_cut" cut --h "$h_big" --steps 16 --pcg-every 8 --pcg-seconds 20
+# The ≥ 50× target (README "Targets"): step 3 on two threads, cached Schur matrix for
+# deformation; HSJ and SPAI preconditioners for the cut.
+twin "t2_direct_beam${h_big}_deform" deform --h "$h_big" --steps "$big_steps" --schur direct --threads 2
+twin "t2_beam${h_big}_cut" cut --h "$h_big" --steps 16 --threads 2
+twin "spai_beam${h_big}_cut" cut --h "$h_big" --steps 16 --precond spai
+twin "t2_spai_beam${h_big}_cut" cut --h "$h_big" --steps 16 --precond spai --threads 2
 # Size series (Fig. 6, 9, 11a): 16 steps, PCG at steps 0, 8, 16.
 for h in "${beams[@]}"; do
   [[ "$h" == "$h_big" ]] && continue
@@ -46,7 +61,7 @@ run liver_deform deform --mesh liver --steps 16 --pcg-every 4 --pcg-seconds 20 -
 run liver_cut cut --mesh liver --steps 16 --pcg-every 4 --pcg-seconds 20 --ref-kind supernodal
 # Eq. 17 with the cached Schur matrix as GMRES preconditioner (SchurSolver::kDirectCached).
 if [[ "$quick" != quick ]]; then
-  run direct_beam1024_deform deform --h 1024 --steps 32 --schur direct
+  twin direct_beam1024_deform deform --h 1024 --steps 32 --schur direct
   run direct_beam1024_cut cut --h 1024 --steps 16 --schur direct
   run direct_brick16_deform deform --brick 16 --steps 16 --schur direct --ref-kind supernodal
   run direct_brick16_cut cut --brick 16 --steps 16 --schur direct --ref-kind supernodal

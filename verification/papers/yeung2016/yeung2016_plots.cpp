@@ -4,10 +4,12 @@
 /// with the project's own SVG writer (scene/svg_plot.hpp).
 ///
 /// Usage: yeung2016_plots DIR   (reads DIR/<mesh>_<deform|cut>.csv, writes DIR/fig*.svg)
-///        yeung2016_plots --table FILE.csv [MAX_M]
+///        yeung2016_plots --table FILE.csv [--update-times FILE2.csv] [--max-m M]
 ///          prints FILE's per-step Markdown table (update and refactorization + solve in wall
 ///          and process-CPU time, their ratios) and the range and median of both speed-ups
-///          over the steps ≥ 1 with m ≤ MAX_M (default 100) — the tables of README.md.
+///          over the steps ≥ 1 with m ≤ M (default 100) — the tables of README.md. FILE2: the
+///          same run with --no-exact, whose update times (not disturbed by the reference
+///          refactorizations in between) are then used for the speed-ups.
 ///
 /// Rates are 1 / process CPU time of one update (resp. one refactorization + solve, one
 /// Jacobi-PCG solve): wall time on the shared measurement machine is inflated by other jobs.
@@ -148,32 +150,49 @@ double median(std::vector<double> v) {
   return v.size() % 2 == 1 ? v[k] : 0.5 * (v[k - 1] + v[k]);
 }
 
-int print_table(const std::string& path, int max_m) {
+// `timing` (optional, may equal `t`): a run of the same steps without the reference
+// refactorizations in between (augmented_bench --no-exact), whose update times are used for
+// the speed-ups: a 0.2 s factorization between two updates evicts the caches and the TLB and
+// adds 0.3–1 ms to the next update (measured), which is the reference's cost, not the update's.
+int print_table(const std::string& path, const std::string& timing_path, int max_m) {
   const Table t = read_table(path);
-  if (!t.ok) {
+  const Table u = timing_path.empty() ? t : read_table(timing_path);
+  if (!t.ok || !u.ok) {
     std::fprintf(stderr, "%s: no rows (expected the CSV of augmented_bench --table ... --csv)\n",
-                 path.c_str());
+                 (!t.ok ? path : timing_path).c_str());
     return 1;
   }
-  std::printf("`%s`: %s\n\n", path.c_str(), t.meta.c_str());
+  const bool separate = !timing_path.empty();
+  for (size_t i = 0; separate && i < t.rows(); ++i) {
+    if (i >= u.rows() || u["step"][i] != t["step"][i] || u["m"][i] != t["m"][i] ||
+        u["n"][i] != t["n"][i]) {
+      std::fprintf(stderr, "%s and %s do not describe the same steps (row %zu)\n", path.c_str(),
+                   timing_path.c_str(), i);
+      return 1;
+    }
+  }
+  std::printf("`%s`: %s\n", path.c_str(), t.meta.c_str());
+  if (separate) std::printf("update times from `%s`: %s\n", timing_path.c_str(), u.meta.c_str());
   std::printf(
-      "| step | n | m | GMRES it | update ms wall / CPU | rate Hz (wall) | refactor + solve ms "
-      "wall / CPU | speed-up wall / CPU | numeric refactor CPU ms | rel. error | backward error "
-      "| ok |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "\n| step | n | m | GMRES it | update ms wall / CPU | rate Hz (wall) |%s refactor + solve "
+      "ms wall / CPU | speed-up wall / CPU | numeric refactor CPU ms | rel. error | backward "
+      "error | ok |\n|---|---|---|---|---|---|%s---|---|---|---|---|---|\n",
+      separate ? " update ms wall, between refactorizations |" : "", separate ? "---|" : "");
   std::vector<double> sw, sc;
   for (size_t i = 0; i < t.rows(); ++i) {
-    const double tu = t["t_update"][i], cu = t["cpu_update"][i];
+    const double tu = u["t_update"][i], cu = u["cpu_update"][i];
     const double tr = t["t_refactor"][i], cr = t["cpu_refactor"][i];
     const double num = t["cpu_numeric_refactor"][i];
-    char numtxt[32] = "-";
+    char numtxt[32] = "-", inter[48] = "";
     if (num > 0) std::snprintf(numtxt, sizeof numtxt, "%.1f", 1e3 * num);
+    if (separate) std::snprintf(inter, sizeof inter, " %.2f |", 1e3 * t["t_update"][i]);
     std::printf(
-        "| %d | %d | %d | %d | %.2f / %.2f | %.0f | %.1f / %.1f | %.1f / %.1f | %s | %.1e | %.1e | "
-        "%s |\n",
+        "| %d | %d | %d | %d | %.2f / %.2f | %.0f |%s %.1f / %.1f | %.1f / %.1f | %s | %.1e | "
+        "%.1e | %s |\n",
         static_cast<int>(t["step"][i]), static_cast<int>(t["n"][i]), static_cast<int>(t["m"][i]),
-        static_cast<int>(t["gmres_it"][i]), 1e3 * tu, 1e3 * cu, tu > 0 ? 1 / tu : 0.0, 1e3 * tr,
-        1e3 * cr, tu > 0 ? tr / tu : 0.0, cu > 0 ? cr / cu : 0.0, numtxt, t["rel_error"][i],
-        t["backward_error"][i], t["ok"][i] > 0 ? "ok" : "FAIL");
+        static_cast<int>(t["gmres_it"][i]), 1e3 * tu, 1e3 * cu, tu > 0 ? 1 / tu : 0.0, inter,
+        1e3 * tr, 1e3 * cr, tu > 0 ? tr / tu : 0.0, cu > 0 ? cr / cu : 0.0, numtxt,
+        t["rel_error"][i], t["backward_error"][i], t["ok"][i] > 0 ? "ok" : "FAIL");
     if (t["step"][i] >= 1 && t["m"][i] <= max_m && tu > 0 && cu > 0) {
       sw.push_back(tr / tu);
       sc.push_back(cr / cu);
@@ -192,12 +211,26 @@ int print_table(const std::string& path, int max_m) {
 }
 
 int main(int argc, char** argv) {
-  if (argc >= 3 && std::string(argv[1]) == "--table")
-    return print_table(argv[2], argc >= 4 ? std::stoi(argv[3]) : 100);
+  if (argc >= 3 && std::string(argv[1]) == "--table") {
+    std::string timing;
+    int max_m = 100;
+    for (int i = 3; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "--update-times" && i + 1 < argc) {
+        timing = argv[++i];
+      } else if (a == "--max-m" && i + 1 < argc) {
+        max_m = std::stoi(argv[++i]);
+      } else {
+        std::fprintf(stderr, "unknown option %s\n", a.c_str());
+        return 2;
+      }
+    }
+    return print_table(argv[2], timing, max_m);
+  }
   if (argc != 2) {
     std::fprintf(stderr,
                  "usage: %s DIR (with the CSV files of run_experiments.sh)\n"
-                 "       %s --table FILE.csv [MAX_M]\n",
+                 "       %s --table FILE.csv [--update-times FILE2.csv] [--max-m M]\n",
                  argv[0], argv[0]);
     return 2;
   }
