@@ -19,6 +19,7 @@
 ///                      cached Schur matrix; then "+N Schur solves" counts the restricted
 ///                      solves spent on updating H R⁻¹ J)
 ///                      [--threads T] (threads of step 3's backward pass; 1 by default)
+///                      [--gmres-tol TOL] (relative residual of eq. 17; 1e-12 by default)
 ///                      [--csv FILE] (also write the rows as CSV, for yeung2016_plots)
 ///    prints one Markdown row per step: m, GMRES iterations, closure sizes, update time and
 ///    rate, refactorization + solve time, speed-up, Jacobi-PCG time, relative error.
@@ -243,6 +244,8 @@ int run_table(int argc, char** argv) {
       opt.exact = false;
     } else if (a == "--threads") {
       opt.solve_threads = std::stoi(next());
+    } else if (a == "--gmres-tol") {
+      opt.gmres_tolerance = std::stod(next());
     } else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;

@@ -74,6 +74,8 @@ struct Options {
   solver::SchurSolver schur_solver = solver::SchurSolver::kGmres;
   /// Threads of step 3's full backward substitution (AugmentedOptions::solve_threads).
   int solve_threads = 1;
+  /// GMRES tolerance on the relative residual of eq. 17.
+  double gmres_tolerance = 1e-12;
 };
 
 /// One row of the per-step table.
@@ -272,7 +274,7 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
   aopt.solve_threads = opt.solve_threads;
   aopt.cholmod.kind = opt.cholmod;
   aopt.cholmod.ordering = opt.ordering;
-  aopt.gmres.tolerance = 1e-12;
+  aopt.gmres.tolerance = opt.gmres_tolerance;
   aopt.gmres.restart = 200;
   aopt.gmres.max_iterations = 2000;
   AugmentedSystem aug(aopt);
