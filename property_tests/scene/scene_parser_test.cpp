@@ -376,6 +376,43 @@ TEST(SceneParserBad, RefactorAtMOnANonAugmentedSolver) {
       << e;
 }
 
+// solve_threads (docs/scenes.md, interactive cutting run; AugmentedOptions::solve_threads).
+TEST(SceneParser, SolveThreadsParses) {
+  Json j = augmented_cut_scene();
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.solve_threads, 1);  // default: serial
+  j["solver"]["solve_threads"] = 2;
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.solve_threads, 2);
+}
+
+TEST(SceneParserBad, SolveThreadsOutOfRange) {
+  for (const Json& bad : {Json(0), Json(65), Json(1.5), Json("2")}) {
+    Json j = augmented_cut_scene();
+    j["solver"]["solve_threads"] = bad;
+    const std::string e = error_of(j);
+    EXPECT_NE(e.find("/solver/solve_threads: expected an integer in [1, 64]"), std::string::npos)
+        << e;
+  }
+}
+
+TEST(SceneParserBad, SolveThreadsOnANonAugmentedSolverOrWithoutTool) {
+  Json j = augmented_cut_scene();
+  j["solver"].erase("cut_configuration");
+  j["solver"]["method"] = "cg";
+  j["solver"]["solve_threads"] = 2;
+  std::string e = error_of(j);
+  EXPECT_NE(e.find("/solver/solve_threads: not allowed here: only the \"augmented\" method"),
+            std::string::npos)
+      << e;
+  j = augmented_cut_scene();
+  j["solver"].erase("cut_configuration");
+  j["solver"]["solve_threads"] = 2;
+  j.erase("tools");
+  e = error_of(j);
+  EXPECT_NE(e.find("/solver/solve_threads: not allowed here: the scene names no tool"),
+            std::string::npos)
+      << e;
+}
+
 TEST(SceneParserBad, RefactorAtMWithoutTool) {
   Json j = augmented_cut_scene();
   j["solver"].erase("cut_configuration");

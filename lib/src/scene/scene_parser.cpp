@@ -217,6 +217,7 @@ SolverSpec parse_solver(JsonObject o) {
     s.cut_deformed =
         o.choice("cut_configuration", {"deformed", "reference"}, "deformed") == "deformed";
     s.refactor_at_m = o.integer("refactor_at_m", 0, std::numeric_limits<int>::max(), 0);
+    s.solve_threads = o.integer("solve_threads", 1, 64, 1);
   } else {
     o.forbid("cut_configuration",
              "only the \"augmented\" method solves between sweep triangles (the others cut "
@@ -224,6 +225,9 @@ SolverSpec parse_solver(JsonObject o) {
     o.forbid("refactor_at_m",
              "only the \"augmented\" method has a factorization to refactor (§3.6 of Yeung et "
              "al. 2016)");
+    o.forbid("solve_threads",
+             "only the \"augmented\" method has step-3 triangular solves to split (Yeung et al. "
+             "2016 §3.2)");
   }
   o.finish();
   return s;
@@ -360,6 +364,11 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
     fail(file, "/solver/refactor_at_m",
          "not allowed here: the scene names no tool, so the augmented run solves once and "
          "never refactors (add a scalpel under /tools)");
+  if (s.tools.empty() && root.get("solver") && root.get("solver")->is_object() &&
+      root.get("solver")->contains("solve_threads"))
+    fail(file, "/solver/solve_threads",
+         "not allowed here: the scene names no tool, so the augmented run is one direct CHOLMOD "
+         "solve without the augmented steps (add a scalpel under /tools)");
   if (root.has("outputs")) {
     s.outputs = parse_outputs(root.object("outputs", "an outputs object"));
   } else {

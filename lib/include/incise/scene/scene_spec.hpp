@@ -109,6 +109,10 @@ struct SolverSpec {
   /// paper's §3.6 background refactorization — started after a solve once m − |𝓓| replaced
   /// columns (a count) have accumulated; 0 = never. Scene key `refactor_at_m`.
   int refactor_at_m = 0;
+  /// Interactive cutting run only: solver::AugmentedOptions::solve_threads, the threads of
+  /// step 3's full backward substitution (1 = serial; the result is bit-identical for any
+  /// value). Scene key `solve_threads`, 1 … 64.
+  int solve_threads = 1;
 };
 
 /// A cutting tool. The scalpel is swept along a path; consecutive blade positions span the
