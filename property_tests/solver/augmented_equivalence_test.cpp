@@ -141,6 +141,7 @@ struct Family {
   double fixed_fraction = 0;  ///< nodes with z < zmin + fraction·(z range) are fixed (0: z = 0)
   /// Eq. 17 by GMRES or by the cached explicit Schur matrix (SchurSolver::kDirectCached).
   solver::SchurSolver schur = solver::SchurSolver::kGmres;
+  int threads = 1;  ///< AugmentedOptions::solve_threads (step 3's backward pass)
 };
 
 void PrintTo(const Family& f, std::ostream* os) {
@@ -165,8 +166,8 @@ mesh::MeshData liver() {
 class AugmentedEquivalence : public ::testing::TestWithParam<Family> {};
 
 // Yeung et al. 2016 eqs. 4–17: ≥ 200 random steps per default run across the parameter sets
-// (6 families × 2 seeds × 30 steps, plus 4 steps on the liver mesh), each compared with a fresh
-// factorization.
+// (9 families × 2 seeds × 30 steps — two with the cached Schur matrix, one with step 3 on two
+// threads — plus 4 steps on the liver mesh), each compared with a fresh factorization.
 TEST_P(AugmentedEquivalence, RandomCutsRemovalsConstraintsEq4to17) {
   const Family fam = GetParam();
   INCISE_SEEDED_RNG(rng, 5);
@@ -182,6 +183,7 @@ TEST_P(AugmentedEquivalence, RandomCutsRemovalsConstraintsEq4to17) {
     opt.gmres.max_iterations = 3000;
     opt.preconditioner = fam.preconditioner;
     opt.schur_solver = fam.schur;
+    opt.solve_threads = fam.threads;
     opt.cholmod.kind =
         (s % 2 == 0) ? solver::CholmodKind::kSupernodal : solver::CholmodKind::kSimplicialLdl;
     const mesh::MeshData mesh_data = fam.make();
@@ -338,7 +340,9 @@ INSTANTIATE_TEST_SUITE_P(
         Family{"beam_elastic_direct", &small_beam, SchurPreconditioner::kNone, true, 2, 30, 0,
                solver::SchurSolver::kDirectCached},
         Family{"brick_direct", &small_brick, SchurPreconditioner::kNone, false, 2, 30, 0,
-               solver::SchurSolver::kDirectCached}),
+               solver::SchurSolver::kDirectCached},
+        Family{"beam_elastic_threads2", &small_beam, SchurPreconditioner::kDiagonal, true, 2, 30, 0,
+               solver::SchurSolver::kGmres, 2}),
     [](const ::testing::TestParamInfo<Family>& p) { return std::string(p.param.name); });
 
 // Eq. 1: replacing one column (and, by symmetry, its row) by an explicit example.
