@@ -355,20 +355,21 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
     for (std::size_t i = 0; i < tools->size(); ++i)
       s.tools.push_back(parse_tool((*tools)[i], detail::child_path("/tools", i), file));
   }
-  if (s.tools.empty() && root.get("solver") && root.get("solver")->is_object() &&
-      root.get("solver")->contains("cut_configuration"))
-    fail(file, "/solver/cut_configuration",
-         "not allowed here: the scene names no tool (add a scalpel under /tools)");
-  if (s.tools.empty() && root.get("solver") && root.get("solver")->is_object() &&
-      root.get("solver")->contains("refactor_at_m"))
-    fail(file, "/solver/refactor_at_m",
-         "not allowed here: the scene names no tool, so the augmented run solves once and "
-         "never refactors (add a scalpel under /tools)");
-  if (s.tools.empty() && root.get("solver") && root.get("solver")->is_object() &&
-      root.get("solver")->contains("solve_threads"))
-    fail(file, "/solver/solve_threads",
-         "not allowed here: the scene names no tool, so the augmented run is one direct CHOLMOD "
-         "solve without the augmented steps (add a scalpel under /tools)");
+  // Keys of the interactive cutting run (augmented solver with a tool) in a scene without one.
+  const Json* solver_json = root.get("solver");
+  if (s.tools.empty() && solver_json && solver_json->is_object()) {
+    const std::pair<const char*, const char*> cut_only_keys[] = {
+        {"cut_configuration", ""},
+        {"refactor_at_m", ", so the augmented run solves once and never refactors"},
+        {"solve_threads",
+         ", so the augmented run is one direct CHOLMOD solve without the augmented steps"}};
+    for (const auto& [key, why] : cut_only_keys) {
+      if (solver_json->contains(key))
+        fail(file, std::string("/solver/") + key,
+             std::string("not allowed here: the scene names no tool") + why +
+                 " (add a scalpel under /tools)");
+    }
+  }
   if (root.has("outputs")) {
     s.outputs = parse_outputs(root.object("outputs", "an outputs object"));
   } else {

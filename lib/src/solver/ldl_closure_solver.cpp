@@ -432,15 +432,14 @@ void ClosureLdlSolver::backward_full_to(double* x_out) {
       }
     }
   };
+  const std::function<void(size_t)> bin = [&](size_t b) {
+    std::vector<double>& g = b == 0 ? gather_ : thread_gather_[b - 1];
+    run_bin(b, g.data() + g.size());
+  };
   if (workers_) {
-    workers_->run([&](size_t b) {
-      run_bin(b, b == 0 ? gather_.data() + gather_.size()
-                        : thread_gather_[b - 1].data() + thread_gather_[b - 1].size());
-    });
+    workers_->run(bin);
   } else {  // the worker threads could not be created: all bins here
-    for (size_t b = 0; b < bins_.size(); ++b)
-      run_bin(b, b == 0 ? gather_.data() + gather_.size()
-                        : thread_gather_[b - 1].data() + thread_gather_[b - 1].size());
+    for (size_t b = 0; b < bins_.size(); ++b) bin(b);
   }
   for (int p : serial_) {
     x_out[perm[p]] = x[p];
