@@ -195,7 +195,7 @@ FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
   if (!(diag_scale_ > 0)) diag_scale_ = 1.0;
   changed_.clear();
   dirichlet_.clear();
-  schur_base_ = nullptr;
+  g_base_ = nullptr;
   f_ = Eigen::VectorXd::Zero(n_);
   changed_since_snapshot_.clear();
   snapshot_active_ = false;
@@ -219,7 +219,6 @@ AugmentedSystem::Column AugmentedSystem::column_of(int j) const {
 
 void AugmentedSystem::touch_column(int j) {
   if (snapshot_active_) changed_since_snapshot_.insert(j);
-  bump_version(j);
   if (changed_.count(j) != 0) return;
   changed_.emplace(j, column_of(j));
 }
@@ -268,13 +267,12 @@ void AugmentedSystem::add_element(const std::vector<int>& dofs, const Eigen::Mat
 void AugmentedSystem::impose_dirichlet(int dof, double value) {
   INCISE_CHECK(dof >= 0 && dof < n_, "impose_dirichlet: DOF index out of range");
   INCISE_CHECK_PARAM(std::isfinite(value), "impose_dirichlet: value must be finite");
-  if (dirichlet_.count(dof) == 0) bump_version(dof);  // J column becomes e_dof
   dirichlet_[dof] = value;
 }
 
 void AugmentedSystem::release_dirichlet(int dof) {
   INCISE_CHECK(dof >= 0 && dof < n_, "release_dirichlet: DOF index out of range");
-  if (dirichlet_.erase(dof) != 0) bump_version(dof);
+  dirichlet_.erase(dof);
 }
 
 void AugmentedSystem::set_force(const Eigen::VectorXd& f) {
@@ -351,7 +349,6 @@ int AugmentedSystem::prune_unchanged_columns() {
       }
     }
     if (same) {
-      bump_version(j);
       it = changed_.erase(it);
       ++pruned;
     } else {
@@ -409,107 +406,103 @@ bool AugmentedSystem::wait_for_refactorization() {
   return swap_in(job_.get(), changed_since_snapshot_);
 }
 
-// H R⁻¹ J, kept between calls (SchurSolver::kDirectCached). Entry
-// (i, k) = (R⁻¹ J_k) at DOF 𝓛ᵢ. Reused when the base factor, DOF 𝓛ᵢ and the version of column
-// 𝓛ₖ are unchanged; a changed/new column k costs one restricted solve R⁻¹ J_k (as one GMRES
-// operator application); a new row i for the kept columns costs one restricted solve
-// y = R⁻¹ e_{𝓛ᵢ} on the structure of those columns, then (R⁻¹ J_k)_i = yᵀ J_k (R symmetric).
-// Rows of new DOFs (≥ n_base) are rows of the identity block of R: entry = (J_k)_{𝓛ᵢ}.
-Eigen::MatrixXd AugmentedSystem::schur_matrix(const std::vector<int>& l_list,
-                                              const std::vector<char>& is_dir,
-                                              const std::vector<const Column*>& jcols,
-                                              const std::vector<int>& l_base,
-                                              const std::vector<int>& c_y, int& solves) {
+// H R⁻¹ J in the capacitance form (SchurSolver::kDirectCached). Write J_k = R_{*,𝓛ₖ} + E_k for
+// a column that is not Dirichlet (E_k = K_{*,𝓛ₖ} − R_{*,𝓛ₖ}; R_{*,𝓛ₖ} = e_{𝓛ₖ} for a new DOF)
+// and J_k = e_{𝓛ₖ} for a Dirichlet column. E_k is nonzero only in rows whose own column
+// changed (K and R are symmetric), i.e. in rows of 𝓛, so with G = H R⁻¹ Hᵀ (the 𝓛-block of
+// R⁻¹; the identity on new DOFs)
+//
+//     H R⁻¹ J = Φ + G Ψ,   Φ = diag(1 for non-Dirichlet, 0 for Dirichlet columns),
+//                          Ψ_{*k} = H E_k (non-Dirichlet) or e_k (Dirichlet).
+//
+// This is the capacitance matrix of the Sherman–Morrison–Woodbury form of the update. G depends
+// only on the set 𝓛 and the factor, not on the column values, so it is kept between solves:
+// a DOF that joins 𝓛 costs one restricted solve y = R⁻¹ e_{𝓛ᵢ} (column i of G, and row i by
+// the symmetry of G); changed column values cost nothing but the product G Ψ (O(m·nnz(Ψ))).
+// Entries of E in rows outside 𝓛 (possible only if K lost its exact symmetry) are left out:
+// the matrix is then an approximation, which as GMRES's preconditioner costs iterations, not
+// accuracy.
+Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const std::vector<int>& l_list,
+                                                    const std::vector<char>& is_dir,
+                                                    const std::vector<const Column*>& jcols,
+                                                    const std::vector<int>& l_base,
+                                                    const std::vector<int>& c_y, int& solves) {
   const int m = static_cast<int>(l_list.size());
   const int nb = n_base_;
+  const int mb = static_cast<int>(l_base.size());
   ClosureLdlSolver& solver = *base_->solver;
-  auto for_j = [&](int k, auto&& fn) {
-    if (is_dir[k]) {
-      fn(l_list[k], 1.0);
-    } else {
-      for (const auto& [row, v] : *jcols[k]) fn(row, v);
-    }
-  };
-  std::vector<std::uint64_t> keys(m);
-  for (int k = 0; k < m; ++k) keys[k] = column_version(l_list[k]);
-  std::vector<int> old(m, -1);  // position of 𝓛ᵢ in the cached 𝓛 (both sorted)
-  if (schur_base_ == base_.get()) {
+  // G on the base entries of 𝓛 (l_base, sorted): kept entries from the cache, new columns by
+  // restricted solves.
+  std::vector<int> old(mb, -1);  // position of l_base[i] in the cached list (both sorted)
+  if (g_base_ == base_.get()) {
     size_t q = 0;
-    for (int i = 0; i < m; ++i) {
-      while (q < schur_l_.size() && schur_l_[q] < l_list[i]) ++q;
-      if (q < schur_l_.size() && schur_l_[q] == l_list[i]) old[i] = static_cast<int>(q);
+    for (int i = 0; i < mb; ++i) {
+      while (q < g_l_.size() && g_l_[q] < l_base[i]) ++q;
+      if (q < g_l_.size() && g_l_[q] == l_base[i]) old[i] = static_cast<int>(q);
     }
   }
-  std::vector<char> col_ok(m, 0);
-  std::vector<int> new_rows;
-  for (int k = 0; k < m; ++k) {
-    col_ok[k] = old[k] >= 0 && schur_keys_[old[k]] == keys[k];
-    if (old[k] < 0) new_rows.push_back(k);
-  }
-  Eigen::MatrixXd s = Eigen::MatrixXd::Zero(m, m);
-  std::vector<int> ok_cols;
-  for (int k = 0; k < m; ++k) {
-    if (!col_ok[k]) continue;
-    ok_cols.push_back(k);
-    for (int i = 0; i < m; ++i)
-      if (old[i] >= 0) s(i, k) = schur_(old[i], old[k]);
+  Eigen::MatrixXd g(mb, mb);
+  for (int k = 0; k < mb; ++k) {
+    if (old[k] < 0) continue;
+    for (int i = 0; i < mb; ++i)
+      if (old[i] >= 0) g(i, k) = g_(old[i], old[k]);
   }
   solves = 0;
-  std::vector<int> idx;
-  std::vector<double> val, y;
-  // Changed and new columns: s(:, k) = H R⁻¹ J_k.
-  for (int k = 0; k < m; ++k) {
-    if (col_ok[k]) continue;
-    idx.clear();
-    val.clear();
-    for_j(k, [&](int row, double v) {
-      if (row < nb) {
-        idx.push_back(row);
-        val.push_back(v);
-      } else {
-        s(pos_in_l_[row], k) = v;
-      }
-    });
-    solver.solve_restricted(idx, val, solver.closure(idx), c_y, l_base, y);
+  std::vector<double> y;
+  for (int k = 0; k < mb; ++k) {
+    if (old[k] >= 0) continue;
+    const std::vector<int> e{l_base[k]};
+    solver.solve_restricted(e, {1.0}, solver.closure(e), c_y, l_base, y);
     ++solves;
-    int kb = 0;
-    for (int i = 0; i < m; ++i)
-      if (l_list[i] < nb) s(i, k) = y[kb++];
-  }
-  // New rows of the kept columns.
-  if (!new_rows.empty() && !ok_cols.empty()) {
-    std::vector<int> rows;  // base rows of the kept columns' structure
-    for (int k : ok_cols)
-      for_j(k, [&](int row, double v) {
-        if (row < nb)
-          rows.push_back(row);
-        else if (old[pos_in_l_[row]] < 0)
-          s(pos_in_l_[row], k) = v;
-      });
-    std::sort(rows.begin(), rows.end());
-    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
-    const std::vector<int> c_rows = solver.closure(rows);
-    std::unordered_map<int, int> at;
-    at.reserve(rows.size() * 2);
-    for (size_t t = 0; t < rows.size(); ++t) at[rows[t]] = static_cast<int>(t);
-    for (int i : new_rows) {
-      if (l_list[i] >= nb) continue;  // identity block: set above
-      const std::vector<int> e{l_list[i]};
-      solver.solve_restricted(e, {1.0}, solver.closure(e), c_rows, rows, y);
-      ++solves;
-      for (int k : ok_cols) {
-        double sum = 0;
-        for_j(k, [&](int row, double v) {
-          if (row < nb) sum += y[at[row]] * v;
-        });
-        s(i, k) = sum;
-      }
+    for (int i = 0; i < mb; ++i) {
+      g(i, k) = y[i];
+      if (old[i] >= 0) g(k, i) = y[i];  // rows of new columns come from their own solves
     }
   }
-  schur_base_ = base_.get();
-  schur_l_ = l_list;
-  schur_keys_ = keys;
-  schur_ = s;
+  g_base_ = base_.get();
+  g_l_ = l_base;
+  g_ = g;
+
+  // Φ + G Ψ, column by column: for each entry (𝓛 position p, value v) of Ψ_{*k}, add v·G_{*p}.
+  // 𝓛 is sorted, so its base DOFs (< n_base) are its first mb entries and G is block diagonal:
+  // g on them, the identity on the new DOFs.
+  Eigen::MatrixXd s = Eigen::MatrixXd::Zero(m, m);
+  auto add_g_column = [&](int k, int p, double v) {
+    if (p < mb) {
+      s.col(k).head(mb) += v * g.col(p);
+    } else {
+      s(p, k) += v;
+    }
+  };
+  for (int k = 0; k < m; ++k) {
+    const int j = l_list[k];
+    if (is_dir[k]) {
+      add_g_column(k, k, 1.0);
+      continue;
+    }
+    s(k, k) += 1.0;
+    // E_k = K_{*j} − R_{*j}: merge the stored column with the base column (both sorted).
+    const Column& kc = *jcols[k];
+    auto add_e = [&](int row, double v) {
+      if (v != 0 && pos_in_l_[row] >= 0) add_g_column(k, pos_in_l_[row], v);
+    };
+    size_t a = 0;
+    if (j < nb) {
+      for (SparseMatrix::InnerIterator it(base_->matrix, j); it; ++it) {
+        const int row = static_cast<int>(it.row());
+        for (; a < kc.size() && kc[a].first < row; ++a) add_e(kc[a].first, kc[a].second);
+        if (a < kc.size() && kc[a].first == row) {
+          add_e(row, kc[a].second - it.value());
+          ++a;
+        } else {
+          add_e(row, -it.value());
+        }
+      }
+      for (; a < kc.size(); ++a) add_e(kc[a].first, kc[a].second);
+    } else {
+      for (const auto& [row, v] : kc) add_e(row, row == j ? v - 1.0 : v);
+    }
+  }
   return s;
 }
 
@@ -719,18 +712,29 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
   };
   GmresOperator prec;
   Eigen::PartialPivLU<Eigen::MatrixXd> schur_lu;
+  Eigen::VectorXd row_scale, col_scale;
   if (m > 0 && options_.schur_solver == SchurSolver::kDirectCached) {
-    // The cached H R⁻¹ J (LU-factored) as right preconditioner: GMRES with the exact operator
+    // The explicit H R⁻¹ J (LU-factored) as right preconditioner: GMRES with the exact operator
     // then converges in one or two iterations and keeps the residual of eq. 17 consistent with
-    // the operator step 3 uses (the cached rows, computed through the symmetry of R, differ
-    // from the operator by round-off amplified by κ(R): as a direct solve this cost the long
-    // beam's cut two digits of backward error).
-    schur_lu.compute(schur_matrix(l_list, is_dir, jcols, l_base, c_y, report.schur_solves));
+    // the operator step 3 uses (the capacitance form differs from the operator by round-off
+    // amplified by κ(R)).
+    Eigen::MatrixXd s = capacitance_matrix(l_list, is_dir, jcols, l_base, c_y, report.schur_solves);
+    // Rows and columns are in different units (displacement per force, per unit displacement)
+    // and span many decades on long meshes: equilibrate (max-norm row, then column scaling)
+    // before the LU, so that its condition estimate measures singularity, not scaling.
+    row_scale = s.cwiseAbs().rowwise().maxCoeff().cwiseMax(1e-300).cwiseInverse();
+    s = row_scale.asDiagonal() * s;
+    col_scale = s.cwiseAbs().colwise().maxCoeff().transpose().cwiseMax(1e-300).cwiseInverse();
+    s = s * col_scale.asDiagonal();
+    schur_lu.compute(s);
     // A numerically singular H R⁻¹ J (e.g. a cut freed a component): plain GMRES, whose
     // breakdown / stagnation / amplification checks report it.
     const double rc = schur_lu.rcond();
-    if (std::isfinite(rc) && rc > 1e-13)
-      prec = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) { out = schur_lu.solve(v); };
+    if (std::isfinite(rc) && rc > 1e-13) {
+      prec = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) {
+        out = col_scale.cwiseProduct(schur_lu.solve(row_scale.cwiseProduct(v)));
+      };
+    }
   } else if (use_m) {
     prec = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) { out = m_lu.solve(v); };
   }

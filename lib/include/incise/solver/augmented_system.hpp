@@ -44,12 +44,13 @@ enum class SchurPreconditioner {
 /// How the m×m Schur system (H R⁻¹ J) a₂ = H R⁻¹ f̂ of eq. 17 is solved.
 enum class SchurSolver {
   kGmres,  ///< GMRES (§3.2): one closure-restricted solve with R per iteration, every step
-  /// H R⁻¹ J formed explicitly and kept between solve() calls: only the columns whose J column
-  /// changed (element changes, constraint imposed/released, new DOFs) and the rows of new
-  /// 𝓛 entries are recomputed, one closure-restricted solve with R each (the rows through
-  /// the symmetry of R: (R⁻¹J_k)_i = (R⁻¹e_i)ᵀJ_k). Its dense LU is the right preconditioner
-  /// of GMRES, which then converges in 1–2 iterations. Cheaper when few columns change per
-  /// step (deformation: 3 columns and 3 rows per constrained node vs. ~m GMRES iterations).
+  /// H R⁻¹ J formed explicitly in the capacitance form Φ + G Ψ (docs/augmented.md): G, the
+  /// block of R⁻¹ on 𝓛, is kept between solve() calls while the factor is the same; a DOF
+  /// that joins 𝓛 costs one closure-restricted solve R⁻¹e_{𝓛ᵢ}, changed column values only
+  /// the m×m product G Ψ (Ψ holds the changes E = K − R on 𝓛 and e_k for Dirichlet columns).
+  /// Its dense LU is the right preconditioner of GMRES on the exact operator, which then
+  /// converges in 1–2 iterations (the capacitance form amplifies round-off by κ(R) in the
+  /// directions of R's low modes, so it is not used as a direct solve).
   kDirectCached
 };
 
@@ -105,7 +106,7 @@ struct [[nodiscard]] AugmentedReport {
   int m = 0;               ///< replaced columns |𝓛| (changed columns + Dirichlet DOFs)
   int dirichlet = 0;       ///< |𝓓|
   GmresReport gmres;       ///< step 2 (kGmres; with kDirectCached: iterations 0, the LU residual)
-  int schur_solves = 0;    ///< kDirectCached: restricted solves spent updating H R⁻¹ J
+  int schur_solves = 0;    ///< kDirectCached: restricted solves spent on new columns of G
   int pruned_columns = 0;  ///< columns dropped from 𝓛 because K equals R there again
   // Closure sizes (positions of L touched), §3.3 / Fig. 4 of the paper.
   int closure_f = 0;       ///< |closure_L(f̂)| (step 1 forward)
@@ -217,16 +218,12 @@ class AugmentedSystem {
   const Column* changed_column(int j) const;
   void touch_column(int j);
   bool swap_in(std::unique_ptr<Base> base, const std::set<int>& changed_since);
-  Eigen::MatrixXd schur_matrix(const std::vector<int>& l_list, const std::vector<char>& is_dir,
-                               const std::vector<const Column*>& jcols,
-                               const std::vector<int>& l_base, const std::vector<int>& c_y,
-                               int& solves);
+  Eigen::MatrixXd capacitance_matrix(const std::vector<int>& l_list,
+                                     const std::vector<char>& is_dir,
+                                     const std::vector<const Column*>& jcols,
+                                     const std::vector<int>& l_base, const std::vector<int>& c_y,
+                                     int& solves);
   int prune_unchanged_columns();
-  void bump_version(int j) { column_version_[j] = ++version_counter_; }
-  std::uint64_t column_version(int j) const {
-    auto it = column_version_.find(j);
-    return it == column_version_.end() ? 0 : it->second;
-  }
 
   AugmentedOptions options_;
   std::unique_ptr<Base> base_;
@@ -241,13 +238,11 @@ class AugmentedSystem {
   std::uint64_t pattern_version_ = 1;
   FactorStatus last_refactor_status_ = FactorStatus::kOk;
   double diag_scale_ = 1;  // max |K⁰_ii|: entries below 1e-13·diag_scale_ count as zero
-  // SchurSolver::kDirectCached: H R⁻¹ J of the last solve, its 𝓛 and column versions.
-  std::unordered_map<int, std::uint64_t> column_version_;  // bumped when J_{*j} changes
-  std::uint64_t version_counter_ = 0;
-  const void* schur_base_ = nullptr;  // Base the cached matrix was computed with
-  std::vector<int> schur_l_;
-  std::vector<std::uint64_t> schur_keys_;
-  Eigen::MatrixXd schur_;
+  // SchurSolver::kDirectCached: G = (R⁻¹) on the base DOFs of 𝓛 of the last solve, kept while
+  // the base factor is the same.
+  const void* g_base_ = nullptr;  // Base g_ was computed with
+  std::vector<int> g_l_;          // its DOFs (sorted)
+  Eigen::MatrixXd g_;
   // Workspace.
   std::vector<int> pos_in_l_;
 };
