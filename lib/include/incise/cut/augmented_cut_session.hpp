@@ -51,17 +51,22 @@ namespace incise::cut {
 
 /// Options of an AugmentedCutSession.
 struct AugmentedCutOptions {
-  /// AugmentedOptions with a supernodal CHOLMOD factor (see `augmented`).
+  /// AugmentedOptions with a supernodal CHOLMOD factor and eq. 17 preconditioned by the
+  /// explicit H R⁻¹ J (SchurSolver::kDirectCached; see `augmented`).
   static solver::AugmentedOptions supernodal_defaults() {
     solver::AugmentedOptions o;
     o.cholmod.kind = solver::CholmodKind::kSupernodal;
+    o.schur_solver = solver::SchurSolver::kDirectCached;
     return o;
   }
   CutOptions cut;  ///< the cutter's options (thesis defaults)
   /// The augmented solver's options; the factorization of K⁰ is *supernodal* here (METIS
   /// ordering kept): on the bulky 105k-tet box it took 2.4–4.7 s CPU (four runs) against 48 s for
   /// the simplicial LDLᵀ that AugmentedOptions defaults to (thin beams), with equal step cost
-  /// (docs/cutting.md, cut_bench BM_AugmentedInteractiveStep).
+  /// (docs/cutting.md, cut_bench BM_AugmentedInteractiveStep). Eq. 17 uses the explicit
+  /// H R⁻¹ J in capacitance form: a cut adds the DOFs of a few nodes to 𝓛 per step, which
+  /// costs one restricted solve each, instead of ~20 GMRES iterations every step (0.5 × the
+  /// update time on the 105k-tet box, docs/cutting.md).
   solver::AugmentedOptions augmented = supernodal_defaults();
   /// After every successful solve set the cut mesh's deformed positions to X + a, so that the
   /// next sweep triangle is interpreted in the deformed configuration (§3.2). O(n) per step
