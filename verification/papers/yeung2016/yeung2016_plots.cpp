@@ -10,6 +10,8 @@
 ///          over the steps ≥ 1 with m ≤ M (default 100) — the tables of README.md. FILE2: the
 ///          same run with --no-exact, whose update times (not disturbed by the reference
 ///          refactorizations in between) are then used for the speed-ups.
+///        yeung2016_plots --summary DIR
+///          prints the "All meshes" table (one row per CSV in DIR, steps ≥ 1, CPU times).
 ///
 /// Rates are 1 / process CPU time of one update (resp. one refactorization + solve, one
 /// Jacobi-PCG solve): wall time on the shared measurement machine is inflated by other jobs.
@@ -122,8 +124,8 @@ void rate_figure(const std::string& dir, const std::string& file, const Table& t
   if (!t.ok) return;
   std::vector<Series> s;
   s.push_back(rate_series(t, "cpu_update", "augmented update (GMRES, HSJ)"));
-  if (direct != nullptr && direct->ok)
-    s.push_back(rate_series(*direct, "cpu_update", "augmented update (cached Schur precond.)"));
+  if (direct != nullptr && direct->ok && direct->name == t.name)
+    s.push_back(rate_series(*direct, "cpu_update", "augmented update (GMRES, explicit H R^-1 J)"));
   s.push_back(rate_series(t, "cpu_refactor", "CHOLMOD analyze + factorize + solve"));
   Series num = rate_series(t, "cpu_numeric_refactor", "CHOLMOD factorize + solve (pattern kept)");
   if (!num.x.empty()) {
@@ -210,7 +212,85 @@ int print_table(const std::string& path, const std::string& timing_path, int max
   return 0;
 }
 
+// The "All meshes" table of README.md: one row per CSV of run_experiments.sh that exists in
+// `dir`, over all steps ≥ 1 (all m), CPU times; refactorization = analysis + factorization +
+// solve. Explicit-matrix runs (direct_ prefix) follow the GMRES + HSJ row of the same mesh.
+int print_summary(const std::string& dir) {
+  std::vector<std::string> names;
+  auto add = [&](const std::string& n) {
+    names.push_back(n);
+    names.push_back("direct_" + n);
+  };
+  for (const char* kind : {"deform", "cut"})
+    for (int h : {16, 64, 256, 1024}) add("beam" + std::to_string(h) + "_" + kind);
+  for (const char* kind : {"deform", "cut"})
+    for (int b : {4, 8, 12, 16, 20}) add("brick" + std::to_string(b) + "_" + kind);
+  add("liver_deform");
+  add("liver_cut");
+  std::printf(
+      "| mesh | experiment | eq. 17 | nodes | n₀ | |L| (M) | max m | max GMRES it | max clos Ja2 "
+      "| update CPU ms min–max | refactor CPU ms (median) | speed-up min–max | Jacobi-PCG CPU "
+      "ms (converged/run) | max rel. error | max backward error |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  int printed = 0;
+  for (const std::string& name : names) {
+    const Table t = read_table(dir + "/" + name + ".csv");
+    if (!t.ok) continue;
+    const std::vector<std::string> meta = split(t.meta);
+    auto field = [&](size_t i) { return i < meta.size() ? meta[i] : std::string("?"); };
+    double max_m = 0, max_it = 0, max_clos = 0, max_err = 0, max_bw = 0;
+    double upd_lo = 1e300, upd_hi = 0, sp_lo = 1e300, sp_hi = 0, pcg_lo = 1e300, pcg_hi = 0;
+    int pcg_runs = 0, pcg_conv = 0;
+    std::vector<double> refactor;
+    for (size_t i = 0; i < t.rows(); ++i) {
+      if (t["step"][i] < 1) continue;
+      max_m = std::max(max_m, t["m"][i]);
+      max_it = std::max(max_it, t["gmres_it"][i]);
+      max_clos = std::max(max_clos, t["closure_ja2"][i]);
+      max_err = std::max(max_err, t["rel_error"][i]);
+      max_bw = std::max(max_bw, t["backward_error"][i]);
+      const double cu = t["cpu_update"][i], cr = t["cpu_refactor"][i];
+      upd_lo = std::min(upd_lo, cu);
+      upd_hi = std::max(upd_hi, cu);
+      if (cr > 0 && cu > 0) {
+        refactor.push_back(cr);
+        sp_lo = std::min(sp_lo, cr / cu);
+        sp_hi = std::max(sp_hi, cr / cu);
+      }
+    }
+    for (size_t i = 0; i < t.rows(); ++i) {
+      if (t["step"][i] < 1 || !(t["cpu_pcg"][i] > 0)) continue;
+      ++pcg_runs;
+      pcg_conv += t["pcg_converged"][i] > 0.5 ? 1 : 0;
+      pcg_lo = std::min(pcg_lo, t["cpu_pcg"][i]);
+      pcg_hi = std::max(pcg_hi, t["cpu_pcg"][i]);
+    }
+    char pcg[64] = "-", sp[48] = "-", ref[32] = "-";
+    if (pcg_runs > 0)
+      std::snprintf(pcg, sizeof pcg, "%.0f–%.0f (%d/%d)", 1e3 * pcg_lo, 1e3 * pcg_hi, pcg_conv,
+                    pcg_runs);
+    if (!refactor.empty()) {
+      std::snprintf(sp, sizeof sp, "%.0f–%.0f", sp_lo, sp_hi);
+      std::snprintf(ref, sizeof ref, "%.0f", 1e3 * median(refactor));
+    }
+    std::printf(
+        "| %s | %s | %s | %s | %s | %.2f | %.0f | %.0f | %.0f | %.2f–%.2f | %s | %s | %s | %.1e | "
+        "%.1e |\n",
+        field(0).c_str(), field(1).c_str(),
+        name.rfind("direct_", 0) == 0 ? "explicit H R⁻¹ J" : "GMRES + HSJ", field(2).c_str(),
+        field(4).c_str(), std::stod(field(5)) / 1e6, max_m, max_it, max_clos, 1e3 * upd_lo,
+        1e3 * upd_hi, ref, sp, pcg, max_err, max_bw);
+    ++printed;
+  }
+  if (printed == 0) {
+    std::fprintf(stderr, "%s: no CSV files of run_experiments.sh\n", dir.c_str());
+    return 1;
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
+  if (argc == 3 && std::string(argv[1]) == "--summary") return print_summary(argv[2]);
   if (argc >= 3 && std::string(argv[1]) == "--table") {
     std::string timing;
     int max_m = 100;
@@ -230,8 +310,9 @@ int main(int argc, char** argv) {
   if (argc != 2) {
     std::fprintf(stderr,
                  "usage: %s DIR (with the CSV files of run_experiments.sh)\n"
-                 "       %s --table FILE.csv [--update-times FILE2.csv] [--max-m M]\n",
-                 argv[0], argv[0]);
+                 "       %s --table FILE.csv [--update-times FILE2.csv] [--max-m M]\n"
+                 "       %s --summary DIR\n",
+                 argv[0], argv[0], argv[0]);
     return 2;
   }
   const std::string dir = argv[1];
@@ -286,18 +367,19 @@ int main(int argc, char** argv) {
     write_svg(dir + "/fig4_closures.svg", s, o);
   }
   // Fig. 5: deformation rates; Fig. 7: cutting rates; Fig. 10a analogue: the liver.
+  // The explicit-matrix runs are drawn where they are of the same mesh (rate_figure checks).
   rate_figure(dir, "fig5a_beam_deform.svg", largest("beam", beams, "deform"),
-              "Fig. 5a analogue: deformation", "constrained nodes");
+              "Fig. 5a analogue: deformation", "constrained nodes", &tab["direct_beam1024_deform"]);
   rate_figure(dir, "fig5b_brick_deform.svg", brick_fig("deform"), "Fig. 5b analogue: deformation",
-              "constrained nodes");
+              "constrained nodes", &tab["direct_brick16_deform"]);
   rate_figure(dir, "fig7a_beam_cut.svg", largest("beam", beams, "cut"), "Fig. 7a analogue: cutting",
-              "cut step (duplicated nodes)");
+              "cut step (duplicated nodes)", &tab["direct_beam1024_cut"]);
   rate_figure(dir, "fig7b_brick_cut.svg", brick_fig("cut"), "Fig. 7b analogue: cutting",
-              "cut step (duplicated nodes)");
+              "cut step (duplicated nodes)", &tab["direct_brick16_cut"]);
   rate_figure(dir, "fig10a_liver_cut.svg", tab["liver_cut"], "Fig. 10a analogue: cutting",
-              "cut step (duplicated nodes)");
+              "cut step (duplicated nodes)", &tab["direct_liver_cut"]);
   rate_figure(dir, "fig10_liver_deform.svg", tab["liver_deform"], "liver deformation",
-              "constrained nodes");
+              "constrained nodes", &tab["direct_liver_deform"]);
   // Fig. 11a: maximum GMRES iterations over the 16 steps vs mesh size.
   {
     std::vector<Series> s;
