@@ -195,7 +195,8 @@ FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
   if (!(diag_scale_ > 0)) diag_scale_ = 1.0;
   changed_.clear();
   dirichlet_.clear();
-  g_base_ = nullptr;
+  ++base_generation_;
+  g_generation_ = 0;
   f_ = Eigen::VectorXd::Zero(n_);
   changed_since_snapshot_.clear();
   snapshot_active_ = false;
@@ -389,6 +390,7 @@ bool AugmentedSystem::swap_in(std::unique_ptr<Base> base, const std::set<int>& c
     }
   }
   base_ = std::move(base);
+  ++base_generation_;  // a generation, not the address: a new Base may reuse a freed one's
   n_base_ = nb;
   changed_since_snapshot_.clear();
   return true;
@@ -434,7 +436,7 @@ Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const std::vector<int>& l_li
   // G on the base entries of 𝓛 (l_base, sorted): kept entries from the cache, new columns by
   // restricted solves.
   std::vector<int> old(mb, -1);  // position of l_base[i] in the cached list (both sorted)
-  if (g_base_ == base_.get()) {
+  if (g_generation_ == base_generation_) {
     size_t q = 0;
     for (int i = 0; i < mb; ++i) {
       while (q < g_l_.size() && g_l_[q] < l_base[i]) ++q;
@@ -459,7 +461,7 @@ Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const std::vector<int>& l_li
       if (old[i] >= 0) g(k, i) = y[i];  // rows of new columns come from their own solves
     }
   }
-  g_base_ = base_.get();
+  g_generation_ = base_generation_;
   g_l_ = l_base;
   g_ = g;
 

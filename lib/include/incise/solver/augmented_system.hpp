@@ -240,8 +240,9 @@ class AugmentedSystem {
   double diag_scale_ = 1;  // max |K⁰_ii|: entries below 1e-13·diag_scale_ count as zero
   // SchurSolver::kDirectCached: G = (R⁻¹) on the base DOFs of 𝓛 of the last solve, kept while
   // the base factor is the same.
-  const void* g_base_ = nullptr;  // Base g_ was computed with
-  std::vector<int> g_l_;          // its DOFs (sorted)
+  std::uint64_t base_generation_ = 0;  // bumped whenever base_ is replaced
+  std::uint64_t g_generation_ = 0;     // base_generation_ g_ was computed with (0: none)
+  std::vector<int> g_l_;               // its DOFs (sorted)
   Eigen::MatrixXd g_;
   // Workspace.
   std::vector<int> pos_in_l_;
