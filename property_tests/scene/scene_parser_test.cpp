@@ -413,6 +413,40 @@ TEST(SceneParserBad, SolveThreadsOnANonAugmentedSolverOrWithoutTool) {
       << e;
 }
 
+// schur_preconditioner (docs/scenes.md, interactive cutting run; eq. 17 of Yeung et al. 2016).
+TEST(SceneParser, SchurPreconditionerParses) {
+  Json j = augmented_cut_scene();
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.schur_preconditioner, "explicit");
+  for (const char* v : {"explicit", "hsj", "spai", "none"}) {
+    j["solver"]["schur_preconditioner"] = v;
+    EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.schur_preconditioner, v);
+  }
+}
+
+TEST(SceneParserBad, SchurPreconditionerUnknownOrMisplaced) {
+  Json j = augmented_cut_scene();
+  j["solver"]["schur_preconditioner"] = "jacobi";
+  std::string e = error_of(j);
+  EXPECT_NE(e.find("/solver/schur_preconditioner: expected one of"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"explicit\""), std::string::npos) << e;
+  j = augmented_cut_scene();
+  j["solver"].erase("cut_configuration");
+  j["solver"]["method"] = "cg";
+  j["solver"]["schur_preconditioner"] = "hsj";
+  e = error_of(j);
+  EXPECT_NE(e.find("/solver/schur_preconditioner: not allowed here: only the \"augmented\" method"),
+            std::string::npos)
+      << e;
+  j = augmented_cut_scene();
+  j["solver"].erase("cut_configuration");
+  j["solver"]["schur_preconditioner"] = "hsj";
+  j.erase("tools");
+  e = error_of(j);
+  EXPECT_NE(e.find("/solver/schur_preconditioner: not allowed here: the scene names no tool"),
+            std::string::npos)
+      << e;
+}
+
 TEST(SceneParserBad, RefactorAtMWithoutTool) {
   Json j = augmented_cut_scene();
   j["solver"].erase("cut_configuration");

@@ -218,6 +218,8 @@ SolverSpec parse_solver(JsonObject o) {
         o.choice("cut_configuration", {"deformed", "reference"}, "deformed") == "deformed";
     s.refactor_at_m = o.integer("refactor_at_m", 0, std::numeric_limits<int>::max(), 0);
     s.solve_threads = o.integer("solve_threads", 1, 64, 1);
+    s.schur_preconditioner =
+        o.choice("schur_preconditioner", {"explicit", "hsj", "spai", "none"}, "explicit");
   } else {
     o.forbid("cut_configuration",
              "only the \"augmented\" method solves between sweep triangles (the others cut "
@@ -228,6 +230,8 @@ SolverSpec parse_solver(JsonObject o) {
     o.forbid("solve_threads",
              "only the \"augmented\" method has step-3 triangular solves to split (Yeung et al. "
              "2016 §3.2)");
+    o.forbid("schur_preconditioner",
+             "only the \"augmented\" method solves a Schur system (Yeung et al. 2016 eq. 17)");
   }
   o.finish();
   return s;
@@ -362,7 +366,9 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
         {"cut_configuration", ""},
         {"refactor_at_m", ", so the augmented run solves once and never refactors"},
         {"solve_threads",
-         ", so the augmented run is one direct CHOLMOD solve without the augmented steps"}};
+         ", so the augmented run is one direct CHOLMOD solve without the augmented steps"},
+        {"schur_preconditioner",
+         ", so the augmented run is one direct CHOLMOD solve without a Schur system"}};
     for (const auto& [key, why] : cut_only_keys) {
       if (solver_json->contains(key))
         fail(file, std::string("/solver/") + key,

@@ -121,6 +121,12 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   options.update_deformed = spec.solver.cut_deformed;
   options.refactor_at_m = spec.solver.refactor_at_m;
   options.augmented.solve_threads = spec.solver.solve_threads;
+  const std::string& prec = spec.solver.schur_preconditioner;
+  options.augmented.schur_solver =
+      prec == "explicit" ? solver::SchurSolver::kDirectCached : solver::SchurSolver::kGmres;
+  options.augmented.preconditioner = prec == "spai" ? solver::SchurPreconditioner::kTridiagonalSpai
+                                     : prec == "none" ? solver::SchurPreconditioner::kNone
+                                                      : solver::SchurPreconditioner::kDiagonal;
   auto session = std::make_unique<cut::AugmentedCutSession>(scene.mesh, mat, scene.fixed_nodes,
                                                             forces, options);
   const cut::AugmentedCutStepReport& init = session->initial_report();
@@ -239,7 +245,10 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
          << init.solve.nnz_l << "), then per sweep triangle: cut (thesis §3.2, in the "
          << (spec.solver.cut_deformed ? "deformed" : "reference")
          << " configuration), element stiffness changes and new DOFs as replaced columns, GMRES "
-         << "on the Schur system, step 3 on " << spec.solver.solve_threads
+         << "on the Schur system (preconditioner: "
+         << (spec.solver.schur_preconditioner == "explicit" ? std::string("explicit H R^-1 J")
+                                                            : spec.solver.schur_preconditioner)
+         << "), step 3 on " << spec.solver.solve_threads
          << (spec.solver.solve_threads == 1 ? " thread; " : " threads; ")
          << (spec.solver.refactor_at_m > 0 ? "background refactorization (§3.6) at m - |D| >= " +
                                                  std::to_string(spec.solver.refactor_at_m) + ", " +

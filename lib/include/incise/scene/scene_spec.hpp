@@ -113,6 +113,11 @@ struct SolverSpec {
   /// step 3's full backward substitution (1 = serial; the result is bit-identical for any
   /// value). Scene key `solve_threads`, 1 … 64.
   int solve_threads = 1;
+  /// Interactive cutting run only: how GMRES on eq. 17 (the Schur system) is preconditioned —
+  /// "explicit" (the default: the explicit H R⁻¹ J in capacitance form,
+  /// solver::SchurSolver::kDirectCached), or the paper's §3.5 choices "hsj" (S = D⁻¹), "spai"
+  /// (tridiagonal sparse approximate inverse) and "none". Scene key `schur_preconditioner`.
+  std::string schur_preconditioner = "explicit";
 };
 
 /// A cutting tool. The scalpel is swept along a path; consecutive blade positions span the
