@@ -521,21 +521,26 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
   return out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
 }
 
-bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
-  INCISE_CHECK(u.size() == size(), "hessian_diagonal: u has the wrong size");
+template <class Sink>
+bool ElasticProblem::tangent_sweep(const VecX& u, Sink&& sink) const {
   const material::Lame p = material_.lame();
-  diag.setZero(size());
-  double* dst = diag.data();
-  const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
+  return material::visit_model(material_.model_index(), [&](auto m) {
     return sweep([&](const auto& el, auto& w) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       if (!TetKernel<decltype(m), T>::tangent(p, el.z_inv(), el.b(), el.volume(), w.x, w.k))
         return false;
-      el.add_diagonal(w.k, dst);
+      sink(el, w.k);
       return true;
     });
   });
+}
+
+bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
+  INCISE_CHECK(u.size() == size(), "hessian_diagonal: u has the wrong size");
+  diag.setZero(size());
+  double* dst = diag.data();
+  const bool ok = tangent_sweep(u, [&](const auto& el, const auto& k) { el.add_diagonal(k, dst); });
   flops_ += (element_flops_.tangent + 12) * static_cast<std::uint64_t>(num_elements());
   if (!ok) return false;
   for (Eigen::Index i = 0; i < diag.size(); ++i)
@@ -605,17 +610,7 @@ EvalStatus ElasticProblem::assemble_tangent(const VecX& u, FixedDofTreatment tre
   if (k_.rows() != size()) build_pattern();
   double* val = k_.valuePtr();
   std::memset(val, 0, sizeof(double) * static_cast<std::size_t>(k_.nonZeros()));  // +0.0
-  const material::Lame p = material_.lame();
-  const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep([&](const auto& el, auto& w) {
-      using T = typename std::decay_t<decltype(el)>::Scalar;
-      el.gather(u.data(), w.x);
-      if (!TetKernel<decltype(m), T>::tangent(p, el.z_inv(), el.b(), el.volume(), w.x, w.k))
-        return false;
-      el.add_matrix(w.k, val);
-      return true;
-    });
-  });
+  const bool ok = tangent_sweep(u, [&](const auto& el, const auto& k) { el.add_matrix(k, val); });
   flops_ += (element_flops_.tangent + 144) * static_cast<std::uint64_t>(num_elements());
   if (!ok) return EvalStatus::kInverted;
   if (treatment == FixedDofTreatment::kIdentity) {

@@ -159,6 +159,11 @@ class ElasticProblem : public Problem {
   /// effects) and for the tail, with a double view. Returns false when a double visit fails.
   template <class Visit>
   bool sweep(Visit&& visit) const;
+  /// The element tangents at u (TetKernel::tangent), each handed to `sink(el, k)` (el: the
+  /// element view, k: its 12×12 tangent) — the sweep of assemble_tangent() and
+  /// hessian_diagonal(), which differ only in what they keep of each tangent.
+  template <class Sink>
+  bool tangent_sweep(const VecX& u, Sink&& sink) const;
   Index num_full_blocks() const { return num_elements() / 4; }
   void build_pattern();
   void rebuild_mass();
