@@ -16,8 +16,8 @@
 ///                      [--default-ordering|--amd] (K⁰ ordering; METIS by default)
 ///                      [--ref-kind simplicial|supernodal] (reference refactorization)
 ///                      [--schur gmres|direct] (eq. 17: GMRES, or GMRES preconditioned by the
-///                      cached Schur matrix; then "+N Schur solves" counts the restricted
-///                      solves spent on updating H R⁻¹ J)
+///                      explicit H R⁻¹ J in capacitance form; then "+N Schur solves" counts the
+///                      restricted solves spent on new columns of G)
 ///                      [--threads T] (threads of step 3's backward pass; 1 by default)
 ///                      [--gmres-tol TOL] (relative residual of eq. 17; 1e-12 by default)
 ///                      [--csv FILE] (also write the rows as CSV, for yeung2016_plots)
