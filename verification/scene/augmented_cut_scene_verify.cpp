@@ -124,6 +124,10 @@ TEST(AugmentedCutScene, FinalDisplacementEqualsADirectSolveOfTheCutMesh) {
   EXPECT_EQ(res.report.reason, solver::StopReason::kMaxIterations);
   EXPECT_NE(res.cut_steps.back().status.find("GMRES not converged"), std::string::npos)
       << res.cut_steps.back().status;
+  // A spec built in code (not parsed) with an unknown preconditioner is a usage error.
+  scene::BuiltScene bad = demo();
+  bad.spec.solver.schur_preconditioner = "jacobi";
+  EXPECT_THROW((void)scene::run_scene(bad), UsageError);
 }
 
 // cube_cut.json cuts first (builder) and then solves by CG. Run interactively with the augmented

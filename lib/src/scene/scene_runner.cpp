@@ -122,6 +122,9 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   options.refactor_at_m = spec.solver.refactor_at_m;
   options.augmented.solve_threads = spec.solver.solve_threads;
   const std::string& prec = spec.solver.schur_preconditioner;
+  INCISE_CHECK(prec == "explicit" || prec == "hsj" || prec == "spai" || prec == "none",
+               "SolverSpec::schur_preconditioner must be \"explicit\", \"hsj\", \"spai\" or "
+               "\"none\"");
   options.augmented.schur_solver =
       prec == "explicit" ? solver::SchurSolver::kDirectCached : solver::SchurSolver::kGmres;
   options.augmented.preconditioner = prec == "spai" ? solver::SchurPreconditioner::kTridiagonalSpai
