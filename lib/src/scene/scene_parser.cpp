@@ -219,7 +219,7 @@ SolverSpec parse_solver(JsonObject o) {
     s.refactor_at_m = o.integer("refactor_at_m", 0, std::numeric_limits<int>::max(), 0);
     s.solve_threads = o.integer("solve_threads", 1, 64, 1);
     s.schur_preconditioner =
-        o.choice("schur_preconditioner", {"explicit", "hsj", "spai", "none"}, "explicit");
+        o.choice("schur_preconditioner", schur_preconditioner_names(), "explicit");
   } else {
     o.forbid("cut_configuration",
              "only the \"augmented\" method solves between sweep triangles (the others cut "

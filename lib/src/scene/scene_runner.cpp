@@ -11,6 +11,7 @@
 #include <incise/solver/nonlinear_cg.hpp>
 #include <incise/solver/truncated_newton.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -122,9 +123,9 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   options.refactor_at_m = spec.solver.refactor_at_m;
   options.augmented.solve_threads = spec.solver.solve_threads;
   const std::string& prec = spec.solver.schur_preconditioner;
-  INCISE_CHECK(prec == "explicit" || prec == "hsj" || prec == "spai" || prec == "none",
-               "SolverSpec::schur_preconditioner must be \"explicit\", \"hsj\", \"spai\" or "
-               "\"none\"");
+  const auto& names = schur_preconditioner_names();
+  INCISE_CHECK(std::find(names.begin(), names.end(), prec) != names.end(),
+               "SolverSpec::schur_preconditioner must be one of schur_preconditioner_names()");
   options.augmented.schur_solver =
       prec == "explicit" ? solver::SchurSolver::kDirectCached : solver::SchurSolver::kGmres;
   options.augmented.preconditioner = prec == "spai" ? solver::SchurPreconditioner::kTridiagonalSpai

@@ -463,7 +463,7 @@ Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const std::vector<int>& l_li
   }
   g_generation_ = base_generation_;
   g_l_ = l_base;
-  g_ = g;
+  g_ = std::move(g);  // the cache is also this solve's G
 
   // Φ + G Ψ, column by column: for each entry (𝓛 position p, value v) of Ψ_{*k}, add v·G_{*p}.
   // 𝓛 is sorted, so its base DOFs (< n_base) are its first mb entries and G is block diagonal:
@@ -471,7 +471,7 @@ Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const std::vector<int>& l_li
   Eigen::MatrixXd s = Eigen::MatrixXd::Zero(m, m);
   auto add_g_column = [&](int k, int p, double v) {
     if (p < mb) {
-      s.col(k).head(mb) += v * g.col(p);
+      s.col(k).head(mb) += v * g_.col(p);
     } else {
       s(p, k) += v;
     }

@@ -82,6 +82,12 @@ struct LoadSpec {
 };
 
 /// Solution method and its stopping rule / budgets.
+/// The values of SolverSpec::schur_preconditioner (scene key `schur_preconditioner`).
+inline const std::vector<std::string>& schur_preconditioner_names() {
+  static const std::vector<std::string> names = {"explicit", "hsj", "spai", "none"};
+  return names;
+}
+
 struct SolverSpec {
   /// Which solver.
   enum class Method {

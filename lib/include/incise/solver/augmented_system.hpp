@@ -49,7 +49,7 @@ enum class SchurSolver {
   /// that joins 𝓛 costs one closure-restricted solve R⁻¹e_{𝓛ᵢ}, changed column values only
   /// the m×m product G Ψ (Ψ holds the changes E = K − R on 𝓛 and e_k for Dirichlet columns).
   /// Its dense LU is the right preconditioner of GMRES on the exact operator, which then
-  /// converges in 1–2 iterations (the capacitance form amplifies round-off by κ(R) in the
+  /// converges in 1–3 iterations (the capacitance form amplifies round-off by κ(R) in the
   /// directions of R's low modes, so it is not used as a direct solve).
   kDirectCached
 };
