@@ -14,6 +14,8 @@ ci/install-deps.sh
 
 echo "== clang-format check"
 ci/check-format.sh
+echo "== module order (lib/README.md)"
+ci/check-module-order.sh
 
 # counts "N passed, M failed" from a ctest log ("x% tests passed, M tests failed out of T")
 count() {

@@ -9,9 +9,9 @@
 /// solver update). Arg 1 = 1 adds the O(n) free-component check after every dissecting step, to
 /// show its cost separately (the interactive loop can run it less often).
 #include <benchmark/benchmark.h>
-#include <incise/cut/augmented_cut_session.hpp>
 #include <incise/cut/cutter.hpp>
 #include <incise/fem/elastic_problem.hpp>
+#include <incise/interactive/augmented_cut_session.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/solver/linear_cg.hpp>
@@ -168,12 +168,12 @@ void BM_AugmentedInteractiveStep(benchmark::State& state) {
     if (p.x() == side) forces(0, v) = 0.5;
   }
   const incise::material::Material material("linear", {1e4, 0.25, 0.0, 1000.0});
-  incise::cut::AugmentedCutOptions opt;
-  if (state.range(1) != 0) opt.augmented.cholmod.kind = incise::solver::CholmodKind::kSimplicialLdl;
+  incise::interactive::AugmentedCutOptions opt;
+  if (state.range(1) != 0) opt.augmented.cholmod.kind = incise::linalg::CholmodKind::kSimplicialLdl;
   opt.update_deformed = state.range(2) != 0;
-  opt.augmented.schur_solver = state.range(3) != 0 ? incise::solver::SchurSolver::kDirectCached
-                                                   : incise::solver::SchurSolver::kGmres;
-  incise::cut::AugmentedCutSession session(box, material, fixed, forces, opt);
+  opt.augmented.schur_solver = state.range(3) != 0 ? incise::linalg::SchurSolver::kDirectCached
+                                                   : incise::linalg::SchurSolver::kGmres;
+  incise::interactive::AugmentedCutSession session(box, material, fixed, forces, opt);
   if (!session.initial_report().ok()) {
     state.SkipWithError(session.initial_report().advice.c_str());
     return;
@@ -187,7 +187,7 @@ void BM_AugmentedInteractiveStep(benchmark::State& state) {
   for (auto _ : state) {
     const Vec3 a2 = a + Vec3(0.5 * kH, 0.01 * kH, 0);
     const Vec3 b(a.x(), a.y(), side - 2.63 * kH), b2(a2.x(), a2.y(), side - 2.63 * kH);
-    const incise::cut::AugmentedCutStepReport r =
+    const incise::interactive::AugmentedCutStepReport r =
         (tri % 2 == 0) ? session.step(a, b, b2) : session.step(a, b2, a2);
     cut_cpu += r.cpu_seconds_cut;
     update_cpu += r.cpu_seconds_update;

@@ -5,9 +5,9 @@
 // dashboard DIR/index.html (lib/scene bench_dashboard.hpp). CPU and BLAS come from each
 // binary's own benchmark context.
 
+#include <incise/certify/bench_dashboard.hpp>
+#include <incise/certify/svg_plot.hpp>
 #include <incise/core/error.hpp>
-#include <incise/scene/bench_dashboard.hpp>
-#include <incise/scene/svg_plot.hpp>
 
 #include <spawn.h>
 #include <sys/wait.h>
@@ -146,12 +146,12 @@ int run_bench_command(const Args& args, std::ostream& out, std::ostream& err) {
         continue;
       }
       // Keep only files that hold results (a filter may match nothing in a binary).
-      scene::BenchRun probe;
+      certify::BenchRun probe;
       bool has_results = false;
       try {
         std::ifstream in(tmp);
         std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-        scene::add_benchmark_json(text, tmp.string(), probe);
+        certify::add_benchmark_json(text, tmp.string(), probe);
         has_results = !probe.values.empty();
       } catch (const ParseError& e) {
         ++failures;
@@ -168,17 +168,18 @@ int run_bench_command(const Args& args, std::ostream& out, std::ostream& err) {
       err << "incise bench: no benchmark matched; nothing stored\n";
     }
   }
-  const auto runs = scene::load_bench_runs((fs::path(out_dir) / "runs").string());
-  const scene::DashboardOptions opts;
-  write_file_atomic((fs::path(out_dir) / "index.html").string(), scene::dashboard_html(runs, opts));
-  const auto cmp = scene::compare_last_two(runs, opts);
+  const auto runs = certify::load_bench_runs((fs::path(out_dir) / "runs").string());
+  const certify::DashboardOptions opts;
+  write_file_atomic((fs::path(out_dir) / "index.html").string(),
+                    certify::dashboard_html(runs, opts));
+  const auto cmp = certify::compare_last_two(runs, opts);
   int flagged = 0;
   for (const auto& c : cmp) {
     if (!c.flagged) continue;
     ++flagged;
-    out << "bench: changed beyond noise: " << c.key << " " << scene::format_number(c.previous)
-        << " -> " << scene::format_number(c.last) << " ("
-        << scene::format_number(100 * c.relative_change) << " %)\n";
+    out << "bench: changed beyond noise: " << c.key << " " << certify::format_number(c.previous)
+        << " -> " << certify::format_number(c.last) << " ("
+        << certify::format_number(100 * c.relative_change) << " %)\n";
   }
   out << "bench: " << runs.size() << " stored run(s); " << flagged << " of " << cmp.size()
       << " counters changed beyond noise since the previous run\n";

@@ -2,8 +2,8 @@
 // catalogue (lib/scene certify.hpp) against reference_data/certify/tolerances.json, writes
 // DIR/index.html and DIR/summary.json, and exits non-zero when any check fails.
 
+#include <incise/certify/certify.hpp>
 #include <incise/core/error.hpp>
-#include <incise/scene/certify.hpp>
 
 #include <filesystem>
 #include <iostream>
@@ -40,19 +40,19 @@ int run_certify_command(const Args& args, std::ostream& out, std::ostream& err) 
   const std::string commit = git_commit();
   out << "certify: " << (quick ? "quick" : "full") << " catalogue, reference data " << data_dir
       << "\n";
-  const scene::CertifySummary s = scene::run_certify(
+  const certify::CertifySummary s = certify::run_certify(
       data_dir, quick, filter,
       [&out](const std::string& id) { out << "  running " << id << " ..." << std::endl; });
   for (const auto& r : s.results) {
     out << (r.passed ? "  PASS  " : "  FAIL  ") << r.id << "  value "
-        << scene::format_number(r.value) << " (tolerance " << scene::format_number(r.tolerance)
-        << "), " << scene::format_number(r.seconds) << " s\n";
+        << certify::format_number(r.value) << " (tolerance " << certify::format_number(r.tolerance)
+        << "), " << certify::format_number(r.seconds) << " s\n";
     if (!r.passed) out << "        " << r.detail << "\n";
   }
-  write_file_atomic(out_dir + "/index.html", scene::certify_html(s, commit));
-  write_file_atomic(out_dir + "/summary.json", scene::certify_json(s, commit).dump(2) + "\n");
+  write_file_atomic(out_dir + "/index.html", certify::certify_html(s, commit));
+  write_file_atomic(out_dir + "/summary.json", certify::certify_json(s, commit).dump(2) + "\n");
   out << "certify: " << s.passed << " passed, " << s.failed << " failed in "
-      << scene::format_number(s.seconds) << " s\n";
+      << certify::format_number(s.seconds) << " s\n";
   out << "certify: report " << out_dir << "/index.html, summary " << out_dir << "/summary.json\n";
   if (s.results.empty()) {
     err << "incise certify: no check matches the filter\n";

@@ -7,7 +7,7 @@
 
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
-#include <incise/cut/augmented_cut_session.hpp>
+#include <incise/interactive/augmented_cut_session.hpp>
 #include <incise/io/write_mesh.hpp>
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
@@ -139,7 +139,7 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   };
   // Interactive cutting run ("augmented" with tools): one line (or bar frame) per solve.
   auto cut_observer = [&](const scene::CutStepRow& row, std::size_t total_steps,
-                          const cut::AugmentedCutSession& session) {
+                          const interactive::AugmentedCutSession& session) {
     if (!outs.vtu.empty() && outs.vtu_every > 0 && row.step % outs.vtu_every == 0) {
       // A frame of the cut mesh after this step (frames are numbered by step).
       const std::string f = outs.vtu + "_" + std::to_string(row.step) + ".vtu";

@@ -5,10 +5,10 @@
 // solves, m never drops and the factor never changes (no refactorization), and the final
 // displacement equals an independent CHOLMOD solve of the final cut mesh's stiffness.
 
+#include <incise/linalg/cholmod_factor.hpp>
 #include <incise/scene/scene_builder.hpp>
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
-#include <incise/solver/cholmod_factor.hpp>
 
 #include <gtest/gtest.h>
 
@@ -44,7 +44,8 @@ TEST(AugmentedCutScene, EveryStepUpdatesWithoutRefactorization) {
   scene::BuiltScene b = demo();
   std::size_t observed = 0;
   const scene::SceneRunResult res = scene::run_scene(
-      b, {}, [&](const scene::CutStepRow&, std::size_t total, const cut::AugmentedCutSession&) {
+      b, {},
+      [&](const scene::CutStepRow&, std::size_t total, const interactive::AugmentedCutSession&) {
         ++observed;
         EXPECT_EQ(total, 10u);
       });
@@ -98,12 +99,12 @@ void check_final_displacement(scene::BuiltScene& b) {
   fem::ElasticProblem& p = *b.problem;
   const VecX zero = VecX::Zero(p.size());
   ASSERT_EQ(p.assemble_tangent(zero, fem::FixedDofTreatment::kIdentity), EvalStatus::kOk);
-  solver::CholmodFactor factor;
-  ASSERT_EQ(factor.compute(p.tangent_matrix(), 1), solver::FactorStatus::kOk);
+  linalg::CholmodFactor factor;
+  ASSERT_EQ(factor.compute(p.tangent_matrix(), 1), linalg::FactorStatus::kOk);
   VecX f = p.external_force();
   p.project(f);
   VecX u;
-  ASSERT_EQ(factor.solve(f, u), solver::FactorStatus::kOk);
+  ASSERT_EQ(factor.solve(f, u), linalg::FactorStatus::kOk);
   EXPECT_LE((res.u - u).norm(), kDirectSolveTol * u.norm());
 }
 

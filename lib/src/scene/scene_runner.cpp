@@ -2,9 +2,9 @@
 
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
-#include <incise/cut/augmented_cut_session.hpp>
+#include <incise/interactive/augmented_cut_session.hpp>
+#include <incise/linalg/cholmod_factor.hpp>
 #include <incise/material/material.hpp>
-#include <incise/solver/cholmod_factor.hpp>
 #include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/solver/eigen_estimates.hpp>
 #include <incise/solver/linear_cg.hpp>
@@ -37,8 +37,8 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
     return rep;
   }
   const auto& k = p.tangent_matrix();
-  solver::CholmodFactor factor;
-  const solver::FactorStatus st = factor.compute(k, 1);
+  linalg::CholmodFactor factor;
+  const linalg::FactorStatus st = factor.compute(k, 1);
   scene.record(
       "sparse stiffness K (" + std::to_string(k.rows()) + " DOFs, " + std::to_string(k.nonZeros()) +
           " nonzeros) and CHOLMOD factor (|L| = " + std::to_string(factor.nnz_l()) +
@@ -47,8 +47,8 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
       static_cast<std::size_t>(k.nonZeros() + factor.nnz_l()) * (sizeof(double) + sizeof(int)),
       static_cast<std::int64_t>(factor.factor_flops()));
   rep.flops = p.flops() - flops0 + static_cast<std::uint64_t>(factor.factor_flops());
-  if (st != solver::FactorStatus::kOk) {
-    rep.reason = st == solver::FactorStatus::kNotPositiveDefinite ? solver::StopReason::kIndefinite
+  if (st != linalg::FactorStatus::kOk) {
+    rep.reason = st == linalg::FactorStatus::kNotPositiveDefinite ? solver::StopReason::kIndefinite
                                                                   : solver::StopReason::kNonFinite;
     rep.seconds = t.seconds();
     return rep;
@@ -56,7 +56,7 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
   VecX rhs = p.external_force();
   p.project(rhs);
   VecX x;
-  if (factor.solve(rhs, x) != solver::FactorStatus::kOk || !x.allFinite()) {
+  if (factor.solve(rhs, x) != linalg::FactorStatus::kOk || !x.allFinite()) {
     rep.reason = solver::StopReason::kNonFinite;
     rep.seconds = t.seconds();
     return rep;
@@ -81,17 +81,17 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
   return rep;
 }
 
-/// Stop reason of a failed interactive step (cut::CutSolveStatus → solver::StopReason).
-solver::StopReason stop_reason_of(const cut::AugmentedCutStepReport& r) {
+/// Stop reason of a failed interactive step (interactive::CutSolveStatus → solver::StopReason).
+solver::StopReason stop_reason_of(const interactive::AugmentedCutStepReport& r) {
   switch (r.status) {
-    case cut::CutSolveStatus::kOk: return solver::StopReason::kConverged;
-    case cut::CutSolveStatus::kFreeComponent: return solver::StopReason::kIndefinite;
-    case cut::CutSolveStatus::kInvertedElement: return solver::StopReason::kInverted;
-    case cut::CutSolveStatus::kSolverFailed: break;
+    case interactive::CutSolveStatus::kOk: return solver::StopReason::kConverged;
+    case interactive::CutSolveStatus::kFreeComponent: return solver::StopReason::kIndefinite;
+    case interactive::CutSolveStatus::kInvertedElement: return solver::StopReason::kInverted;
+    case interactive::CutSolveStatus::kSolverFailed: break;
   }
   switch (r.solve.status) {
-    case solver::AugmentedStatus::kGmresNotConverged: return solver::StopReason::kMaxIterations;
-    case solver::AugmentedStatus::kNonFinite: return solver::StopReason::kNonFinite;
+    case linalg::AugmentedStatus::kGmresNotConverged: return solver::StopReason::kMaxIterations;
+    case linalg::AugmentedStatus::kNonFinite: return solver::StopReason::kNonFinite;
     default: return solver::StopReason::kIndefinite;  // singular modified K, or no factor
   }
 }
@@ -118,7 +118,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
       Eigen::Map<const Eigen::Matrix3Xd>(scene.external_force.data(), 3, n0);
 
   Timer t;
-  cut::AugmentedCutOptions options;
+  interactive::AugmentedCutOptions options;
   options.update_deformed = spec.solver.cut_deformed;
   options.refactor_at_m = spec.solver.refactor_at_m;
   options.augmented.solve_threads = spec.solver.solve_threads;
@@ -127,13 +127,13 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   INCISE_CHECK(std::find(names.begin(), names.end(), prec) != names.end(),
                "SolverSpec::schur_preconditioner must be one of schur_preconditioner_names()");
   options.augmented.schur_solver =
-      prec == "explicit" ? solver::SchurSolver::kDirectCached : solver::SchurSolver::kGmres;
-  options.augmented.preconditioner = prec == "spai" ? solver::SchurPreconditioner::kTridiagonalSpai
-                                     : prec == "none" ? solver::SchurPreconditioner::kNone
-                                                      : solver::SchurPreconditioner::kDiagonal;
-  auto session = std::make_unique<cut::AugmentedCutSession>(scene.mesh, mat, scene.fixed_nodes,
-                                                            forces, options);
-  const cut::AugmentedCutStepReport& init = session->initial_report();
+      prec == "explicit" ? linalg::SchurSolver::kDirectCached : linalg::SchurSolver::kGmres;
+  options.augmented.preconditioner = prec == "spai" ? linalg::SchurPreconditioner::kTridiagonalSpai
+                                     : prec == "none" ? linalg::SchurPreconditioner::kNone
+                                                      : linalg::SchurPreconditioner::kDiagonal;
+  auto session = std::make_unique<interactive::AugmentedCutSession>(
+      scene.mesh, mat, scene.fixed_nodes, forces, options);
+  const interactive::AugmentedCutStepReport& init = session->initial_report();
   scene.record("stiffness K0 of the uncut body (" + std::to_string(session->system().num_dofs()) +
                    " free DOFs), its CHOLMOD factor (|L| = " + std::to_string(init.solve.nnz_l) +
                    ") and the initial solve",
@@ -149,11 +149,11 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   int refactorizations = 0;  // §3.6 background factorizations swapped in
   double cut_seconds = 0;
   cut::CutTotals totals;
-  auto add_row = [&](int step, int tool, const cut::AugmentedCutStepReport& r) {
+  auto add_row = [&](int step, int tool, const interactive::AugmentedCutStepReport& r) {
     CutStepRow row;
     row.step = step;
     row.tool = tool;
-    row.status = r.ok() ? "ok" : cut::to_string(r.status);
+    row.status = r.ok() ? "ok" : interactive::to_string(r.status);
     if (!r.ok() && !r.advice.empty()) row.status += ": " + r.advice;
     row.degenerate_sweep = r.cut.status == cut::CutStatus::kDegenerateSweep;
     row.faces_dissected = r.cut.faces_dissected;
@@ -190,7 +190,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   int step = 0;
   for (std::size_t k = 0; k < spec.tools.size(); ++k) {
     for (const auto& tri : sweep_triangles(spec.tools[k])) {
-      const cut::AugmentedCutStepReport r = session->step(tri);
+      const interactive::AugmentedCutStepReport r = session->step(tri);
       totals.add(r.cut);
       add_row(++step, static_cast<int>(k), r);
     }

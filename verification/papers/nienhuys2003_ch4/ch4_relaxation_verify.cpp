@@ -18,10 +18,10 @@
 /// runs: Fig. 4.8 (ε_newton), Fig. 4.9 (mesh size), Fig. 4.13 (StVK, E = 2e4). Every thesis
 /// figure 4.7–4.13 gets one SVG fig4_<n>_analogue_*.svg (top panel: energy error vs seconds, as
 /// the thesis plots it; bottom panel: vs counted MFLOP, which is reproducible).
+#include <incise/certify/svg_plot.hpp>
 #include <incise/fem/elastic_problem.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
-#include <incise/scene/svg_plot.hpp>
 #include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/solver/eigen_estimates.hpp>
 #include <incise/solver/energy_error.hpp>
@@ -138,9 +138,9 @@ void write_csv(const std::string& name, const std::vector<TracedRun>& runs) {
 // counted MFLOP (bottom). `runs` may come from several cases (labels say which).
 void write_figure(const std::string& file, const std::string& title,
                   const std::vector<TracedRun>& runs) {
-  std::vector<scene::Series> by_flops, by_seconds;
+  std::vector<certify::Series> by_flops, by_seconds;
   for (const TracedRun& r : runs) {
-    scene::Series sf, ss;
+    certify::Series sf, ss;
     sf.label = ss.label = r.label;
     for (const auto& s : r.samples) {
       sf.x.push_back(double(s.flops) * 1e-6);
@@ -151,17 +151,17 @@ void write_figure(const std::string& file, const std::string& title,
     by_flops.push_back(sf);
     by_seconds.push_back(ss);
   }
-  scene::PlotOptions o;
+  certify::PlotOptions o;
   o.log_y = true;
   o.width = 760;
   o.height = 420;
   o.y_label = "energy error (e,e)_K(u^) [J]";
   o.title = title + " - vs seconds (this machine)";
   o.x_label = "seconds";
-  std::string top = scene::svg_line_plot(by_seconds, o);
+  std::string top = certify::svg_line_plot(by_seconds, o);
   o.title = title + " - vs counted flops";
   o.x_label = "MFLOP";
-  std::string bottom = scene::svg_line_plot(by_flops, o);
+  std::string bottom = certify::svg_line_plot(by_flops, o);
   // Nest both plots in one SVG document, the second shifted down by one panel height.
   std::ofstream(std::string(INCISE_CH4_OUTPUT_DIR) + "/" + file)
       << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << o.width << "\" height=\""

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs the Yeung, Crouch & Pothen 2016 §4.3 experiments (beams, bricks, liver; deformation and
-# cutting) with benchmarks/solver/augmented_bench and writes one Markdown table (.md) and one CSV
+# cutting) with benchmarks/linalg/augmented_bench and writes one Markdown table (.md) and one CSV
 # per run into OUT; then `yeung2016_plots OUT` draws the SVG figures (README.md).
 # Usage: run_experiments.sh BUILD_DIR OUT_DIR [quick]
 # Expected runtime: ≈ 15 min on the shared (loaded) 2-core machine, less when idle; quick ≈ 2 min.
@@ -8,7 +8,7 @@ set -euo pipefail
 build=${1:?build dir}
 out=${2:?output dir}
 quick=${3:-}
-bench="$build/benchmarks/solver/augmented_bench"
+bench="$build/benchmarks/linalg/augmented_bench"
 mkdir -p "$out"
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
 run() {  # name, args...

@@ -13,14 +13,14 @@
 /// Element matrices: the fem module's linear-elastic tetrahedron tangent
 /// (fem::TetKernel<material::LinearElastic>), E = 10 kPa, ν = 0.3 unless changed.
 /// Shared by verification/papers/yeung2016 (small sizes, asserted) and
-/// benchmarks/solver/augmented_bench.cpp (--table mode, the paper's sizes).
+/// benchmarks/linalg/augmented_bench.cpp (--table mode, the paper's sizes).
 
 #include <incise/core/timer.hpp>
 #include <incise/fem/tet_kernels.hpp>
 #include <incise/io/read_mesh.hpp>
+#include <incise/linalg/augmented_system.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
-#include <incise/solver/augmented_system.hpp>
 #include <incise/solver/linear_cg.hpp>
 
 #include <time.h>
@@ -52,13 +52,13 @@ struct Options {
   double spacing = 0.01;  ///< grid spacing (m)
   double youngs = 1e4;    ///< E (Pa)
   double poisson = 0.3;   ///< ν
-  solver::SchurPreconditioner preconditioner = solver::SchurPreconditioner::kDiagonal;
-  solver::CholmodKind cholmod = solver::CholmodKind::kSimplicialLdl;
+  linalg::SchurPreconditioner preconditioner = linalg::SchurPreconditioner::kDiagonal;
+  linalg::CholmodKind cholmod = linalg::CholmodKind::kSimplicialLdl;
   bool exact = true;                 ///< refactor + solve beside every step
   int pcg_every = 0;                 ///< Jacobi-PCG on every k-th step (0: never)
   double pcg_seconds = 10;           ///< time budget of one PCG solve
   bool background_refactor = false;  ///< §3.6: keep a background refactorization running
-  solver::CholmodOrdering ordering = solver::CholmodOrdering::kMetis;  ///< of K⁰ (augmented)
+  linalg::CholmodOrdering ordering = linalg::CholmodOrdering::kMetis;  ///< of K⁰ (augmented)
   Geometry geometry = Geometry::kBeam;
   int brick_n = 8;           ///< brick resolution (kBrick)
   std::string mesh_file;     ///< kFile: path of the mesh
@@ -69,9 +69,9 @@ struct Options {
   bool numeric_refactor = true;
   /// CHOLMOD kind of the reference refactorization (its ordering is CHOLMOD's default). On
   /// the thin beams simplicial is faster; on bricks and organ meshes supernodal (BLAS) is.
-  solver::CholmodKind reference_kind = solver::CholmodKind::kSimplicialLdl;
+  linalg::CholmodKind reference_kind = linalg::CholmodKind::kSimplicialLdl;
   /// Eq. 17 by GMRES (the paper) or by the cached explicit Schur matrix.
-  solver::SchurSolver schur_solver = solver::SchurSolver::kGmres;
+  linalg::SchurSolver schur_solver = linalg::SchurSolver::kGmres;
   /// Threads of step 3's full backward substitution (AugmentedOptions::solve_threads).
   int solve_threads = 1;
   /// GMRES tolerance on the relative residual of eq. 17.
@@ -156,7 +156,7 @@ struct Beam {
     for (int a = 0; a < 4; ++a) x.col(a) = points.col(tets[e][a]);
     return element_tangent(lame, x);
   }
-  solver::SparseMatrix assemble() const {
+  linalg::SparseMatrix assemble() const {
     std::vector<Eigen::Triplet<double>> t;
     t.reserve(tets.size() * 144);
     for (int e = 0; e < static_cast<int>(tets.size()); ++e) {
@@ -166,7 +166,7 @@ struct Beam {
         for (int b = 0; b < 12; ++b)
           if (d[a] >= 0 && d[b] >= 0) t.emplace_back(d[a], d[b], k(a, b));
     }
-    solver::SparseMatrix k(num_dofs, num_dofs);
+    linalg::SparseMatrix k(num_dofs, num_dofs);
     k.setFromTriplets(t.begin(), t.end());
     k.makeCompressed();
     return k;
@@ -194,7 +194,7 @@ inline Beam anchored_beam(const mesh::MeshData& mesh, const material::Lame& lame
 /// Jacobi-PCG problem on a reduced SPD matrix (solver::linear_cg needs an incise::Problem).
 class MatrixProblem : public Problem {
  public:
-  MatrixProblem(const solver::SparseMatrix& k, const Eigen::VectorXd& f) : k_(k), f_(f) {}
+  MatrixProblem(const linalg::SparseMatrix& k, const Eigen::VectorXd& f) : k_(k), f_(f) {}
   Eigen::Index size() const override { return f_.size(); }
   EvalStatus energy(const VecX& u, double& e) override {
     e = 0.5 * u.dot(k_ * u) - f_.dot(u);
@@ -218,7 +218,7 @@ class MatrixProblem : public Problem {
   double external_force_norm() const override { return f_.norm(); }
 
  private:
-  const solver::SparseMatrix& k_;
+  const linalg::SparseMatrix& k_;
   Eigen::VectorXd f_;
 };
 
@@ -227,6 +227,7 @@ class MatrixProblem : public Problem {
 /// Runs the experiment; rows are appended per step (row 0: the initial solve).
 inline std::vector<Row> run(const Options& opt, Info& info) {
   using namespace incise::solver;
+  using namespace incise::linalg;
   std::vector<Row> rows;
   material::Parameters par;
   par.youngs_modulus = opt.youngs;

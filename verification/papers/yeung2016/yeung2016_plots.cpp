@@ -17,7 +17,7 @@
 /// Jacobi-PCG solve): wall time on the shared measurement machine is inflated by other jobs.
 /// PCG points are drawn only for solves that reached ‖r‖ ≤ 1e-10‖f‖ within their budget.
 
-#include <incise/scene/svg_plot.hpp>
+#include <incise/certify/svg_plot.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -30,8 +30,8 @@
 
 namespace {
 
-using incise::scene::PlotOptions;
-using incise::scene::Series;
+using incise::certify::PlotOptions;
+using incise::certify::Series;
 
 struct Table {
   std::string name;  // mesh description from the CSV's first line
@@ -112,7 +112,7 @@ void write_svg(const std::string& path, const std::vector<Series>& series,
                const PlotOptions& options) {
   std::ofstream out(path);
   out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-      << incise::scene::svg_line_plot(series, options) << "\n";
+      << incise::certify::svg_line_plot(series, options) << "\n";
   std::printf("wrote %s\n", path.c_str());
 }
 

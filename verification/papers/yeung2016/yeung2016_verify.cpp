@@ -75,7 +75,7 @@ TEST(Yeung2016, BeamCuttingFig7MatchesRefactorization) {
 
 TEST(Yeung2016, BeamCuttingWithSpaiAndNoPreconditioner) {
   for (auto p :
-       {solver::SchurPreconditioner::kNone, solver::SchurPreconditioner::kTridiagonalSpai}) {
+       {linalg::SchurPreconditioner::kNone, linalg::SchurPreconditioner::kTridiagonalSpai}) {
     yeung2016::Options opt;
     opt.kind = yeung2016::Kind::kCut;
     opt.h = 16;
@@ -96,7 +96,7 @@ TEST(Yeung2016, DirectCachedSchurMatchesRefactorization) {
     opt.kind = kind;
     opt.h = beam_h();
     opt.steps = kind == yeung2016::Kind::kDeform ? 12 : 8;
-    opt.schur_solver = solver::SchurSolver::kDirectCached;
+    opt.schur_solver = linalg::SchurSolver::kDirectCached;
     auto check_direct = [&] {
       for (const auto& r : check(opt))
         EXPECT_LE(r.gmres_iterations, 4) << "step " << r.step << " m " << r.m;

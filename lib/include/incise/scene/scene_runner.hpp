@@ -9,8 +9,8 @@
 /// spectral_tuning is set); "augmented" → CHOLMOD factorization of the assembled K (fixed DOFs
 /// as identity rows) and one direct solve, the initial system of the augmented method
 /// (Yeung et al. 2016 §3). "augmented" with tools → an interactive cutting run
-/// (cut::AugmentedCutSession): K⁰ of the uncut body is factored once, then every sweep triangle
-/// is cut (thesis §3.2) and the static solution updated by the augmented solver — element
+/// (interactive::AugmentedCutSession): K⁰ of the uncut body is factored once, then every sweep
+/// triangle is cut (thesis §3.2) and the static solution updated by the augmented solver — element
 /// stiffness changes and new DOFs as replaced columns, GMRES on the Schur system — without
 /// refactorization; the per-step m, GMRES iterations and update times are returned as
 /// SceneRunResult::cut_steps. Parts built on the way (eigenvalue estimates, FFT, factorization) are
@@ -24,9 +24,9 @@
 #include <string>
 #include <vector>
 
-namespace incise::cut {
+namespace incise::interactive {
 class AugmentedCutSession;
-}  // namespace incise::cut
+}  // namespace incise::interactive
 
 namespace incise::scene {
 
@@ -54,7 +54,7 @@ struct TraceRow {
 struct CutStepRow {
   int step = 0;                     ///< 0: initial solve; k ≥ 1: k-th sweep triangle
   int tool = -1;                    ///< index into SceneSpec::tools (−1 for step 0)
-  std::string status;               ///< "ok" or the cut::CutSolveStatus name (+ advice)
+  std::string status;               ///< "ok" or the interactive::CutSolveStatus name (+ advice)
   bool degenerate_sweep = false;    ///< the cutter skipped a zero-area sweep triangle
   Index faces_dissected = 0;        ///< faces dissected by this step (§3.2)
   Index nodes_snapped = 0;          ///< nodes snapped onto the sweep (§3.2.2)
@@ -94,7 +94,7 @@ using RunObserver = std::function<void(const solver::IterationInfo&)>;
 /// triangles in the run and the session (its cut mesh and displacement are those after the
 /// step; valid during the call).
 using CutStepObserver = std::function<void(const CutStepRow&, std::size_t total_steps,
-                                           const cut::AugmentedCutSession& session)>;
+                                           const interactive::AugmentedCutSession& session)>;
 
 /// Runs the scene's solver from u = 0. Numerical failure is reported in result.report.reason,
 /// never thrown. Throws UsageError only for a scene whose problem was not built.

@@ -111,17 +111,17 @@ struct SolverSpec {
   /// moves in world space, thesis §3.2) or to the reference configuration (false: the same
   /// cut as the builder's cut-first path). Scene key `cut_configuration`.
   bool cut_deformed = true;
-  /// Interactive cutting run only: cut::AugmentedCutOptions::refactor_at_m, the augmented
+  /// Interactive cutting run only: interactive::AugmentedCutOptions::refactor_at_m, the augmented
   /// paper's §3.6 background refactorization — started after a solve once m − |𝓓| replaced
   /// columns (a count) have accumulated; 0 = never. Scene key `refactor_at_m`.
   int refactor_at_m = 0;
-  /// Interactive cutting run only: solver::AugmentedOptions::solve_threads, the threads of
+  /// Interactive cutting run only: linalg::AugmentedOptions::solve_threads, the threads of
   /// step 3's full backward substitution (1 = serial; the result is bit-identical for any
   /// value). Scene key `solve_threads`, 1 … 64.
   int solve_threads = 1;
   /// Interactive cutting run only: how GMRES on eq. 17 (the Schur system) is preconditioned —
   /// "explicit" (the default: the explicit H R⁻¹ J in capacitance form,
-  /// solver::SchurSolver::kDirectCached), or the paper's §3.5 choices "hsj" (S = D⁻¹), "spai"
+  /// linalg::SchurSolver::kDirectCached), or the paper's §3.5 choices "hsj" (S = D⁻¹), "spai"
   /// (tridiagonal sparse approximate inverse) and "none". Scene key `schur_preconditioner`.
   std::string schur_preconditioner = "explicit";
 };

@@ -1,0 +1,235 @@
+#pragma once
+/// \file augmented_cut_session.hpp
+/// One interactive cutting session on a linear-elastic body whose static solution is kept
+/// current by the augmented-matrix solver (thesis §3.2 cut steps; Yeung, Crouch & Pothen 2016
+/// §3 column replacements, docs/augmented.md). It owns the cut mesh, the Cutter, the element
+/// stiffness bookkeeping and an linalg::AugmentedSystem.
+///
+/// After every sweep-triangle step (Cutter::step) the CutStepReport — the single description
+/// of "what changed in this step", also used by the warm-restarted relaxation path — is
+/// translated into column replacements:
+/// - every element slot listed in `changed_elements`, or incident with a node in
+///   `moved_nodes` (snapping changes reference positions), is compared with the element the
+///   system holds for that slot; if its nodes or reference positions differ, the old element
+///   stiffness is subtracted (AugmentedSystem::add_element(·, Kₑ, −1)) and the new one added
+///   (+1). Kₑ is the linear-elastic tetrahedron tangent (thesis (2.22), §3.1);
+/// - nodes created by the step (`new_nodes`) get three new DOFs (add_dofs); copies of a node
+///   fixed from the start stay fixed (no DOFs, zero displacement);
+/// - nodes fixed by the component policy (`fixed_nodes`, FreeComponentPolicy::kFixOnFace) and
+///   nodes left without elements (`removed_nodes`) are held at their current displacement by
+///   Dirichlet constraints (impose_dirichlet), so no DOF is left without stiffness. Each
+///   constrained DOF d also gets a diagonal spring K_dd += k̄ (k̄ = mean diagonal of K⁰): it
+///   changes no displacement (a prescribed DOF's own diagonal enters only its reaction, which
+///   the session does not use), but keeps the current K positive definite — a piece held only
+///   by constraints, or a node without elements, would otherwise make K singular and every
+///   §3.6 refactorization of it fail;
+/// - then AugmentedSystem::solve() gives the new static displacement without refactoring.
+///
+/// DOF numbering: nodes fixed at construction have no DOFs (removed from K⁰,
+/// remove_fixed_dofs convention of augmented_system.hpp); the other used nodes of the initial
+/// mesh get 3·k, 3·k+1, 3·k+2 in node order; new nodes get the next DOFs in creation order.
+///
+/// Failure is a status (CutSolveStatus), never an exception: a component without fixed nodes
+/// (policy kReport) makes K singular and the solve is skipped; an element inverted in the
+/// reference configuration (only possible with refuse_inverting_snaps = false) has no valid
+/// stiffness; the augmented solve itself may report kSingularModifiedSystem (e.g. a piece held
+/// by a single fixed node) or kGmresNotConverged.
+
+#include <incise/core/types.hpp>
+#include <incise/cut/cut_mesh.hpp>
+#include <incise/cut/cutter.hpp>
+#include <incise/linalg/augmented_system.hpp>
+#include <incise/material/material.hpp>
+#include <incise/mesh/mesh_data.hpp>
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace incise::interactive {
+
+/// Options of an AugmentedCutSession.
+struct AugmentedCutOptions {
+  /// AugmentedOptions with a supernodal CHOLMOD factor and eq. 17 preconditioned by the
+  /// explicit H R⁻¹ J (SchurSolver::kDirectCached; see `augmented`).
+  static linalg::AugmentedOptions supernodal_defaults() {
+    linalg::AugmentedOptions o;
+    o.cholmod.kind = linalg::CholmodKind::kSupernodal;
+    o.schur_solver = linalg::SchurSolver::kDirectCached;
+    return o;
+  }
+  cut::CutOptions cut;  ///< the cutter's options (thesis defaults)
+  /// The augmented solver's options; the factorization of K⁰ is *supernodal* here (METIS
+  /// ordering kept): on the bulky 105k-tet box it took 2.4–4.7 s CPU (four runs) against 48 s for
+  /// the simplicial LDLᵀ that AugmentedOptions defaults to (thin beams), with equal step cost
+  /// (docs/cutting.md, cut_bench BM_AugmentedInteractiveStep). Eq. 17 uses the explicit
+  /// H R⁻¹ J in capacitance form: a cut adds the DOFs of a few nodes to 𝓛 per step, which
+  /// costs one restricted solve each, and GMRES then needs 1–3 iterations instead of dozens
+  /// with HSJ (solver update 113 vs 229 ms per step on the 105k-tet box, docs/cutting.md).
+  linalg::AugmentedOptions augmented = supernodal_defaults();
+  /// After every successful solve set the cut mesh's deformed positions to X + a, so that the
+  /// next sweep triangle is interpreted in the deformed configuration (§3.2). O(n) per step
+  /// (the cutter's boundary search grid is rebuilt); false keeps x = X (cutting in the
+  /// reference configuration).
+  bool update_deformed = true;
+  /// §3.6 of the augmented paper (automatic background refactorization), in replaced columns
+  /// (a count). After a step's (or solve()'s) augmented solve, when the replaced columns that
+  /// a refactorization can remove — m − |𝓓|, m = |𝓛|; the Dirichlet DOFs 𝓓 stay in 𝓛 after
+  /// any refactorization, so counting them would restart a useless job after every solve once
+  /// |𝓓| reached the threshold — number at least `refactor_at_m` and no refactorization is
+  /// pending, the session starts one (AugmentedSystem::start_refactorization(): the current K
+  /// is factored in a background thread). The next solve() that finds it finished swaps it in,
+  /// and m drops to m′ + |𝓓|, m′ the columns changed since the job started. 0 = never (m grows
+  /// for the whole cut). Why (§3.6): the update cost grows with m (GMRES on the m × m Schur
+  /// system, eq. 17, and the closures of its columns) while a factorization costs about the
+  /// same at any m, so the paper bounds m "by periodically re-computing a full LDLᵀ
+  /// factorization of K in a process that runs concurrently with the simulation loop"; a
+  /// threshold near the m at which the accumulated extra update time has reached one
+  /// factorization time follows its argument. The job wants a second core. Must be ≥ 0.
+  int refactor_at_m = 0;
+};
+
+/// Outcome of the solver update of one step.
+enum class CutSolveStatus {
+  kOk,               ///< solved; displacement() is the static solution of the cut mesh
+  kFreeComponent,    ///< a component without fixed nodes exists (policy kReport): K is
+                     ///< singular, no solve was made; displacement() keeps the last solution
+  kInvertedElement,  ///< a live element has non-positive reference volume: no stiffness
+  kSolverFailed      ///< AugmentedSystem::solve() failed; see AugmentedCutStepReport::solve
+};
+
+/// Human-readable name of a CutSolveStatus.
+const char* to_string(CutSolveStatus status);
+
+/// Report of one interactive step (one sweep triangle, then the solver update).
+struct [[nodiscard]] AugmentedCutStepReport {
+  CutSolveStatus status = CutSolveStatus::kOk;
+  std::string advice;      ///< what the caller can do when status != kOk
+  cut::CutStepReport cut;  ///< the cutter's report (what changed in the mesh)
+  // Translation into column replacements (this step).
+  Index elements_subtracted = 0;  ///< element stiffnesses removed (old version of a slot)
+  Index elements_added = 0;       ///< element stiffnesses added (new version of a slot)
+  Index dofs_added = 0;           ///< new DOFs (3 per new free node)
+  Index constrained_fixed = 0;    ///< DOFs constrained because the cutter fixed their node
+  Index constrained_unused = 0;   ///< DOFs constrained because their node lost all elements
+  Index free_components = 0;      ///< components without fixed nodes in the mesh (cumulative)
+  Index inverted_elements = 0;    ///< live elements with reference volume ≤ 0 (current)
+  bool solved = false;            ///< whether AugmentedSystem::solve() ran
+  linalg::AugmentedReport solve;  ///< m = |𝓛|, GMRES iterations, closures, solver timings
+  // §3.6 background refactorization (AugmentedCutOptions::refactor_at_m).
+  int m_before_solve = 0;  ///< m = |𝓛| after this step's column replacements, before the solve
+  int m_after_solve = 0;   ///< m after the solve (after a swap, if any; unchanged without one)
+  /// The solve swapped in a finished background factorization (m_after_solve then counts only
+  /// the columns changed since it started, plus 𝓓); solve.refactorization_status tells whether
+  /// a finished job failed (it is then dropped: the old factor stays in use).
+  bool refactorization_swapped = false;
+  /// After the solve, m ≥ refactor_at_m with no job pending: a background refactorization of
+  /// the current K was started.
+  bool refactorization_started = false;
+  // Timings (seconds). CPU = CLOCK_THREAD_CPUTIME_ID of the calling thread.
+  double seconds_cut = 0;         ///< wall time of cut::Cutter::step
+  double seconds_update = 0;      ///< wall time of the column replacements (no solve)
+  double seconds_solve = 0;       ///< wall time of AugmentedSystem::solve() (+ deformed update)
+  double cpu_seconds_cut = 0;     ///< CPU time of cut::Cutter::step
+  double cpu_seconds_update = 0;  ///< CPU time of the column replacements and the solve
+  /// True when status == kOk.
+  bool ok() const { return status == CutSolveStatus::kOk; }
+};
+
+/// A cut mesh, its cutter and the augmented linear-elastic static solver, kept consistent
+/// step by step (see file comment). Not copyable or movable (the cutter refers to the mesh);
+/// hold it by std::unique_ptr when needed. Not thread-safe.
+class AugmentedCutSession {
+ public:
+  /// Body `mesh` (3D tetrahedra, reference configuration, m) of linear material `material`
+  /// ("linear" model: thesis (2.22)); nodes `fixed_nodes` are held at zero displacement;
+  /// `node_forces` (3 × num_points, N) are the external nodal forces. Factors K⁰ and solves
+  /// the uncut problem: the outcome is initial_report(). Throws ParameterError for a
+  /// non-linear material, a non-tetrahedral mesh, a bad node index or a force matrix of the
+  /// wrong size; UsageError for an invalid mesh (from CutMesh).
+  AugmentedCutSession(const mesh::MeshData& mesh, const material::Material& material,
+                      const std::vector<Index>& fixed_nodes, const Eigen::Matrix3Xd& node_forces,
+                      AugmentedCutOptions options = {});
+  ~AugmentedCutSession();
+  AugmentedCutSession(const AugmentedCutSession&) = delete;
+  AugmentedCutSession& operator=(const AugmentedCutSession&) = delete;
+
+  /// Report of the initial factorization and solve (cut fields empty). When K⁰ is not
+  /// positive definite (e.g. no fixed nodes) status is kSolverFailed with solve.status
+  /// kNoFactor; steps then cut the mesh but cannot solve.
+  const AugmentedCutStepReport& initial_report() const { return initial_; }
+
+  /// One interactive step: Cutter::step on sweep triangle (a, b, c) (deformed configuration,
+  /// m), the translation of its CutStepReport into column replacements, and the augmented
+  /// solve. Post: displacement() is the static solution of the cut mesh when ok().
+  AugmentedCutStepReport step(const Vec3& a, const Vec3& b, const Vec3& c);
+  /// Same with the triangle as an array.
+  AugmentedCutStepReport step(const std::array<Vec3, 3>& tri) {
+    return step(tri[0], tri[1], tri[2]);
+  }
+
+  /// Ends the current incision (Cutter::end_incision): the next step starts a new one.
+  void end_incision() { cutter_->end_incision(); }
+
+  /// Changes the external force on node v (N); takes effect at the next solve.
+  void set_node_force(Index v, const Vec3& force);
+  /// Solves again without cutting (e.g. after set_node_force); cut fields of the report empty.
+  AugmentedCutStepReport solve();
+
+  /// §3.6 of the augmented paper: refactors the current K in a background thread; later
+  /// solves swap it in and m drops. Returns false if a job is already running. Started
+  /// automatically when AugmentedCutOptions::refactor_at_m > 0.
+  bool start_refactorization() { return system_->start_refactorization(); }
+
+  /// The cut mesh (reference and deformed positions, connectivity).
+  const cut::CutMesh& mesh() const { return *mesh_; }
+  /// The cutter (options, degeneracy count).
+  const cut::Cutter& cutter() const { return *cutter_; }
+  /// The augmented system (m, current K, constraints).
+  const linalg::AugmentedSystem& system() const { return *system_; }
+  /// First of the three DOFs of node v, or −1 (fixed from the start, or never used).
+  int dof(Index v) const { return node_dof_[static_cast<size_t>(v)]; }
+  /// Current displacement of every node (3 × num_nodes, m): the last successful solution;
+  /// zero for nodes fixed from the start.
+  const Eigen::Matrix3Xd& displacement() const { return displacement_; }
+  /// Element stiffness Kₑ (12×12, node-major DOF order 3a+i) of the linear-elastic
+  /// tetrahedron with reference nodes `x` (columns, m), symmetrized; zero when the volume
+  /// is not positive. The matrix the session adds and subtracts.
+  Eigen::Matrix<double, 12, 12> element_stiffness(const Eigen::Matrix<double, 3, 4>& x) const;
+
+ private:
+  struct LastSolve {  // outcome of the last solve_into (reused when a step changes nothing)
+    CutSolveStatus status = CutSolveStatus::kOk;
+    std::string advice;
+    Index free_components = 0, inverted_elements = 0;
+    bool solved = false;  // a valid solution for the current system and forces
+  };
+  struct Record {  // what the system holds for one element slot
+    cut::Tet nodes{-1, -1, -1, -1};
+    Eigen::Matrix<double, 3, 4> x;
+  };
+  std::vector<int> element_dofs(const cut::Tet& t) const;
+  void add_record(Index slot, double scale);
+  void assign_new_nodes(const cut::CutStepReport& cut, AugmentedCutStepReport& r);
+  void constrain(Index v, Index& counter);
+  void solve_into(AugmentedCutStepReport& r);
+
+  material::Material material_;
+  AugmentedCutOptions options_;
+  std::unique_ptr<cut::CutMesh> mesh_;
+  std::unique_ptr<cut::Cutter> cutter_;
+  std::unique_ptr<linalg::AugmentedSystem> system_;
+  std::vector<int> node_dof_;
+  std::vector<char> initially_fixed_;
+  std::vector<Vec3> node_force_;
+  std::vector<Record> records_;
+  Eigen::Matrix3Xd displacement_;
+  Index free_components_ = 0;
+  Index inverted_ = 0;
+  double constraint_spring_ = 1;  // k̄ (N/m): K_dd += k̄ at each constrained DOF d (file comment)
+  AugmentedCutStepReport initial_;
+  LastSolve last_;
+};
+
+}  // namespace incise::interactive

@@ -1,0 +1,251 @@
+#pragma once
+/// \file augmented_system.hpp
+/// Augmented-matrix solves of a changing linear elastostatic system K a = f (Yeung, Crouch,
+/// Pothen 2016, "Interactively cutting and constraining vertices in meshes using augmented
+/// matrices", §3). The factor of an initial matrix K⁰ is kept; later changes of K (element
+/// removals/additions, new DOFs from cuts) and Dirichlet constraints are expressed as
+/// replacements of m columns (eqs. 4–6):
+///
+///     K^A = [ R  J ]   R = diag(K⁰, I)  (eq. 12, padded with I for new DOFs),
+///           [ H  0 ]   J_{*,i} = K_{*,𝓛ᵢ} (𝓛ᵢ ∉ 𝓓) or e_{𝓛ᵢ} (𝓛ᵢ ∈ 𝓓),  H_{i,*} = e_{𝓛ᵢ}ᵀ,
+///
+/// and solved by the three steps of §3.2: y = R⁻¹f̂ restricted to 𝓛, GMRES on the Schur system
+/// (H R⁻¹ J) a₂ = H R⁻¹ f̂ (eq. 17), a₁ = R⁻¹(f̂ − J a₂) (eq. 16). Triangular solves are
+/// restricted to elimination-tree closures (§3.3). A background thread can refactor the current
+/// K (§3.6). See docs/augmented.md.
+///
+/// DOF numbering: the caller numbers the *free* DOFs of K⁰ 0…n₀−1; DOFs held fixed for the
+/// whole simulation (e.g. an anchored face) are removed from K⁰ beforehand
+/// (remove_fixed_dofs()) and are passed as −1 in element DOF lists. New DOFs get n₀, n₀+1, …
+/// in the order of add_dofs() calls.
+
+#include <incise/linalg/cholmod_factor.hpp>
+#include <incise/linalg/gmres.hpp>
+
+#include <cstdint>
+#include <future>
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace incise::linalg {
+
+/// Preconditioner M ≈ H S J of the Schur system (§3.5).
+enum class SchurPreconditioner {
+  kNone,            ///< plain GMRES
+  kDiagonal,        ///< S = D⁻¹ from the LDLᵀ factor of R (permuted back)
+  kTridiagonalSpai  ///< S = tridiagonal sparse approximate inverse of R (Benson &
+                    ///< Frederickson 1982): min ‖R S − I‖_F column by column
+};
+
+/// How the m×m Schur system (H R⁻¹ J) a₂ = H R⁻¹ f̂ of eq. 17 is solved.
+enum class SchurSolver {
+  kGmres,  ///< GMRES (§3.2): one closure-restricted solve with R per iteration, every step
+  /// H R⁻¹ J formed explicitly in the capacitance form Φ + G Ψ (docs/augmented.md): G, the
+  /// block of R⁻¹ on 𝓛, is kept between solve() calls while the factor is the same; a DOF
+  /// that joins 𝓛 costs one closure-restricted solve R⁻¹e_{𝓛ᵢ}, changed column values only
+  /// the m×m product G Ψ (Ψ holds the changes E = K − R on 𝓛 and e_k for Dirichlet columns).
+  /// Its dense LU is the right preconditioner of GMRES on the exact operator, which then
+  /// converges in 1–3 iterations (the capacitance form amplifies round-off by κ(R) in the
+  /// directions of R's low modes, so it is not used as a direct solve).
+  kDirectCached
+};
+
+/// Options of an AugmentedSystem.
+struct AugmentedOptions {
+  /// Factorization of K⁰ (and of background refactorizations). METIS nested dissection by
+  /// default: on the paper's 25,600-node beam AMD gives closures of ~26,000 positions for a
+  /// single DOF, METIS ~650 (docs/augmented.md), at 1.6× the fill. Simplicial LDLᵀ by default:
+  /// the solves use the simplicial form anyway (supernodal padding adds 12% explicit zeros),
+  /// and it factored as fast as the supernodal kernel on the measured machine.
+  CholmodOptions cholmod = {CholmodKind::kSimplicialLdl, CholmodOrdering::kMetis};
+  GmresOptions gmres;  ///< GMRES for eq. 17
+  SchurPreconditioner preconditioner = SchurPreconditioner::kDiagonal;
+  /// Solver of eq. 17 (GMRES by default, as in the paper).
+  SchurSolver schur_solver = SchurSolver::kGmres;
+  /// At the start of solve(), drop from 𝓛 every changed column that is again *exactly* equal
+  /// to its column of R (e.g. an element removed and added back with exactly representable
+  /// sums); skipped while a background refactorization snapshot is pending (§3.6 bookkeeping).
+  bool prune_unchanged_columns = true;
+  /// Numerical-singularity guard: a solution with amplification
+  /// max|K_ii|·‖a‖₂ / (‖f̂‖₂ + max|K_ii|·‖ā‖₂) above this is reported as
+  /// kSingularModifiedSystem (GMRES can "converge" on a numerically singular eq. 17, e.g. after
+  /// a cut frees a component, and return a huge, meaningless a). The amplification is bounded
+  /// by κ(K) for a nonsingular K, so this must exceed the condition number of legitimate
+  /// systems (the paper's longest beam: κ ≈ 3.3e12).
+  double max_amplification = 1e14;
+  /// Threads of step 3's full backward substitution (ClosureLdlSolver): 1 = serial. The pass
+  /// streams all of L and is memory-bound; a second core adds memory bandwidth (on the
+  /// measured 2-core machine 1.5× for a pure stream). The result is bit-identical for any
+  /// value. Leave at 1 when the core is needed elsewhere, e.g. by a background
+  /// refactorization (§3.6) or the rest of the simulator.
+  int solve_threads = 1;
+};
+
+/// Outcome of AugmentedSystem::solve().
+enum class AugmentedStatus {
+  kOk,
+  kNoFactor,                ///< initialize() was not called or its factorization failed
+  kSingularModifiedSystem,  ///< the modified K is singular: a DOF lost all stiffness (empty
+                            ///< column), or GMRES broke down / stagnated on eq. 17
+  kGmresNotConverged,       ///< GMRES hit its iteration cap before the tolerance
+  kNonFinite                ///< NaN/Inf in the data (forces, element matrices)
+};
+
+/// Human-readable name of an AugmentedStatus.
+const char* to_string(AugmentedStatus status);
+
+/// Report of one augmented solve (one "update step" of the paper).
+struct [[nodiscard]] AugmentedReport {
+  AugmentedStatus status = AugmentedStatus::kNoFactor;
+  std::string advice;      ///< what the caller can do when status != kOk
+  int n = 0;               ///< current number of DOFs
+  int m = 0;               ///< replaced columns |𝓛| (changed columns + Dirichlet DOFs)
+  int dirichlet = 0;       ///< |𝓓|
+  GmresReport gmres;       ///< step 2 (kGmres; with kDirectCached: iterations 0, the LU residual)
+  int schur_solves = 0;    ///< kDirectCached: restricted solves spent on new columns of G
+  int pruned_columns = 0;  ///< columns dropped from 𝓛 because K equals R there again
+  // Closure sizes (positions of L touched), §3.3 / Fig. 4 of the paper.
+  int closure_f = 0;       ///< |closure_L(f̂)| (step 1 forward)
+  int closure_y = 0;       ///< |closure_L(ŷ)| = |closure_L(𝓛)| (backward, steps 1–2)
+  int closure_ja2 = 0;     ///< |closure_L(J a₂)| (step 2 forward, per iteration)
+  int closure_step3 = 0;   ///< |closure_L(f̂ − J a₂)| (step 3 forward; backward is full)
+  std::int64_t nnz_l = 0;  ///< |L| of the factor in use
+  // Timings in seconds.
+  double seconds_setup = 0;  ///< building J, H, f̂, closures and the preconditioner
+  double seconds_step1 = 0;
+  double seconds_step2 = 0;
+  double seconds_step3 = 0;
+  double seconds_total = 0;
+  double amplification = 0;              ///< see AugmentedOptions::max_amplification
+  bool refactorization_swapped = false;  ///< a background factor replaced the old one here
+  FactorStatus refactorization_status = FactorStatus::kOk;  ///< of a finished background job
+
+  /// True when status == kOk.
+  bool ok() const { return status == AugmentedStatus::kOk; }
+};
+
+/// Result of remove_fixed_dofs().
+struct ReducedMatrix {
+  SparseMatrix matrix;            ///< rows/columns of the free DOFs, in increasing order
+  std::vector<int> full_to_free;  ///< full index → free index, −1 for fixed DOFs
+};
+
+/// Removes the rows and columns of permanently fixed DOFs (zero displacement) from a full
+/// symmetric matrix: the free-free block K_FF of §3.1 ("the reduced stiffness matrix").
+ReducedMatrix remove_fixed_dofs(const SparseMatrix& k, const std::vector<bool>& fixed);
+
+/// The augmented system of §3.1 with the solution method of §3.2–3.6. Not thread-safe: one
+/// thread issues updates and solves; the optional background refactorization runs in its own
+/// thread with its own CHOLMOD common and touches no member of this object.
+class AugmentedSystem {
+ public:
+  explicit AugmentedSystem(AugmentedOptions options = {});
+  ~AugmentedSystem();
+  AugmentedSystem(const AugmentedSystem&) = delete;
+  AugmentedSystem& operator=(const AugmentedSystem&) = delete;
+
+  /// Factors K⁰ (symmetric, both triangles stored, positive definite on the free DOFs) and
+  /// resets all changes, constraints and forces. Returns the factorization status; on failure
+  /// solve() reports kNoFactor. Throws UsageError for a non-square or non-symmetric pattern.
+  [[nodiscard]] FactorStatus initialize(const SparseMatrix& k0);
+
+  /// Current number of DOFs n = n₀ + added DOFs.
+  int num_dofs() const { return n_; }
+  /// Order of the matrix whose factor is in use (n₀, or larger after a refactorization).
+  int factored_dofs() const { return n_base_; }
+
+  /// Appends `count` new DOFs (e.g. 3 for a node duplicated by a cut) with zero stiffness and
+  /// zero force; returns the index of the first. They must receive stiffness (add_element)
+  /// before solve(), or solve() reports kSingularModifiedSystem.
+  int add_dofs(int count);
+
+  /// K ← K + scale·Kₑ on the rows/columns `dofs` (entries −1 are fixed DOFs and skipped):
+  /// adds (scale = 1) or removes (scale = −1) an element's stiffness (§3.1: "affected elements
+  /// can be removed ... by subtracting their contributions"). Kₑ must be square, symmetric and
+  /// sized like `dofs`. Every touched column joins 𝓛.
+  void add_element(const std::vector<int>& dofs, const Eigen::MatrixXd& ke, double scale = 1.0);
+
+  /// Prescribes displacement `value` (m) at DOF `dof` (joins 𝓓 and 𝓛; eq. 5 second case).
+  /// Re-imposing updates the value.
+  void impose_dirichlet(int dof, double value);
+  /// Releases the constraint of `dof` (no-op when not constrained). The column leaves 𝓛 when K
+  /// agrees with R there.
+  void release_dirichlet(int dof);
+  /// Whether `dof` is constrained.
+  bool is_constrained(int dof) const { return dirichlet_.count(dof) != 0; }
+
+  /// Sets the external force vector f (N), size num_dofs().
+  void set_force(const Eigen::VectorXd& f);
+  /// Current external force (size num_dofs()).
+  const Eigen::VectorXd& force() const { return f_; }
+
+  /// Solves the current system: `displacement` (size n, prescribed values at 𝓓) and `reaction`
+  /// (size n, zero off 𝓓): reaction_d = (K a)_d − f_d, the force the constraint exerts, so that
+  /// K a = f + reaction. Polls the background refactorization first.
+  AugmentedReport solve(Eigen::VectorXd& displacement, Eigen::VectorXd& reaction);
+
+  /// 𝓛: sorted indices of replaced columns (changed columns, new DOFs, Dirichlet DOFs).
+  std::vector<int> replaced_columns() const;
+  /// Number of replaced columns m = |𝓛|.
+  int num_replaced() const;
+  /// The current stiffness K (n × n, both triangles), assembled from the base and changes.
+  SparseMatrix current_matrix() const;
+
+  /// §3.6: starts factoring a snapshot of the current K in a background thread (own CHOLMOD
+  /// common, own CholmodFactor). Returns false (and does nothing) if one is already running.
+  bool start_refactorization();
+  /// Whether a background refactorization is running or finished but not yet swapped in.
+  bool refactorization_pending() const { return job_.valid(); }
+  /// If the background job has finished, swaps its factor in (m drops to the columns changed
+  /// since the job started) and returns true. A failed job is dropped; its status is stored in
+  /// last_refactorization_status().
+  bool poll_refactorization();
+  /// Blocks until the background job (if any) finishes, then swaps as poll does.
+  bool wait_for_refactorization();
+  /// Status of the last finished background factorization.
+  FactorStatus last_refactorization_status() const { return last_refactor_status_; }
+
+ private:
+  using Column = std::vector<std::pair<int, double>>;  // sorted by row
+  struct Base;                                         // factor, matrix, preconditioner data of R
+  static std::unique_ptr<Base> make_base(SparseMatrix matrix, std::unique_ptr<CholmodFactor> factor,
+                                         const AugmentedOptions& options);
+  Column column_of(int j) const;
+  const Column* changed_column(int j) const;
+  void touch_column(int j);
+  bool swap_in(std::unique_ptr<Base> base, const std::set<int>& changed_since);
+  Eigen::MatrixXd capacitance_matrix(const std::vector<int>& l_list,
+                                     const std::vector<char>& is_dir,
+                                     const std::vector<const Column*>& jcols,
+                                     const std::vector<int>& l_base, const std::vector<int>& c_y,
+                                     int& solves);
+  int prune_unchanged_columns();
+
+  AugmentedOptions options_;
+  std::unique_ptr<Base> base_;
+  int n_ = 0;
+  int n_base_ = 0;
+  std::unordered_map<int, Column> changed_;  // current K columns differing from R
+  std::map<int, double> dirichlet_;          // 𝓓 with prescribed values
+  Eigen::VectorXd f_;
+  std::set<int> changed_since_snapshot_;
+  bool snapshot_active_ = false;
+  std::future<std::unique_ptr<Base>> job_;
+  std::uint64_t pattern_version_ = 1;
+  FactorStatus last_refactor_status_ = FactorStatus::kOk;
+  double diag_scale_ = 1;  // max |K⁰_ii|: entries below 1e-13·diag_scale_ count as zero
+  // SchurSolver::kDirectCached: G = (R⁻¹) on the base DOFs of 𝓛 of the last solve, kept while
+  // the base factor is the same.
+  std::uint64_t base_generation_ = 0;  // bumped whenever base_ is replaced
+  std::uint64_t g_generation_ = 0;     // base_generation_ g_ was computed with (0: none)
+  std::vector<int> g_l_;               // its DOFs (sorted)
+  Eigen::MatrixXd g_;
+  // Workspace.
+  std::vector<int> pos_in_l_;
+};
+
+}  // namespace incise::linalg

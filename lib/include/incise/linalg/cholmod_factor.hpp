@@ -1,0 +1,152 @@
+#pragma once
+/// \file cholmod_factor.hpp
+/// RAII wrapper of a CHOLMOD sparse Cholesky factorization (analyze / factorize / solve / info),
+/// with Eigen types at the boundary. One `cholmod_common` per object: an object may be used by
+/// one thread at a time, and different objects may be used concurrently (Yeung et al. 2016
+/// §3.6 runs a second object in a background thread).
+
+#include <incise/core/types.hpp>
+
+#include <Eigen/SparseCore>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace incise::linalg {
+
+/// Sparse matrix type at the solver boundary: column-major, 32-bit indices, compressed.
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+/// Which CHOLMOD factorization to compute.
+enum class CholmodKind {
+  kSupernodal,     ///< supernodal LLᵀ using BLAS (OpenBLAS) dense kernels
+  kSimplicialLdl,  ///< simplicial (column-by-column, no BLAS) LDLᵀ
+  kAuto            ///< CHOLMOD's own choice (supernodal when flops/nnz(L) is large)
+};
+
+/// Fill-reducing ordering.
+enum class CholmodOrdering {
+  kDefault,  ///< CHOLMOD default: AMD, and METIS/NESDIS if AMD fill is large (when compiled in)
+  kAmd,      ///< approximate minimum degree only
+  kNatural,  ///< identity permutation (for tests; usually much more fill)
+  kMetis     ///< METIS nested dissection: shallow elimination trees, hence small closures
+             ///< (Yeung et al. 2016 §3.4, Thm. 3) — the default of AugmentedSystem
+};
+
+/// Options of a CholmodFactor.
+struct CholmodOptions {
+  CholmodKind kind = CholmodKind::kSupernodal;  ///< see docs/augmented.md for the measurement
+  CholmodOrdering ordering = CholmodOrdering::kDefault;
+  /// A factorization whose pivot ratio min Dᵢᵢ / max Dᵢᵢ (CHOLMOD's rcond estimate) is below
+  /// this is reported as kNotPositiveDefinite ("numerically singular"): CHOLMOD itself only
+  /// flags pivots ≤ 0, and an exactly singular matrix usually yields a positive pivot of
+  /// round-off size (e.g. a floating component after a cut). 0 disables the check.
+  double min_pivot_ratio = 1e-14;
+};
+
+/// Outcome of analyze/factorize/solve, in the spirit of Eigen's `info()`.
+enum class FactorStatus {
+  kOk,
+  kNotAnalyzed,          ///< factorize/solve called before analyze (usage error, reported)
+  kNotPositiveDefinite,  ///< a pivot ≤ 0: matrix is singular or indefinite; `minor()` says where
+  kOutOfMemory,          ///< CHOLMOD could not allocate
+  kInvalidInput,         ///< matrix not square, sizes differ from the analysis, NaN entries
+  kCholmodError          ///< any other CHOLMOD failure (message in `message()`)
+};
+
+/// Human-readable name of a FactorStatus.
+const char* to_string(FactorStatus status);
+
+/// Unit lower-triangular LDLᵀ factor of a permuted SPD matrix, P A Pᵀ = L D Lᵀ, stored as plain
+/// arrays (compressed columns, strictly lower part; the unit diagonal is implicit).
+/// Immutable once built: may be shared between threads (e.g. through shared_ptr<const>).
+/// Row index i of L refers to permuted position i; `perm[i]` is the original index at position
+/// i and `inverse_perm[perm[i]] = i`. The elimination-tree parent of column j is the smallest
+/// row index in column j (−1 for a root) — Yeung et al. 2016, Appendix Definition 2, Thm. 3.
+struct LdlFactorData {
+  int n = 0;                      ///< order of A
+  std::vector<int> perm;          ///< position → original index
+  std::vector<int> inverse_perm;  ///< original index → position
+  std::vector<int> col_ptr;       ///< size n+1
+  std::vector<int> row_idx;       ///< sorted ascending within each column, all > column index
+  std::vector<double> values;     ///< entries of L below the diagonal
+  std::vector<double> d;          ///< diagonal D (all > 0 for an SPD matrix)
+  std::vector<int> parent;        ///< elimination tree parent of each position, −1 for roots
+
+  /// Number of stored entries of L including the unit diagonal (|L| in Table I of the paper).
+  std::int64_t nnz_l() const { return static_cast<std::int64_t>(values.size()) + n; }
+};
+
+/// RAII CHOLMOD factorization of a symmetric positive definite matrix A (only the lower
+/// triangle of the Eigen matrix is read). Usage: analyze(A) once per sparsity pattern,
+/// factorize(A) per numerical values, then solve(b). The symbolic analysis is cached by the
+/// caller-supplied pattern version: analyze() with the same version and the same size and
+/// nonzero count is a no-op. Failures are returned as FactorStatus, never thrown; misuse
+/// (non-square input) also reports kInvalidInput.
+class CholmodFactor {
+ public:
+  explicit CholmodFactor(CholmodOptions options = {});
+  ~CholmodFactor();
+  CholmodFactor(const CholmodFactor&) = delete;
+  CholmodFactor& operator=(const CholmodFactor&) = delete;
+  CholmodFactor(CholmodFactor&&) noexcept;
+  CholmodFactor& operator=(CholmodFactor&&) noexcept;
+
+  /// Symbolic analysis (ordering, elimination tree, pattern of L) of the pattern of `a`.
+  /// Reuses the previous analysis when `pattern_version` equals the previous one and the size
+  /// and nonzero count agree. Pass a fresh version whenever the pattern changes.
+  [[nodiscard]] FactorStatus analyze(const SparseMatrix& a, std::uint64_t pattern_version);
+
+  /// Numerical factorization of `a` (same pattern as analyzed). kNotPositiveDefinite when a
+  /// pivot is not positive; minor() is then the failing column (in the permuted order).
+  [[nodiscard]] FactorStatus factorize(const SparseMatrix& a);
+
+  /// analyze(a, version) followed by factorize(a).
+  [[nodiscard]] FactorStatus compute(const SparseMatrix& a, std::uint64_t pattern_version);
+
+  /// Solves A x = b with the current factor (dense right-hand side). Returns info().
+  [[nodiscard]] FactorStatus solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+
+  /// Status of the last operation.
+  FactorStatus info() const { return status_; }
+  /// CHOLMOD's message for the last failure (empty when ok).
+  const std::string& message() const { return message_; }
+  /// Column where factorization stopped (n when successful).
+  int minor() const { return minor_; }
+  /// Order of the analyzed matrix (0 before analyze).
+  int rows() const { return n_; }
+  /// CHOLMOD's reciprocal condition estimate of the last factorization (min/max pivot of D).
+  double rcond() const { return rcond_; }
+  /// Whether the stored factor is supernodal.
+  bool is_supernodal() const;
+  /// Nonzeros of L as counted by CHOLMOD (including the diagonal; supernodal storage counts
+  /// the padded dense blocks).
+  std::int64_t nnz_l() const;
+  /// Floating point operations of the last factorization as estimated by CHOLMOD (fl).
+  double factor_flops() const;
+  /// Number of symbolic analyses actually performed (cache misses), for tests.
+  int analyses_performed() const { return analyses_; }
+
+  /// Copy of the factor as unit-lower LDLᵀ arrays (converts a copy of a supernodal LLᵀ
+  /// factor to simplicial LDLᵀ; the stored factor is not modified). Precondition: info()==kOk
+  /// after factorize; otherwise returns nullptr.
+  std::shared_ptr<const LdlFactorData> extract_ldl();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  CholmodOptions options_;
+  FactorStatus status_ = FactorStatus::kNotAnalyzed;
+  std::string message_;
+  int minor_ = 0;
+  double rcond_ = 0;
+  int n_ = 0;
+  int analyses_ = 0;
+  std::int64_t analyzed_nnz_ = -1;
+  std::uint64_t pattern_version_ = 0;
+  bool factorized_ = false;
+};
+
+}  // namespace incise::linalg

@@ -1,0 +1,312 @@
+#include <incise/core/error.hpp>
+#include <incise/core/timer.hpp>
+#include <incise/fem/tet_kernels.hpp>
+#include <incise/interactive/augmented_cut_session.hpp>
+
+#include <algorithm>
+
+namespace incise::interactive {
+
+const char* to_string(CutSolveStatus status) {
+  switch (status) {
+    case CutSolveStatus::kOk: return "ok";
+    case CutSolveStatus::kFreeComponent: return "free component (singular stiffness)";
+    case CutSolveStatus::kInvertedElement: return "element inverted in the reference configuration";
+    case CutSolveStatus::kSolverFailed: return "augmented solve failed";
+  }
+  return "unknown";
+}
+
+AugmentedCutSession::AugmentedCutSession(const mesh::MeshData& mesh,
+                                         const material::Material& material,
+                                         const std::vector<Index>& fixed_nodes,
+                                         const Eigen::Matrix3Xd& node_forces,
+                                         AugmentedCutOptions options)
+    : material_(material), options_(std::move(options)) {
+  INCISE_CHECK_PARAM(material_.name() == "linear",
+                     "AugmentedCutSession needs the \"linear\" material (the augmented solver "
+                     "solves the linear static problem K a = f), got \"" +
+                         material_.name() + "\"");
+  INCISE_CHECK_PARAM(options_.refactor_at_m >= 0,
+                     "AugmentedCutOptions::refactor_at_m must be >= 0 (0 = never refactor)");
+  mesh_ = std::make_unique<cut::CutMesh>(mesh);
+  const Index n = mesh_->num_nodes();
+  INCISE_CHECK_PARAM(node_forces.cols() == n, "node_forces needs one column per mesh node");
+  INCISE_CHECK_PARAM(node_forces.allFinite(), "node_forces must be finite");
+  initially_fixed_.assign(static_cast<size_t>(n), 0);
+  for (Index v : fixed_nodes) {
+    INCISE_CHECK_PARAM(v >= 0 && v < n, "fixed node index out of range");
+    initially_fixed_[static_cast<size_t>(v)] = 1;
+    mesh_->set_fixed(v, true);
+  }
+  cutter_ = std::make_unique<cut::Cutter>(*mesh_, options_.cut);
+  system_ = std::make_unique<linalg::AugmentedSystem>(options_.augmented);
+
+  node_dof_.assign(static_cast<size_t>(n), -1);
+  node_force_.resize(static_cast<size_t>(n));
+  int dofs = 0;
+  for (Index v = 0; v < n; ++v) {
+    node_force_[static_cast<size_t>(v)] = node_forces.col(v);
+    if (initially_fixed_[static_cast<size_t>(v)] || mesh_->unused(v)) continue;
+    node_dof_[static_cast<size_t>(v)] = dofs;
+    dofs += 3;
+  }
+  displacement_ = Eigen::Matrix3Xd::Zero(3, n);
+
+  // K⁰: every live element, fixed DOFs left out.
+  const Index cap = mesh_->element_capacity();
+  records_.resize(static_cast<size_t>(cap));
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(static_cast<size_t>(mesh_->num_elements()) * 144);
+  for (Index e = 0; e < cap; ++e) {
+    if (!mesh_->alive(e)) continue;
+    Record& rec = records_[static_cast<size_t>(e)];
+    rec.nodes = mesh_->element(e);
+    for (int a = 0; a < 4; ++a) rec.x.col(a) = mesh_->reference(rec.nodes[static_cast<size_t>(a)]);
+    if (fem::make_tet_reference(rec.x).volume <= 0) ++inverted_;
+    const Eigen::Matrix<double, 12, 12> ke = element_stiffness(rec.x);
+    const std::vector<int> d = element_dofs(rec.nodes);
+    for (int i = 0; i < 12; ++i) {
+      if (d[static_cast<size_t>(i)] < 0) continue;
+      for (int j = 0; j < 12; ++j) {
+        if (d[static_cast<size_t>(j)] >= 0)
+          triplets.emplace_back(d[static_cast<size_t>(i)], d[static_cast<size_t>(j)], ke(i, j));
+      }
+    }
+  }
+  linalg::SparseMatrix k0(dofs, dofs);
+  k0.setFromTriplets(triplets.begin(), triplets.end());
+  k0.makeCompressed();
+  if (dofs > 0 && k0.diagonal().mean() > 0) constraint_spring_ = k0.diagonal().mean();
+  const double cpu0 = thread_cpu_seconds();
+  const Timer timer;
+  const linalg::FactorStatus fs = system_->initialize(k0);
+  if (fs != linalg::FactorStatus::kOk) {
+    initial_.status = CutSolveStatus::kSolverFailed;
+    initial_.advice =
+        "the initial stiffness matrix is not positive definite: fix enough nodes (at least "
+        "three non-collinear ones per connected component)";
+    initial_.solve.status = linalg::AugmentedStatus::kNoFactor;
+  } else {
+    solve_into(initial_);
+  }
+  initial_.seconds_solve = timer.seconds();
+  initial_.cpu_seconds_update = thread_cpu_seconds() - cpu0;
+}
+
+AugmentedCutSession::~AugmentedCutSession() = default;
+
+Eigen::Matrix<double, 12, 12> AugmentedCutSession::element_stiffness(
+    const Eigen::Matrix<double, 3, 4>& x) const {
+  const fem::TetReference ref = fem::make_tet_reference(x);
+  Eigen::Matrix<double, 12, 12> k = Eigen::Matrix<double, 12, 12>::Zero();
+  if (!(ref.volume > 0)) return k;
+  const Eigen::Matrix<double, 3, 4> u = Eigen::Matrix<double, 3, 4>::Zero();
+  Eigen::Matrix<double, 3, 4> q;
+  // The linear model is defined for every deformation: forces_and_tangent cannot fail here.
+  (void)fem::TetKernel<material::LinearElastic, double>::forces_and_tangent(
+      material_.lame(), ref.z_inv, ref.b, ref.volume, u, q, k);
+  // Symmetric up to round-off; keep the symmetric part (AugmentedSystem needs symmetry).
+  return 0.5 * (k + k.transpose());
+}
+
+std::vector<int> AugmentedCutSession::element_dofs(const cut::Tet& t) const {
+  std::vector<int> d(12, -1);
+  for (int a = 0; a < 4; ++a) {
+    const int base = node_dof_[static_cast<size_t>(t[static_cast<size_t>(a)])];
+    if (base < 0) continue;
+    for (int i = 0; i < 3; ++i) d[static_cast<size_t>(3 * a + i)] = base + i;
+  }
+  return d;
+}
+
+void AugmentedCutSession::add_record(Index slot, double scale) {
+  const Record& rec = records_[static_cast<size_t>(slot)];
+  if (fem::make_tet_reference(rec.x).volume <= 0) inverted_ += scale > 0 ? 1 : -1;
+  const Eigen::Matrix<double, 12, 12> ke = element_stiffness(rec.x);
+  system_->add_element(element_dofs(rec.nodes), ke, scale);
+}
+
+void AugmentedCutSession::constrain(Index v, Index& counter) {
+  const int d = node_dof_[static_cast<size_t>(v)];
+  if (d < 0) return;
+  const Vec3 u = mesh_->deformed(v) - mesh_->reference(v);
+  const Eigen::Matrix<double, 1, 1> spring =
+      Eigen::Matrix<double, 1, 1>::Constant(constraint_spring_);
+  for (int i = 0; i < 3; ++i) {
+    if (system_->is_constrained(d + i)) continue;
+    system_->impose_dirichlet(d + i, u(i));
+    system_->add_element({d + i}, spring);  // keeps K positive definite (file comment)
+    ++counter;
+  }
+}
+
+void AugmentedCutSession::assign_new_nodes(const cut::CutStepReport& cut,
+                                           AugmentedCutStepReport& r) {
+  const Index old_n = static_cast<Index>(node_dof_.size());
+  const Index n = mesh_->num_nodes();
+  if (n == old_n) return;
+  node_dof_.resize(static_cast<size_t>(n), -1);
+  initially_fixed_.resize(static_cast<size_t>(n), 0);
+  node_force_.resize(static_cast<size_t>(n), Vec3::Zero());
+  displacement_.conservativeResize(3, n);
+  (void)cut;  // every node with index ≥ old_n is new (new_nodes lists the used ones)
+  for (Index v = old_n; v < n; ++v) {
+    displacement_.col(v) = mesh_->deformed(v) - mesh_->reference(v);
+    if (mesh_->unused(v)) continue;  // e.g. a split node left unused by a refused collapse
+    if (mesh_->fixed(v) && initially_fixed_[static_cast<size_t>(mesh_->origin(v))]) {
+      // Copy of a node fixed from the start: fixed at zero displacement, no DOFs.
+      initially_fixed_[static_cast<size_t>(v)] = 1;
+      displacement_.col(v).setZero();
+      continue;
+    }
+    node_dof_[static_cast<size_t>(v)] = system_->add_dofs(3);
+    r.dofs_added += 3;
+    if (mesh_->fixed(v)) constrain(v, r.constrained_fixed);
+  }
+}
+
+AugmentedCutStepReport AugmentedCutSession::step(const Vec3& a, const Vec3& b, const Vec3& c) {
+  AugmentedCutStepReport r;
+  {
+    const double cpu0 = thread_cpu_seconds();
+    const Timer timer;
+    r.cut = cutter_->step(a, b, c);
+    r.seconds_cut = timer.seconds();
+    r.cpu_seconds_cut = thread_cpu_seconds() - cpu0;
+  }
+  const double cpu0 = thread_cpu_seconds();
+  const Timer timer;
+  assign_new_nodes(r.cut, r);
+  if (static_cast<Index>(records_.size()) < mesh_->element_capacity())
+    records_.resize(static_cast<size_t>(mesh_->element_capacity()));
+
+  // Slots whose element may differ from what the system holds: changed elements and the
+  // stars of moved nodes (snapping changes reference positions, hence Kₑ).
+  std::vector<Index> slots = r.cut.changed_elements;
+  for (Index v : r.cut.moved_nodes) {
+    for (Index e : mesh_->star(v)) slots.push_back(e);
+  }
+  std::sort(slots.begin(), slots.end());
+  slots.erase(std::unique(slots.begin(), slots.end()), slots.end());
+  for (Index e : slots) {
+    Record& rec = records_[static_cast<size_t>(e)];
+    Record now;
+    if (mesh_->alive(e)) {
+      now.nodes = mesh_->element(e);
+      for (int k = 0; k < 4; ++k)
+        now.x.col(k) = mesh_->reference(now.nodes[static_cast<size_t>(k)]);
+    }
+    const bool had = rec.nodes[0] >= 0, has = now.nodes[0] >= 0;
+    if (had && has && rec.nodes == now.nodes && rec.x == now.x) continue;
+    if (had) {
+      add_record(e, -1.0);
+      ++r.elements_subtracted;
+    }
+    rec = now;
+    if (has) {
+      add_record(e, 1.0);
+      ++r.elements_added;
+    }
+  }
+  for (Index v : r.cut.fixed_nodes) constrain(v, r.constrained_fixed);
+  for (Index v : r.cut.removed_nodes) {
+    if (v < static_cast<Index>(node_dof_.size()) && mesh_->unused(v))
+      constrain(v, r.constrained_unused);
+  }
+  free_components_ += r.cut.free_components - r.cut.components_fixed;
+  r.seconds_update = timer.seconds();
+  const Timer solve_timer;
+  const bool changed = r.elements_subtracted + r.elements_added + r.dofs_added +
+                           r.constrained_fixed + r.constrained_unused >
+                       0;
+  if (changed || !last_.solved) {
+    solve_into(r);
+  } else {
+    // Nothing changed: the last solution stands.
+    r.m_before_solve = r.m_after_solve = system_->num_replaced();
+    r.status = last_.status;
+    r.advice = last_.advice;
+    r.free_components = last_.free_components;
+    r.inverted_elements = last_.inverted_elements;
+  }
+  r.seconds_solve = solve_timer.seconds();
+  r.cpu_seconds_update = thread_cpu_seconds() - cpu0;
+  return r;
+}
+
+void AugmentedCutSession::set_node_force(Index v, const Vec3& force) {
+  INCISE_CHECK_PARAM(v >= 0 && v < static_cast<Index>(node_force_.size()),
+                     "node index out of range");
+  INCISE_CHECK_PARAM(force.allFinite(), "node force must be finite");
+  node_force_[static_cast<size_t>(v)] = force;
+  last_.solved = false;
+}
+
+AugmentedCutStepReport AugmentedCutSession::solve() {
+  AugmentedCutStepReport r;
+  const double cpu0 = thread_cpu_seconds();
+  const Timer timer;
+  solve_into(r);
+  r.seconds_solve = timer.seconds();
+  r.cpu_seconds_update = thread_cpu_seconds() - cpu0;
+  return r;
+}
+
+void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
+  r.free_components = free_components_;
+  r.inverted_elements = inverted_;
+  r.solved = false;
+  r.m_before_solve = r.m_after_solve = system_->num_replaced();
+  if (free_components_ > 0) {
+    r.status = CutSolveStatus::kFreeComponent;
+    r.advice =
+        "a component has no fixed node, so the stiffness matrix is singular: use "
+        "cut::FreeComponentPolicy::kFixOnFace or fix a node of it";
+  } else if (inverted_ > 0) {
+    r.status = CutSolveStatus::kInvertedElement;
+    r.advice =
+        "an element has non-positive reference volume and no stiffness: keep "
+        "cut::CutOptions::refuse_inverting_snaps on";
+  } else {
+    const int n = system_->num_dofs();
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(n);
+    for (size_t v = 0; v < node_dof_.size(); ++v) {
+      if (node_dof_[v] >= 0) f.segment<3>(node_dof_[v]) = node_force_[v];
+    }
+    system_->set_force(f);
+    Eigen::VectorXd a, reaction;
+    r.solve = system_->solve(a, reaction);  // swaps in a finished background factor first
+    r.solved = true;
+    r.refactorization_swapped = r.solve.refactorization_swapped;
+    r.m_after_solve = system_->num_replaced();
+    // §3.6: bound m by refactoring the current K in the background once the columns a
+    // refactorization can remove (m − |𝓓|: Dirichlet DOFs stay in 𝓛) reach the threshold; the
+    // next solve that finds the job finished swaps it in.
+    // Not in the solve that dropped a failed job (its snapshot was not positive definite): the
+    // next solve makes the next attempt, so a stuck K costs one factorization every other solve.
+    if (options_.refactor_at_m > 0 && r.solve.status != linalg::AugmentedStatus::kNoFactor &&
+        r.solve.refactorization_status == linalg::FactorStatus::kOk &&
+        r.m_after_solve - r.solve.dirichlet >= options_.refactor_at_m &&
+        !system_->refactorization_pending())
+      r.refactorization_started = system_->start_refactorization();
+    if (!r.solve.ok()) {
+      r.status = CutSolveStatus::kSolverFailed;
+      r.advice = std::string(linalg::to_string(r.solve.status)) + ": " + r.solve.advice;
+    } else {
+      r.status = CutSolveStatus::kOk;
+      for (size_t v = 0; v < node_dof_.size(); ++v) {
+        if (node_dof_[v] >= 0)
+          displacement_.col(static_cast<Index>(v)) = a.segment<3>(node_dof_[v]);
+      }
+      if (options_.update_deformed) mesh_->set_deformed(mesh_->reference_matrix() + displacement_);
+    }
+  }
+  last_.status = r.status;
+  last_.advice = r.advice;
+  last_.free_components = r.free_components;
+  last_.inverted_elements = r.inverted_elements;
+  last_.solved = r.status == CutSolveStatus::kOk;
+}
+
+}  // namespace incise::interactive

@@ -1,0 +1,824 @@
+#include <incise/core/error.hpp>
+#include <incise/core/timer.hpp>
+#include <incise/linalg/augmented_system.hpp>
+#include <incise/linalg/ldl_closure_solver.hpp>
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+namespace incise::linalg {
+
+const char* to_string(AugmentedStatus status) {
+  switch (status) {
+    case AugmentedStatus::kOk: return "ok";
+    case AugmentedStatus::kNoFactor: return "no factor";
+    case AugmentedStatus::kSingularModifiedSystem: return "singular modified system";
+    case AugmentedStatus::kGmresNotConverged: return "GMRES not converged";
+    case AugmentedStatus::kNonFinite: return "non-finite data";
+  }
+  return "unknown";
+}
+
+ReducedMatrix remove_fixed_dofs(const SparseMatrix& k, const std::vector<bool>& fixed) {
+  INCISE_CHECK(k.rows() == k.cols(), "remove_fixed_dofs: matrix must be square");
+  INCISE_CHECK(static_cast<Eigen::Index>(fixed.size()) == k.rows(),
+               "remove_fixed_dofs: fixed flags must have one entry per row");
+  ReducedMatrix out;
+  out.full_to_free.assign(fixed.size(), -1);
+  int nf = 0;
+  for (size_t i = 0; i < fixed.size(); ++i) {
+    if (!fixed[i]) out.full_to_free[i] = nf++;
+  }
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(static_cast<size_t>(k.nonZeros()));
+  for (int j = 0; j < k.outerSize(); ++j) {
+    const int fj = out.full_to_free[j];
+    if (fj < 0) continue;
+    for (SparseMatrix::InnerIterator it(k, j); it; ++it) {
+      const int fi = out.full_to_free[it.row()];
+      if (fi >= 0) trip.emplace_back(fi, fj, it.value());
+    }
+  }
+  out.matrix.resize(nf, nf);
+  out.matrix.setFromTriplets(trip.begin(), trip.end());
+  out.matrix.makeCompressed();
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Base: the factored matrix R (= K at the time of the last (re)factorization) and S of §3.5.
+
+struct AugmentedSystem::Base {
+  SparseMatrix matrix;
+  std::unique_ptr<CholmodFactor> factor;
+  std::shared_ptr<const LdlFactorData> ldl;
+  std::unique_ptr<ClosureLdlSolver> solver;
+  Eigen::VectorXd s_diag;                             // D⁻¹ in original order
+  Eigen::VectorXd spai_lower, spai_diag, spai_upper;  // S(j+1,j), S(j,j), S(j,j+1)
+  FactorStatus status = FactorStatus::kNotAnalyzed;
+  std::string message;
+};
+
+namespace {
+
+std::uint64_t pattern_signature(const SparseMatrix& a) {
+  std::uint64_t h = 1469598103934665603ULL;
+  auto mix = [&h](std::uint64_t v) {
+    h ^= v;
+    h *= 1099511628211ULL;
+  };
+  mix(static_cast<std::uint64_t>(a.rows()));
+  for (Eigen::Index j = 0; j <= a.outerSize(); ++j)
+    mix(static_cast<std::uint64_t>(a.outerIndexPtr()[j]));
+  for (Eigen::Index k = 0; k < a.nonZeros(); ++k)
+    mix(static_cast<std::uint64_t>(a.innerIndexPtr()[k]));
+  return h | 1ULL;  // never 0
+}
+
+double sparse_column_dot(const SparseMatrix& a, int s, int t) {
+  SparseMatrix::InnerIterator is(a, s), it(a, t);
+  double sum = 0;
+  while (is && it) {
+    if (is.row() < it.row()) {
+      ++is;
+    } else if (it.row() < is.row()) {
+      ++it;
+    } else {
+      sum += is.value() * it.value();
+      ++is;
+      ++it;
+    }
+  }
+  return sum;
+}
+
+// Tridiagonal sparse approximate inverse (Benson & Frederickson 1982; Yeung et al. §3.5):
+// column j of S minimises ‖R S_{*j} − e_j‖₂ over vectors supported on {j−1, j, j+1}, solved
+// through the 3×3 normal equations G c = R(j, idx) with G_st = R_{*s}·R_{*t}.
+void tridiagonal_spai(const SparseMatrix& r, Eigen::VectorXd& lower, Eigen::VectorXd& diag,
+                      Eigen::VectorXd& upper) {
+  const int n = static_cast<int>(r.rows());
+  lower = Eigen::VectorXd::Zero(n);
+  diag = Eigen::VectorXd::Zero(n);
+  upper = Eigen::VectorXd::Zero(n);
+  for (int j = 0; j < n; ++j) {
+    int idx[3];
+    int cnt = 0;
+    for (int t = j - 1; t <= j + 1; ++t) {
+      if (t >= 0 && t < n) idx[cnt++] = t;
+    }
+    Eigen::Matrix3d g = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    for (int a = 0; a < cnt; ++a) {
+      for (int b = a; b < cnt; ++b) g(a, b) = g(b, a) = sparse_column_dot(r, idx[a], idx[b]);
+      rhs(a) = r.coeff(j, idx[a]);
+    }
+    const Eigen::VectorXd c = g.topLeftCorner(cnt, cnt).ldlt().solve(rhs.head(cnt));
+    for (int a = 0; a < cnt; ++a) {
+      const int t = idx[a];
+      if (t == j) {
+        diag(j) = c(a);
+      } else if (t == j - 1) {
+        upper(j - 1) = c(a);  // S(j−1, j)
+      } else {
+        lower(j) = c(a);  // S(j+1, j)
+      }
+    }
+  }
+}
+
+}  // namespace
+
+// Factors `matrix` and prepares S (§3.5). Runs in the caller's thread or in the background job;
+// touches nothing but its arguments.
+std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
+    SparseMatrix matrix, std::unique_ptr<CholmodFactor> factor, const AugmentedOptions& options) {
+  auto base = std::make_unique<AugmentedSystem::Base>();
+  base->matrix = std::move(matrix);
+  base->matrix.makeCompressed();
+  if (!factor) factor = std::make_unique<CholmodFactor>(options.cholmod);
+  base->factor = std::move(factor);
+  if (!Eigen::Map<const Eigen::VectorXd>(base->matrix.valuePtr(), base->matrix.nonZeros())
+           .allFinite()) {
+    base->status = FactorStatus::kInvalidInput;
+    base->message = "matrix has non-finite entries";
+    return base;
+  }
+  base->status = base->factor->compute(base->matrix, pattern_signature(base->matrix));
+  base->message = base->factor->message();
+  if (base->status != FactorStatus::kOk) return base;
+  base->ldl = base->factor->extract_ldl();
+  if (!base->ldl) {
+    base->status = base->factor->info() == FactorStatus::kOk ? FactorStatus::kCholmodError
+                                                             : base->factor->info();
+    base->message = "could not convert the factor to LDL'";
+    return base;
+  }
+  base->solver = std::make_unique<ClosureLdlSolver>(base->ldl, options.solve_threads);
+  const int n = base->ldl->n;
+  base->s_diag.resize(n);
+  for (int i = 0; i < n; ++i) base->s_diag(i) = 1.0 / base->ldl->d[base->ldl->inverse_perm[i]];
+  if (options.preconditioner == SchurPreconditioner::kTridiagonalSpai) {
+    tridiagonal_spai(base->matrix, base->spai_lower, base->spai_diag, base->spai_upper);
+  }
+  return base;
+}
+
+AugmentedSystem::AugmentedSystem(AugmentedOptions options) : options_(options) {
+  INCISE_CHECK_PARAM(options_.solve_threads >= 1, "AugmentedOptions::solve_threads must be >= 1");
+}
+
+AugmentedSystem::~AugmentedSystem() {
+  if (job_.valid()) job_.wait();
+}
+
+FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
+  INCISE_CHECK(k0.rows() == k0.cols(), "AugmentedSystem::initialize: K0 must be square");
+  SparseMatrix k = k0;
+  k.makeCompressed();
+  {
+    const SparseMatrix kt = k.transpose();
+    INCISE_CHECK((kt - k).norm() <= 1e-12 * std::max(1e-300, k.norm()),
+                 "AugmentedSystem::initialize: K0 must be symmetric with both triangles stored");
+  }
+  if (job_.valid()) job_.wait();
+  job_ = {};
+  std::unique_ptr<CholmodFactor> reuse;
+  if (base_) reuse = std::move(base_->factor);
+  base_ = make_base(std::move(k), std::move(reuse), options_);
+  n_ = n_base_ = static_cast<int>(k0.rows());
+  diag_scale_ = k0.rows() > 0 ? k0.diagonal().cwiseAbs().maxCoeff() : 1.0;
+  if (!(diag_scale_ > 0)) diag_scale_ = 1.0;
+  changed_.clear();
+  dirichlet_.clear();
+  ++base_generation_;
+  g_generation_ = 0;
+  f_ = Eigen::VectorXd::Zero(n_);
+  changed_since_snapshot_.clear();
+  snapshot_active_ = false;
+  return base_->status;
+}
+
+const AugmentedSystem::Column* AugmentedSystem::changed_column(int j) const {
+  auto it = changed_.find(j);
+  return it == changed_.end() ? nullptr : &it->second;
+}
+
+AugmentedSystem::Column AugmentedSystem::column_of(int j) const {
+  if (const Column* c = changed_column(j)) return *c;
+  Column col;
+  if (j < n_base_) {
+    for (SparseMatrix::InnerIterator it(base_->matrix, j); it; ++it)
+      col.emplace_back(static_cast<int>(it.row()), it.value());
+  }
+  return col;
+}
+
+void AugmentedSystem::touch_column(int j) {
+  if (snapshot_active_) changed_since_snapshot_.insert(j);
+  if (changed_.count(j) != 0) return;
+  changed_.emplace(j, column_of(j));
+}
+
+int AugmentedSystem::add_dofs(int count) {
+  INCISE_CHECK(count >= 0, "add_dofs: count must be >= 0");
+  INCISE_CHECK(base_ != nullptr, "add_dofs before initialize");
+  const int first = n_;
+  n_ += count;
+  f_.conservativeResize(n_);
+  for (int j = first; j < n_; ++j) {
+    f_(j) = 0;
+    touch_column(j);
+  }
+  return first;
+}
+
+void AugmentedSystem::add_element(const std::vector<int>& dofs, const Eigen::MatrixXd& ke,
+                                  double scale) {
+  INCISE_CHECK(base_ != nullptr, "add_element before initialize");
+  const int s = static_cast<int>(dofs.size());
+  INCISE_CHECK(ke.rows() == s && ke.cols() == s, "add_element: Ke must be square, sized like dofs");
+  INCISE_CHECK((ke - ke.transpose()).cwiseAbs().maxCoeff() <=
+                   1e-10 * std::max(1e-300, ke.cwiseAbs().maxCoeff()),
+               "add_element: Ke must be symmetric");
+  for (int d : dofs) INCISE_CHECK(d >= -1 && d < n_, "add_element: DOF index out of range");
+  for (int a = 0; a < s; ++a) {
+    const int j = dofs[a];
+    if (j < 0) continue;
+    touch_column(j);
+    Column& col = changed_[j];
+    for (int b = 0; b < s; ++b) {
+      const int i = dofs[b];
+      if (i < 0) continue;
+      const double v = scale * ke(b, a);
+      auto it = std::lower_bound(col.begin(), col.end(), std::make_pair(i, -HUGE_VAL));
+      if (it != col.end() && it->first == i) {
+        it->second += v;
+      } else {
+        col.insert(it, {i, v});
+      }
+    }
+  }
+}
+
+void AugmentedSystem::impose_dirichlet(int dof, double value) {
+  INCISE_CHECK(dof >= 0 && dof < n_, "impose_dirichlet: DOF index out of range");
+  INCISE_CHECK_PARAM(std::isfinite(value), "impose_dirichlet: value must be finite");
+  dirichlet_[dof] = value;
+}
+
+void AugmentedSystem::release_dirichlet(int dof) {
+  INCISE_CHECK(dof >= 0 && dof < n_, "release_dirichlet: DOF index out of range");
+  dirichlet_.erase(dof);
+}
+
+void AugmentedSystem::set_force(const Eigen::VectorXd& f) {
+  INCISE_CHECK(f.size() == n_, "set_force: size must equal num_dofs()");
+  f_ = f;
+}
+
+std::vector<int> AugmentedSystem::replaced_columns() const {
+  std::vector<int> l;
+  l.reserve(changed_.size() + dirichlet_.size());
+  for (const auto& kv : changed_) l.push_back(kv.first);
+  for (const auto& kv : dirichlet_) {
+    if (changed_.count(kv.first) == 0) l.push_back(kv.first);
+  }
+  std::sort(l.begin(), l.end());
+  return l;
+}
+
+int AugmentedSystem::num_replaced() const {
+  return static_cast<int>(replaced_columns().size());
+}
+
+SparseMatrix AugmentedSystem::current_matrix() const {
+  INCISE_CHECK(base_ != nullptr, "current_matrix before initialize");
+  std::vector<int> outer(static_cast<size_t>(n_) + 1, 0);
+  std::vector<int> inner;
+  std::vector<double> values;
+  inner.reserve(static_cast<size_t>(base_->matrix.nonZeros()));
+  values.reserve(static_cast<size_t>(base_->matrix.nonZeros()));
+  for (int j = 0; j < n_; ++j) {
+    outer[j] = static_cast<int>(inner.size());
+    if (const Column* c = changed_column(j)) {
+      for (const auto& [row, v] : *c) {
+        inner.push_back(row);
+        values.push_back(v);
+      }
+    } else if (j < n_base_) {
+      for (SparseMatrix::InnerIterator it(base_->matrix, j); it; ++it) {
+        inner.push_back(static_cast<int>(it.row()));
+        values.push_back(it.value());
+      }
+    }
+  }
+  outer[n_] = static_cast<int>(inner.size());
+  return Eigen::Map<const SparseMatrix>(n_, n_, static_cast<Eigen::Index>(inner.size()),
+                                        outer.data(), inner.data(), values.data());
+}
+
+// Drops changed columns whose entries equal the base column again (bitwise; missing entries
+// count as 0). Not while a snapshot is pending: swap_in() relies on changed_ for the columns
+// changed since the snapshot.
+int AugmentedSystem::prune_unchanged_columns() {
+  if (snapshot_active_) return 0;
+  int pruned = 0;
+  for (auto it = changed_.begin(); it != changed_.end();) {
+    const int j = it->first;
+    bool same = j < n_base_;
+    if (same) {
+      const Column& c = it->second;
+      SparseMatrix::InnerIterator b(base_->matrix, j);
+      size_t k = 0;
+      while (same && (b || k < c.size())) {
+        if (b && (k == c.size() || b.row() < c[k].first)) {
+          same = b.value() == 0;
+          ++b;
+        } else if (!b || c[k].first < b.row()) {
+          same = c[k].second == 0;
+          ++k;
+        } else {
+          same = b.value() == c[k].second;
+          ++b;
+          ++k;
+        }
+      }
+    }
+    if (same) {
+      it = changed_.erase(it);
+      ++pruned;
+    } else {
+      ++it;
+    }
+  }
+  return pruned;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Background refactorization (§3.6).
+
+bool AugmentedSystem::start_refactorization() {
+  INCISE_CHECK(base_ != nullptr, "start_refactorization before initialize");
+  if (job_.valid()) return false;
+  SparseMatrix snapshot = current_matrix();
+  changed_since_snapshot_.clear();
+  snapshot_active_ = true;
+  std::unique_ptr<CholmodFactor> spare;  // a fresh object: its own cholmod_common
+  const AugmentedOptions options = options_;
+  job_ = std::async(std::launch::async,
+                    [m = std::move(snapshot), options, f = std::move(spare)]() mutable {
+                      return make_base(std::move(m), std::move(f), options);
+                    });
+  return true;
+}
+
+bool AugmentedSystem::swap_in(std::unique_ptr<Base> base, const std::set<int>& changed_since) {
+  snapshot_active_ = false;
+  last_refactor_status_ = base->status;
+  if (base->status != FactorStatus::kOk) return false;
+  const int nb = static_cast<int>(base->matrix.rows());
+  for (auto it = changed_.begin(); it != changed_.end();) {
+    if (changed_since.count(it->first) == 0 && it->first < nb) {
+      it = changed_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  base_ = std::move(base);
+  ++base_generation_;  // a generation, not the address: a new Base may reuse a freed one's
+  n_base_ = nb;
+  changed_since_snapshot_.clear();
+  return true;
+}
+
+bool AugmentedSystem::poll_refactorization() {
+  if (!job_.valid()) return false;
+  if (job_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
+  return swap_in(job_.get(), changed_since_snapshot_);
+}
+
+bool AugmentedSystem::wait_for_refactorization() {
+  if (!job_.valid()) return false;
+  job_.wait();
+  return swap_in(job_.get(), changed_since_snapshot_);
+}
+
+// H R⁻¹ J in the capacitance form (SchurSolver::kDirectCached). Write J_k = R_{*,𝓛ₖ} + E_k for
+// a column that is not Dirichlet (E_k = K_{*,𝓛ₖ} − R_{*,𝓛ₖ}; R_{*,𝓛ₖ} = e_{𝓛ₖ} for a new DOF)
+// and J_k = e_{𝓛ₖ} for a Dirichlet column. E_k is nonzero only in rows whose own column
+// changed (K and R are symmetric), i.e. in rows of 𝓛, so with G = H R⁻¹ Hᵀ (the 𝓛-block of
+// R⁻¹; the identity on new DOFs)
+//
+//     H R⁻¹ J = Φ + G Ψ,   Φ = diag(1 for non-Dirichlet, 0 for Dirichlet columns),
+//                          Ψ_{*k} = H E_k (non-Dirichlet) or e_k (Dirichlet).
+//
+// This is the capacitance matrix of the Sherman–Morrison–Woodbury form of the update. G depends
+// only on the set 𝓛 and the factor, not on the column values, so it is kept between solves:
+// a DOF that joins 𝓛 costs one restricted solve y = R⁻¹ e_{𝓛ᵢ} (column i of G, and row i by
+// the symmetry of G); changed column values cost nothing but the product G Ψ (O(m·nnz(Ψ))).
+// Entries of E in rows outside 𝓛 (possible only if K lost its exact symmetry) are left out:
+// the matrix is then an approximation, which as GMRES's preconditioner costs iterations, not
+// accuracy.
+Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const std::vector<int>& l_list,
+                                                    const std::vector<char>& is_dir,
+                                                    const std::vector<const Column*>& jcols,
+                                                    const std::vector<int>& l_base,
+                                                    const std::vector<int>& c_y, int& solves) {
+  const int m = static_cast<int>(l_list.size());
+  const int nb = n_base_;
+  const int mb = static_cast<int>(l_base.size());
+  ClosureLdlSolver& solver = *base_->solver;
+  // G on the base entries of 𝓛 (l_base, sorted): kept entries from the cache, new columns by
+  // restricted solves.
+  std::vector<int> old(mb, -1);  // position of l_base[i] in the cached list (both sorted)
+  if (g_generation_ == base_generation_) {
+    size_t q = 0;
+    for (int i = 0; i < mb; ++i) {
+      while (q < g_l_.size() && g_l_[q] < l_base[i]) ++q;
+      if (q < g_l_.size() && g_l_[q] == l_base[i]) old[i] = static_cast<int>(q);
+    }
+  }
+  Eigen::MatrixXd g(mb, mb);
+  for (int k = 0; k < mb; ++k) {
+    if (old[k] < 0) continue;
+    for (int i = 0; i < mb; ++i)
+      if (old[i] >= 0) g(i, k) = g_(old[i], old[k]);
+  }
+  solves = 0;
+  std::vector<double> y;
+  for (int k = 0; k < mb; ++k) {
+    if (old[k] >= 0) continue;
+    const std::vector<int> e{l_base[k]};
+    solver.solve_restricted(e, {1.0}, solver.closure(e), c_y, l_base, y);
+    ++solves;
+    for (int i = 0; i < mb; ++i) {
+      g(i, k) = y[i];
+      if (old[i] >= 0) g(k, i) = y[i];  // rows of new columns come from their own solves
+    }
+  }
+  g_generation_ = base_generation_;
+  g_l_ = l_base;
+  g_ = std::move(g);  // the cache is also this solve's G
+
+  // Φ + G Ψ, column by column: for each entry (𝓛 position p, value v) of Ψ_{*k}, add v·G_{*p}.
+  // 𝓛 is sorted, so its base DOFs (< n_base) are its first mb entries and G is block diagonal:
+  // g on them, the identity on the new DOFs.
+  Eigen::MatrixXd s = Eigen::MatrixXd::Zero(m, m);
+  auto add_g_column = [&](int k, int p, double v) {
+    if (p < mb) {
+      s.col(k).head(mb) += v * g_.col(p);
+    } else {
+      s(p, k) += v;
+    }
+  };
+  for (int k = 0; k < m; ++k) {
+    const int j = l_list[k];
+    if (is_dir[k]) {
+      add_g_column(k, k, 1.0);
+      continue;
+    }
+    s(k, k) += 1.0;
+    // E_k = K_{*j} − R_{*j}: merge the stored column with the base column (both sorted).
+    const Column& kc = *jcols[k];
+    auto add_e = [&](int row, double v) {
+      if (v != 0 && pos_in_l_[row] >= 0) add_g_column(k, pos_in_l_[row], v);
+    };
+    size_t a = 0;
+    if (j < nb) {
+      for (SparseMatrix::InnerIterator it(base_->matrix, j); it; ++it) {
+        const int row = static_cast<int>(it.row());
+        for (; a < kc.size() && kc[a].first < row; ++a) add_e(kc[a].first, kc[a].second);
+        if (a < kc.size() && kc[a].first == row) {
+          add_e(row, kc[a].second - it.value());
+          ++a;
+        } else {
+          add_e(row, -it.value());
+        }
+      }
+      for (; a < kc.size(); ++a) add_e(kc[a].first, kc[a].second);
+    } else {
+      for (const auto& [row, v] : kc) add_e(row, row == j ? v - 1.0 : v);
+    }
+  }
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Solution (§3.2, §3.3).
+
+AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::VectorXd& reaction) {
+  Timer total;
+  AugmentedReport report;
+  if (job_.valid()) {
+    report.refactorization_swapped = poll_refactorization();
+    if (!job_.valid() && !report.refactorization_swapped) {
+      report.refactorization_status = last_refactor_status_;
+    }
+  }
+  displacement = Eigen::VectorXd::Zero(n_);
+  reaction = Eigen::VectorXd::Zero(n_);
+  report.n = n_;
+  if (!base_ || base_->status != FactorStatus::kOk) {
+    report.status = AugmentedStatus::kNoFactor;
+    report.advice = "initialize() with a positive definite K0 first";
+    if (base_) report.advice += " (last factorization: " + base_->message + ")";
+    return report;
+  }
+  if (!f_.allFinite()) {
+    report.status = AugmentedStatus::kNonFinite;
+    report.advice = "the force vector has NaN/Inf entries";
+    return report;
+  }
+  if (options_.prune_unchanged_columns) report.pruned_columns = prune_unchanged_columns();
+  Timer phase;
+  const int n = n_;
+  const int nb = n_base_;
+  ClosureLdlSolver& solver = *base_->solver;
+  report.nnz_l = base_->ldl->nnz_l();
+  const std::vector<int> l_list = replaced_columns();
+  const int m = static_cast<int>(l_list.size());
+  report.m = m;
+  report.dirichlet = static_cast<int>(dirichlet_.size());
+  pos_in_l_.assign(static_cast<size_t>(n), -1);
+  for (int i = 0; i < m; ++i) pos_in_l_[l_list[i]] = i;
+
+  // J columns (eq. 5) as pointers to stored columns; Dirichlet columns are e_{𝓛ᵢ}.
+  std::vector<const Column*> jcols(m, nullptr);
+  std::vector<char> is_dir(m, 0);
+  for (int i = 0; i < m; ++i) {
+    const int j = l_list[i];
+    if (dirichlet_.count(j) != 0) {
+      is_dir[i] = 1;
+      continue;
+    }
+    jcols[i] = changed_column(j);
+    bool any = false;
+    if (jcols[i] != nullptr) {
+      for (const auto& e : *jcols[i]) {
+        if (!std::isfinite(e.second)) {
+          report.status = AugmentedStatus::kNonFinite;
+          report.advice = "column " + std::to_string(j) + " of K has NaN/Inf entries";
+          return report;
+        }
+        any = any || std::abs(e.second) > 1e-13 * diag_scale_;
+      }
+    }
+    if (!any) {
+      report.status = AugmentedStatus::kSingularModifiedSystem;
+      report.advice = "DOF " + std::to_string(j) +
+                      " has no stiffness (empty column of K): attach it to elements, constrain "
+                      "it with impose_dirichlet(), or stop using it";
+      return report;
+    }
+  }
+  auto for_column = [&](int j, auto&& fn) {
+    if (const Column* c = changed_column(j)) {
+      for (const auto& [row, v] : *c) fn(row, v);
+    } else if (j < nb) {
+      for (SparseMatrix::InnerIterator it(base_->matrix, j); it; ++it)
+        fn(static_cast<int>(it.row()), it.value());
+    }
+  };
+
+  // f̂ of eq. 11 (with f_d kept at constrained rows: the unknown becomes the reaction).
+  Eigen::VectorXd fhat = f_;
+  for (const auto& [d, value] : dirichlet_) {
+    if (value != 0) for_column(d, [&](int row, double v) { fhat(row) -= v * value; });
+  }
+  std::vector<int> f_idx;
+  std::vector<double> f_val;
+  for (int i = 0; i < nb; ++i) {
+    if (fhat(i) != 0) {
+      f_idx.push_back(i);
+      f_val.push_back(fhat(i));
+    }
+  }
+  // Structure of J (rows < nb) and of 𝓛 (< nb).
+  std::vector<char> in_j(static_cast<size_t>(nb), 0);
+  std::vector<int> j_struct;
+  for (int i = 0; i < m; ++i) {
+    auto add_row = [&](int row) {
+      if (row < nb && !in_j[row]) {
+        in_j[row] = 1;
+        j_struct.push_back(row);
+      }
+    };
+    if (is_dir[i]) {
+      add_row(l_list[i]);
+    } else {
+      for (const auto& e : *jcols[i]) add_row(e.first);
+    }
+  }
+  std::sort(j_struct.begin(), j_struct.end());
+  std::vector<int> l_base;
+  for (int j : l_list) {
+    if (j < nb) l_base.push_back(j);
+  }
+  const std::vector<int> c_f = solver.closure(f_idx);
+  const std::vector<int> c_y = solver.closure(l_base);
+  const std::vector<int> c_j = solver.closure(j_struct);
+  std::vector<int> s3 = f_idx;
+  s3.insert(s3.end(), j_struct.begin(), j_struct.end());
+  std::sort(s3.begin(), s3.end());
+  s3.erase(std::unique(s3.begin(), s3.end()), s3.end());
+  const std::vector<int> c_3 = solver.closure(s3);
+  report.closure_f = static_cast<int>(c_f.size());
+  report.closure_y = static_cast<int>(c_y.size());
+  report.closure_ja2 = static_cast<int>(c_j.size());
+  report.closure_step3 = static_cast<int>(c_3.size());
+
+  // Preconditioner M = H S J (§3.5), m × m, LU-factored.
+  Eigen::PartialPivLU<Eigen::MatrixXd> m_lu;
+  bool use_m = false;
+  if (options_.preconditioner != SchurPreconditioner::kNone && m > 0 &&
+      options_.schur_solver == SchurSolver::kGmres) {
+    Eigen::MatrixXd mm = Eigen::MatrixXd::Zero(m, m);
+    auto s_entry = [&](int t, int r) -> double {  // S(t, r) for |t − r| ≤ 1
+      if (t >= nb || r >= nb) return t == r ? 1.0 : 0.0;
+      if (options_.preconditioner == SchurPreconditioner::kDiagonal) {
+        return t == r ? base_->s_diag(r) : 0.0;
+      }
+      if (t == r) return base_->spai_diag(r);
+      if (t == r - 1) return base_->spai_upper(t);
+      return base_->spai_lower(r);
+    };
+    for (int k = 0; k < m; ++k) {
+      auto visit = [&](int r, double v) {
+        for (int t = r - 1; t <= r + 1; ++t) {
+          if (t < 0 || t >= n || pos_in_l_[t] < 0) continue;
+          const double s = s_entry(t, r);
+          if (s != 0) mm(pos_in_l_[t], k) += s * v;
+        }
+      };
+      if (is_dir[k]) {
+        visit(l_list[k], 1.0);
+      } else {
+        for (const auto& e : *jcols[k]) visit(e.first, e.second);
+      }
+    }
+    m_lu.compute(mm);
+    const double rc = m_lu.rcond();
+    use_m = std::isfinite(rc) && rc > 1e-13;
+  }
+  report.seconds_setup = phase.seconds();
+
+  // Step 1: rhs = H R⁻¹ f̂ (eq. 18, 19).
+  phase.restart();
+  Eigen::VectorXd rhs(m);
+  std::vector<double> y_base;
+  solver.solve_restricted(f_idx, f_val, c_f, c_y, l_base, y_base);
+  {
+    int kb = 0;
+    for (int i = 0; i < m; ++i) rhs(i) = l_list[i] < nb ? y_base[kb++] : fhat(l_list[i]);
+  }
+  report.seconds_step1 = phase.seconds();
+
+  // Step 2: GMRES on (H R⁻¹ J) a₂ = rhs (eq. 17, 20).
+  phase.restart();
+  Eigen::VectorXd wbuf = Eigen::VectorXd::Zero(n);
+  std::vector<double> jv_val(j_struct.size());
+  auto apply_j = [&](const Eigen::VectorXd& v) {  // wbuf = J v (dense, caller clears)
+    for (int i = 0; i < m; ++i) {
+      const double vi = v(i);
+      if (vi == 0) continue;
+      if (is_dir[i]) {
+        wbuf(l_list[i]) += vi;
+      } else {
+        for (const auto& [row, kv] : *jcols[i]) wbuf(row) += kv * vi;
+      }
+    }
+  };
+  auto clear_j = [&]() {
+    for (int i = 0; i < m; ++i) {
+      if (is_dir[i]) {
+        wbuf(l_list[i]) = 0;
+      } else {
+        for (const auto& e : *jcols[i]) wbuf(e.first) = 0;
+      }
+    }
+  };
+  std::vector<double> yb;  // reused by every operator application (no per-iteration allocation)
+  GmresOperator op = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) {
+    apply_j(v);
+    for (size_t k = 0; k < j_struct.size(); ++k) jv_val[k] = wbuf(j_struct[k]);
+    solver.solve_restricted(j_struct, jv_val, c_j, c_y, l_base, yb);
+    out.resize(m);
+    int kb = 0;
+    for (int i = 0; i < m; ++i) out(i) = l_list[i] < nb ? yb[kb++] : wbuf(l_list[i]);
+    clear_j();
+  };
+  GmresOperator prec;
+  Eigen::PartialPivLU<Eigen::MatrixXd> schur_lu;
+  Eigen::VectorXd row_scale, col_scale;
+  if (m > 0 && options_.schur_solver == SchurSolver::kDirectCached) {
+    // The explicit H R⁻¹ J (LU-factored) as right preconditioner: GMRES with the exact operator
+    // then converges in one or two iterations and keeps the residual of eq. 17 consistent with
+    // the operator step 3 uses (the capacitance form differs from the operator by round-off
+    // amplified by κ(R)).
+    Eigen::MatrixXd s = capacitance_matrix(l_list, is_dir, jcols, l_base, c_y, report.schur_solves);
+    // Rows and columns are in different units (displacement per force, per unit displacement)
+    // and span many decades on long meshes: equilibrate (max-norm row, then column scaling)
+    // before the LU, so that its condition estimate measures singularity, not scaling.
+    row_scale = s.cwiseAbs().rowwise().maxCoeff().cwiseMax(1e-300).cwiseInverse();
+    s = row_scale.asDiagonal() * s;
+    col_scale = s.cwiseAbs().colwise().maxCoeff().transpose().cwiseMax(1e-300).cwiseInverse();
+    s = s * col_scale.asDiagonal();
+    schur_lu.compute(s);
+    // A numerically singular H R⁻¹ J (e.g. a cut freed a component): plain GMRES, whose
+    // breakdown / stagnation / amplification checks report it.
+    const double rc = schur_lu.rcond();
+    if (std::isfinite(rc) && rc > 1e-13) {
+      prec = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) {
+        out = col_scale.cwiseProduct(schur_lu.solve(row_scale.cwiseProduct(v)));
+      };
+    }
+  } else if (use_m) {
+    prec = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) { out = m_lu.solve(v); };
+  }
+  Eigen::VectorXd a2 = Eigen::VectorXd::Zero(m);
+  if (m > 0) {
+    report.gmres = gmres(op, prec, rhs, a2, options_.gmres);
+  } else {
+    report.gmres.status = GmresStatus::kConverged;
+  }
+  report.seconds_step2 = phase.seconds();
+
+  // Step 3: a₁ = R⁻¹(f̂ − J a₂) (eq. 16).
+  phase.restart();
+  apply_j(a2);
+  // f̂ − J a₂ is needed only on its structure s3 (base rows) and on the new DOFs (identity
+  // block of R: a₁ there is the right-hand side itself); a₁ on the base rows is written
+  // straight into the displacement.
+  std::vector<double> b3_val(s3.size());
+  for (size_t k = 0; k < s3.size(); ++k) b3_val[k] = fhat(s3[k]) - wbuf(s3[k]);
+  for (int i = nb; i < n; ++i) displacement(i) = fhat(i) - wbuf(i);
+  clear_j();
+  solver.solve_sparse_rhs(s3, b3_val, c_3, displacement.data());
+  report.seconds_step3 = phase.seconds();
+
+  // Eqs. 8, 9: scatter a₂ into displacements and reactions.
+  for (int i = 0; i < m; ++i) {
+    const int j = l_list[i];
+    if (is_dir[i]) {
+      displacement(j) = dirichlet_.at(j);
+      reaction(j) = -a2(i);
+    } else {
+      displacement(j) = a2(i);
+    }
+  }
+  switch (report.gmres.status) {
+    case GmresStatus::kConverged: report.status = AugmentedStatus::kOk; break;
+    case GmresStatus::kMaxIterations:
+      report.status = AugmentedStatus::kGmresNotConverged;
+      report.advice =
+          "GMRES reached its iteration cap on eq. 17: raise gmres.max_iterations or the restart "
+          "length, use a preconditioner, or refactor (start_refactorization) to reduce m";
+      break;
+    case GmresStatus::kStagnated:
+    case GmresStatus::kBreakdown:
+      report.status = AugmentedStatus::kSingularModifiedSystem;
+      report.advice =
+          "the modified stiffness appears singular (GMRES " +
+          std::string(to_string(report.gmres.status)) +
+          "): a cut may have freed a component or a node lost its support; constrain the free "
+          "part (impose_dirichlet) or remove its elements";
+      break;
+    case GmresStatus::kNonFinite:
+      report.status = AugmentedStatus::kNonFinite;
+      report.advice = "NaN/Inf during GMRES: check element matrices and forces";
+      break;
+  }
+  {
+    double abar2 = 0;
+    for (const auto& kv : dirichlet_) abar2 += kv.second * kv.second;
+    const double denom = fhat.norm() + diag_scale_ * std::sqrt(abar2);
+    report.amplification = denom > 0 ? diag_scale_ * displacement.norm() / denom : 0.0;
+    if (report.status == AugmentedStatus::kOk &&
+        !(report.amplification <= options_.max_amplification)) {
+      report.status = AugmentedStatus::kSingularModifiedSystem;
+      report.advice =
+          "the solution is amplified " + std::to_string(report.amplification) +
+          "x relative to the load: the modified stiffness is numerically singular (a cut may "
+          "have freed a component); constrain the free part or remove its elements";
+      displacement.setZero();
+      reaction.setZero();
+    }
+  }
+  if (!displacement.allFinite() || !reaction.allFinite()) {
+    displacement.setZero();
+    reaction.setZero();
+    if (report.status == AugmentedStatus::kOk) {
+      report.status = AugmentedStatus::kNonFinite;
+      report.advice = "non-finite solution: check element matrices and forces";
+    }
+  }
+  report.seconds_total = total.seconds();
+  return report;
+}
+
+}  // namespace incise::linalg

@@ -1,0 +1,276 @@
+#include <incise/linalg/cholmod_factor.hpp>
+
+#include <cholmod.h>
+
+#include <algorithm>
+#include <numeric>
+#include <utility>
+
+namespace incise::linalg {
+
+const char* to_string(FactorStatus status) {
+  switch (status) {
+    case FactorStatus::kOk: return "ok";
+    case FactorStatus::kNotAnalyzed: return "not analyzed";
+    case FactorStatus::kNotPositiveDefinite: return "not positive definite";
+    case FactorStatus::kOutOfMemory: return "out of memory";
+    case FactorStatus::kInvalidInput: return "invalid input";
+    case FactorStatus::kCholmodError: return "CHOLMOD error";
+  }
+  return "unknown";
+}
+
+struct CholmodFactor::Impl {
+  cholmod_common common;
+  cholmod_factor* factor = nullptr;
+
+  Impl() {
+    cholmod_start(&common);
+    common.print = 0;  // the library never prints
+    common.error_handler = nullptr;
+  }
+  ~Impl() {
+    if (factor != nullptr) cholmod_free_factor(&factor, &common);
+    cholmod_finish(&common);
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+};
+
+namespace {
+
+/// Non-owning cholmod_sparse view of the lower triangle of a compressed Eigen matrix.
+cholmod_sparse view_lower(const SparseMatrix& a) {
+  cholmod_sparse s{};
+  s.nrow = static_cast<size_t>(a.rows());
+  s.ncol = static_cast<size_t>(a.cols());
+  s.nzmax = static_cast<size_t>(a.nonZeros());
+  s.p = const_cast<int*>(a.outerIndexPtr());
+  s.i = const_cast<int*>(a.innerIndexPtr());
+  s.nz = nullptr;
+  s.x = const_cast<double*>(a.valuePtr());
+  s.z = nullptr;
+  s.stype = -1;
+  s.itype = CHOLMOD_INT;
+  s.xtype = CHOLMOD_REAL;
+  s.dtype = CHOLMOD_DOUBLE;
+  s.sorted = 1;
+  s.packed = 1;
+  return s;
+}
+
+FactorStatus status_from_common(const cholmod_common& c, std::string& message) {
+  switch (c.status) {
+    case CHOLMOD_OK: message.clear(); return FactorStatus::kOk;
+    case CHOLMOD_NOT_POSDEF:
+      message = "matrix not positive definite";
+      return FactorStatus::kNotPositiveDefinite;
+    case CHOLMOD_OUT_OF_MEMORY:
+      message = "CHOLMOD out of memory";
+      return FactorStatus::kOutOfMemory;
+    case CHOLMOD_INVALID: message = "CHOLMOD: invalid input"; return FactorStatus::kInvalidInput;
+    default:
+      message = "CHOLMOD status " + std::to_string(c.status);
+      return c.status < 0 ? FactorStatus::kCholmodError : FactorStatus::kOk;
+  }
+}
+
+}  // namespace
+
+CholmodFactor::CholmodFactor(CholmodOptions options)
+    : impl_(std::make_unique<Impl>()), options_(options) {
+  cholmod_common& c = impl_->common;
+  switch (options_.kind) {
+    case CholmodKind::kSupernodal: c.supernodal = CHOLMOD_SUPERNODAL; break;
+    case CholmodKind::kSimplicialLdl:
+      c.supernodal = CHOLMOD_SIMPLICIAL;
+      c.final_ll = 0;
+      break;
+    case CholmodKind::kAuto: c.supernodal = CHOLMOD_AUTO; break;
+  }
+  switch (options_.ordering) {
+    case CholmodOrdering::kDefault: break;
+    case CholmodOrdering::kAmd:
+      c.nmethods = 1;
+      c.method[0].ordering = CHOLMOD_AMD;
+      c.postorder = 1;
+      break;
+    case CholmodOrdering::kMetis:
+      c.nmethods = 1;
+      c.method[0].ordering = CHOLMOD_METIS;
+      c.postorder = 1;
+      break;
+    case CholmodOrdering::kNatural:
+      c.nmethods = 1;
+      c.method[0].ordering = CHOLMOD_NATURAL;
+      c.postorder = 0;
+      break;
+  }
+}
+
+CholmodFactor::~CholmodFactor() = default;
+CholmodFactor::CholmodFactor(CholmodFactor&&) noexcept = default;
+CholmodFactor& CholmodFactor::operator=(CholmodFactor&&) noexcept = default;
+
+FactorStatus CholmodFactor::analyze(const SparseMatrix& a, std::uint64_t pattern_version) {
+  if (a.rows() != a.cols() || !a.isCompressed()) {
+    message_ = "analyze: matrix must be square and compressed";
+    return status_ = FactorStatus::kInvalidInput;
+  }
+  if (impl_->factor != nullptr && pattern_version == pattern_version_ && n_ == a.rows() &&
+      analyzed_nnz_ == a.nonZeros()) {
+    return status_ = FactorStatus::kOk;
+  }
+  if (impl_->factor != nullptr) cholmod_free_factor(&impl_->factor, &impl_->common);
+  factorized_ = false;
+  cholmod_sparse s = view_lower(a);
+  impl_->factor = cholmod_analyze(&s, &impl_->common);
+  ++analyses_;
+  status_ = status_from_common(impl_->common, message_);
+  if (impl_->factor == nullptr) {
+    if (status_ == FactorStatus::kOk) status_ = FactorStatus::kCholmodError;
+    n_ = 0;
+    return status_;
+  }
+  n_ = static_cast<int>(a.rows());
+  analyzed_nnz_ = a.nonZeros();
+  pattern_version_ = pattern_version;
+  return status_;
+}
+
+FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
+  factorized_ = false;
+  if (impl_->factor == nullptr) {
+    message_ = "factorize before analyze";
+    return status_ = FactorStatus::kNotAnalyzed;
+  }
+  if (a.rows() != n_ || a.cols() != n_ || !a.isCompressed()) {
+    message_ = "factorize: size differs from the analyzed matrix";
+    return status_ = FactorStatus::kInvalidInput;
+  }
+  cholmod_sparse s = view_lower(a);
+  cholmod_factorize(&s, impl_->factor, &impl_->common);
+  status_ = status_from_common(impl_->common, message_);
+  minor_ = static_cast<int>(impl_->factor->minor);
+  if (status_ == FactorStatus::kOk && minor_ < n_) {
+    status_ = FactorStatus::kNotPositiveDefinite;
+    message_ = "matrix not positive definite";
+  }
+  rcond_ = status_ == FactorStatus::kOk ? cholmod_rcond(impl_->factor, &impl_->common) : 0.0;
+  if (status_ == FactorStatus::kOk && options_.min_pivot_ratio > 0 &&
+      !(rcond_ >= options_.min_pivot_ratio)) {
+    status_ = FactorStatus::kNotPositiveDefinite;
+    message_ = "matrix numerically singular (pivot ratio " + std::to_string(rcond_) + ")";
+  }
+  if (status_ == FactorStatus::kNotPositiveDefinite) {
+    message_ += " (pivot " + std::to_string(minor_) + " of " + std::to_string(n_) +
+                " failed: singular or indefinite — check constraints and inverted elements)";
+  }
+  factorized_ = status_ == FactorStatus::kOk;
+  return status_;
+}
+
+FactorStatus CholmodFactor::compute(const SparseMatrix& a, std::uint64_t pattern_version) {
+  const FactorStatus s = analyze(a, pattern_version);
+  if (s != FactorStatus::kOk) return s;
+  return factorize(a);
+}
+
+FactorStatus CholmodFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  if (!factorized_) {
+    if (status_ == FactorStatus::kOk) status_ = FactorStatus::kNotAnalyzed;
+    return status_;
+  }
+  if (b.size() != n_) {
+    message_ = "solve: right-hand side has wrong size";
+    return status_ = FactorStatus::kInvalidInput;
+  }
+  cholmod_dense bd{};
+  bd.nrow = static_cast<size_t>(n_);
+  bd.ncol = 1;
+  bd.nzmax = static_cast<size_t>(n_);
+  bd.d = static_cast<size_t>(n_);
+  bd.x = const_cast<double*>(b.data());
+  bd.z = nullptr;
+  bd.xtype = CHOLMOD_REAL;
+  bd.dtype = CHOLMOD_DOUBLE;
+  cholmod_dense* xd = cholmod_solve(CHOLMOD_A, impl_->factor, &bd, &impl_->common);
+  if (xd == nullptr) {
+    status_ = status_from_common(impl_->common, message_);
+    if (status_ == FactorStatus::kOk) status_ = FactorStatus::kCholmodError;
+    return status_;
+  }
+  x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(xd->x), n_);
+  cholmod_free_dense(&xd, &impl_->common);
+  return status_ = FactorStatus::kOk;
+}
+
+bool CholmodFactor::is_supernodal() const {
+  return impl_->factor != nullptr && impl_->factor->is_super != 0;
+}
+
+std::int64_t CholmodFactor::nnz_l() const {
+  return static_cast<std::int64_t>(impl_->common.lnz);
+}
+
+double CholmodFactor::factor_flops() const {
+  return impl_->common.fl;
+}
+
+std::shared_ptr<const LdlFactorData> CholmodFactor::extract_ldl() {
+  if (!factorized_) return nullptr;
+  cholmod_common& c = impl_->common;
+  cholmod_factor* copy = cholmod_copy_factor(impl_->factor, &c);
+  if (copy == nullptr) {
+    status_ = status_from_common(c, message_);
+    return nullptr;
+  }
+  if (!cholmod_change_factor(CHOLMOD_REAL, /*to_ll=*/0, /*to_super=*/0, /*to_packed=*/1,
+                             /*to_monotonic=*/1, copy, &c)) {
+    status_ = status_from_common(c, message_);
+    cholmod_free_factor(&copy, &c);
+    return nullptr;
+  }
+  auto out = std::make_shared<LdlFactorData>();
+  const int n = static_cast<int>(copy->n);
+  out->n = n;
+  out->perm.resize(n);
+  out->inverse_perm.resize(n);
+  const int* perm = static_cast<const int*>(copy->Perm);
+  for (int i = 0; i < n; ++i) out->perm[i] = perm != nullptr ? perm[i] : i;
+  for (int i = 0; i < n; ++i) out->inverse_perm[out->perm[i]] = i;
+  const int* lp = static_cast<const int*>(copy->p);
+  const int* li = static_cast<const int*>(copy->i);
+  const int* lnz = static_cast<const int*>(copy->nz);
+  const double* lx = static_cast<const double*>(copy->x);
+  out->col_ptr.assign(n + 1, 0);
+  out->d.resize(n);
+  out->parent.assign(n, -1);
+  std::int64_t total = 0;
+  for (int j = 0; j < n; ++j) total += lnz[j] - 1;
+  out->row_idx.reserve(static_cast<size_t>(total));
+  out->values.reserve(static_cast<size_t>(total));
+  std::vector<std::pair<int, double>> column;
+  for (int j = 0; j < n; ++j) {
+    out->col_ptr[j] = static_cast<int>(out->row_idx.size());
+    column.clear();
+    for (int k = lp[j]; k < lp[j] + lnz[j]; ++k) {
+      if (li[k] == j) {
+        out->d[j] = lx[k];
+      } else {
+        column.emplace_back(li[k], lx[k]);
+      }
+    }
+    std::sort(column.begin(), column.end());
+    for (const auto& [row, value] : column) {
+      out->row_idx.push_back(row);
+      out->values.push_back(value);
+    }
+    if (!column.empty()) out->parent[j] = column.front().first;
+  }
+  out->col_ptr[n] = static_cast<int>(out->row_idx.size());
+  cholmod_free_factor(&copy, &c);
+  return out;
+}
+
+}  // namespace incise::linalg

@@ -1,0 +1,509 @@
+// AugmentedCutSession (cut/augmented_cut_session.hpp): after every sweep-triangle step the
+// augmented solution (Yeung et al. 2016 §3, column replacements of the thesis §3.2 cut
+// changes) equals a fresh factorization of the cut mesh's linear-elastic stiffness system,
+// assembled independently by fem::ElasticProblem from CutMesh::to_mesh_data and solved with
+// Eigen's SimplicialLDLT. Components left without fixed nodes are a status, not a crash.
+#include <incise/core/error.hpp>
+#include <incise/fem/elastic_problem.hpp>
+#include <incise/interactive/augmented_cut_session.hpp>
+#include <incise/mesh/generators.hpp>
+#include <incise_test/seed.hpp>
+
+#include <gtest/gtest.h>
+#include <Eigen/SparseCholesky>
+
+#include <chrono>
+#include <iostream>
+#include <map>
+#include <random>
+#include <thread>
+
+namespace incise::interactive {
+namespace {
+using namespace incise::cut;  // the session drives the ch. 3 cutter: its types read unqualified
+                              // here
+
+/// Random sequences per body: fewer in builds with debug checks (Debug, and the ASan preset:
+/// the connectivity validates itself after every edit).
+int sequence_count() {
+#if INCISE_DEBUG_CHECKS
+  return incise::test::scaled(6);
+#else
+  return incise::test::scaled(16);
+#endif
+}
+
+material::Material linear_material() {
+  material::Parameters p;
+  p.youngs_modulus = 1e4;  // Pa; the comparison is relative, E only scales a
+  p.poisson_ratio = 0.25;  // thesis §3.3
+  return material::Material("linear", p);
+}
+
+/// Augmented options of the tests: GMRES tolerance 1e-14 on eq. 17 (as the augmented
+/// equivalence tests), so that the comparison measures the method, not a loose stop.
+AugmentedCutOptions test_options() {
+  AugmentedCutOptions o;
+  o.augmented.gmres.tolerance = 1e-14;
+  o.augmented.gmres.max_iterations = 2000;
+  return o;
+}
+
+/// Result of the independent reference solve.
+struct Reference {
+  bool ok = false;
+  Eigen::Matrix3Xd u;  ///< displacement per session node (unused nodes: zero)
+  double rcond = 1;    ///< min/max pivot of the LDLᵀ of the free block (≈ 1/κ lower bound)
+};
+
+/// Fresh factorization of the cut mesh's system: K from fem::ElasticProblem on the compacted
+/// mesh, prescribed DOFs (nodes fixed from the start: 0; DOFs the session constrained: the
+/// session's prescribed values, which the augmented solution carries exactly), free block
+/// solved by SimplicialLDLT.
+Reference reference_solution(const AugmentedCutSession& s, const std::vector<Vec3>& forces) {
+  std::vector<Index> map;
+  const mesh::MeshData md = s.mesh().to_mesh_data(false, true, &map);
+  fem::ElasticProblem prob(md, linear_material());
+  Eigen::SparseMatrix<double> k;
+  const VecX u0 = VecX::Zero(prob.size());
+  EXPECT_EQ(prob.tangent(u0, k, fem::FixedDofTreatment::kKeep), EvalStatus::kOk);
+  const Eigen::Index n = prob.size();
+  std::vector<char> prescribed(static_cast<size_t>(n), 0);
+  VecX abar = VecX::Zero(n), f = VecX::Zero(n);
+  for (Index v = 0; v < static_cast<Index>(map.size()); ++v) {
+    const Index c = map[static_cast<size_t>(v)];
+    if (c < 0) continue;
+    const int d = s.dof(v);
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Index g = 3 * c + i;
+      if (v < static_cast<Index>(forces.size())) f(g) = forces[static_cast<size_t>(v)](i);
+      if (d < 0) {
+        prescribed[static_cast<size_t>(g)] = 1;
+      } else if (s.system().is_constrained(d + i)) {
+        prescribed[static_cast<size_t>(g)] = 1;
+        abar(g) = s.displacement()(i, v);
+      }
+    }
+  }
+  std::vector<Eigen::Index> free_index(static_cast<size_t>(n), -1);
+  Eigen::Index nf = 0;
+  for (Eigen::Index g = 0; g < n; ++g)
+    if (!prescribed[static_cast<size_t>(g)]) free_index[static_cast<size_t>(g)] = nf++;
+  const VecX rhs_full = f - k * abar;
+  VecX rhs(nf);
+  std::vector<Eigen::Triplet<double>> t;
+  for (int col = 0; col < k.outerSize(); ++col) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(k, col); it; ++it) {
+      const Eigen::Index i = free_index[static_cast<size_t>(it.row())];
+      const Eigen::Index j = free_index[static_cast<size_t>(col)];
+      if (i >= 0 && j >= 0) t.emplace_back(i, j, it.value());
+    }
+  }
+  for (Eigen::Index g = 0; g < n; ++g)
+    if (free_index[static_cast<size_t>(g)] >= 0)
+      rhs(free_index[static_cast<size_t>(g)]) = rhs_full(g);
+  Eigen::SparseMatrix<double> kff(nf, nf);
+  kff.setFromTriplets(t.begin(), t.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(kff);
+  Reference out;
+  if (ldlt.info() != Eigen::Success) return out;
+  const VecX d = ldlt.vectorD();
+  if (d.minCoeff() <= 0) {
+    std::cout << "reference: min pivot " << d.minCoeff() << " max " << d.maxCoeff() << "\n";
+    return out;
+  }
+  out.rcond = d.minCoeff() / d.maxCoeff();
+  const VecX x = ldlt.solve(rhs);
+  out.u = Eigen::Matrix3Xd::Zero(3, static_cast<Index>(map.size()));
+  for (Index v = 0; v < static_cast<Index>(map.size()); ++v) {
+    const Index c = map[static_cast<size_t>(v)];
+    if (c < 0) continue;
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Index g = 3 * c + i;
+      const Eigen::Index fi = free_index[static_cast<size_t>(g)];
+      out.u(i, v) = fi >= 0 ? x(fi) : abar(g);
+    }
+  }
+  out.ok = true;
+  return out;
+}
+
+/// max over used nodes |u_session − u_ref| / max |u_ref|.
+double relative_difference(const AugmentedCutSession& s, const Reference& ref) {
+  double diff = 0, scale = 0;
+  for (Index v = 0; v < s.mesh().num_nodes(); ++v) {
+    if (s.mesh().unused(v)) continue;
+    diff = std::max(diff, (s.displacement().col(v) - ref.u.col(v)).cwiseAbs().maxCoeff());
+    scale = std::max(scale, ref.u.col(v).cwiseAbs().maxCoeff());
+  }
+  return scale > 0 ? diff / scale : diff;
+}
+
+/// Tolerance of the comparison: GMRES stops at relative residual 1e-14 on eq. 17, and the
+/// reference itself is backward stable; both errors are amplified by at most κ(K_FF) ≤
+/// 1/rcond (pivot ratio, a lower estimate of κ, hence the factor 100), floored at 1e-9.
+double tolerance(const Reference& ref) {
+  return std::max(1e-9, 100 * std::numeric_limits<double>::epsilon() / ref.rcond);
+}
+
+struct Body {
+  mesh::MeshData mesh;
+  std::vector<Index> fixed;
+  std::vector<Vec3> forces;
+  Vec3 lo, hi;
+  int entry_axis = 2;  ///< random blades enter through the face x[entry_axis] = hi
+};
+
+/// Cube 1 m, 3³ cells (6-tet split), back face z = 0 fixed, dilating forces on the side faces
+/// (the thesis §3.3 setup in small).
+Body small_cube() {
+  Body b;
+  b.mesh = mesh::make_box(3, 3, 3, 1, 1, 1);
+  b.lo = Vec3(0, 0, 0);
+  b.hi = Vec3(1, 1, 1);
+  for (Index v = 0; v < b.mesh.num_points(); ++v) {
+    const Vec3 p = b.mesh.points.col(v);
+    Vec3 f = Vec3::Zero();
+    if (p.z() < 1e-12) b.fixed.push_back(v);
+    if (p.x() < 1e-12) f.x() -= 10;
+    if (p.x() > 1 - 1e-12) f.x() += 10;
+    if (p.y() < 1e-12) f.y() -= 10;
+    if (p.y() > 1 - 1e-12) f.y() += 10;
+    b.forces.push_back(f);
+  }
+  return b;
+}
+
+/// Beam 0.5 × 0.5 × 2 m, 2 × 2 × 8 cells, clamped at z = 0, tip load in −x at z = 2.
+Body beam() {
+  Body b;
+  b.mesh = mesh::make_box(2, 2, 8, 0.5, 0.5, 2);
+  b.lo = Vec3(0, 0, 0);
+  b.hi = Vec3(0.5, 0.5, 2);
+  b.entry_axis = 0;
+  for (Index v = 0; v < b.mesh.num_points(); ++v) {
+    const Vec3 p = b.mesh.points.col(v);
+    if (p.z() < 1e-12) b.fixed.push_back(v);
+    b.forces.push_back(p.z() > 2 - 1e-12 ? Vec3(-5, 0, 1) : Vec3::Zero());
+  }
+  return b;
+}
+
+Eigen::Matrix3Xd force_matrix(const Body& b) {
+  Eigen::Matrix3Xd f(3, static_cast<Index>(b.forces.size()));
+  for (size_t v = 0; v < b.forces.size(); ++v) f.col(static_cast<Index>(v)) = b.forces[v];
+  return f;
+}
+
+/// A blade entering through the face x[entry_axis] = hi[entry_axis] (so that the sweep starts
+/// at the boundary, §3.2.1), across the body at a random angle and offset, moved 1–3 times
+/// towards lo[entry_axis] with random drift and tilt; each move sweeps two triangles (as in
+/// robustness_test.cpp). Draws from `rng` in the constructor and in each next_move().
+class RandomBlade {
+ public:
+  RandomBlade(const Body& body, std::mt19937_64& rng) : body_(body), rng_(rng) {
+    const Vec3 size = body.hi - body.lo;
+    const int ax = body.entry_axis, ay = (ax + 1) % 3, az = (ax + 2) % 3;
+    const double angle = 3.14159265358979 * u_(rng);
+    Vec3 center = 0.5 * (body.lo + body.hi), dir = Vec3::Zero();
+    center(ay) += (u_(rng) - 0.5) * 0.6 * size(ay);
+    center(az) += (u_(rng) - 0.5) * 0.6 * size(az);
+    center(ax) = body.hi(ax) + 0.05 * size(ax);
+    dir(ay) = std::cos(angle) * size(ay);
+    dir(az) = std::sin(angle) * size(az);
+    a_ = center - dir;
+    b_ = center + dir;
+    moves_ = 1 + static_cast<int>(u_(rng) * 3);
+  }
+  /// Number of moves of this blade (1–3).
+  int moves() const { return moves_; }
+  /// The two sweep triangles of the next move; the blade ends where the move ends.
+  std::array<std::array<Vec3, 3>, 2> next_move() {
+    const Vec3 size = body_.hi - body_.lo;
+    const int ax = body_.entry_axis;
+    Vec3 move = 0.1 * size.norm() * Vec3(u_(rng_) - 0.5, u_(rng_) - 0.5, u_(rng_) - 0.5);
+    move(ax) = -(0.15 + 0.3 * u_(rng_)) * size(ax);
+    Vec3 tilt = Vec3::Zero();
+    tilt(ax) = 0.1 * (u_(rng_) - 0.5) * size(ax);
+    const Vec3 a2 = a_ + move, b2 = b_ + move + tilt;
+    const std::array<std::array<Vec3, 3>, 2> out{std::array<Vec3, 3>{a_, b_, b2}, {a_, b2, a2}};
+    a_ = a2;
+    b_ = b2;
+    return out;
+  }
+
+ private:
+  const Body& body_;
+  std::mt19937_64& rng_;
+  std::uniform_real_distribution<double> u_{0.0, 1.0};
+  Vec3 a_, b_;
+  int moves_ = 1;
+};
+
+/// Whether the outcome of a step is admissible. Policy kFixOnFace (default) leaves no free
+/// component; refused inverting snaps leave no inverted element: the only admissible failure
+/// is a singular system from a piece held by fewer than three non-collinear fixed nodes.
+::testing::AssertionResult admissible(const AugmentedCutStepReport& r) {
+  if (r.free_components != 0)
+    return ::testing::AssertionFailure() << r.free_components << " free components";
+  if (r.inverted_elements != 0)
+    return ::testing::AssertionFailure() << r.inverted_elements << " inverted elements";
+  if (r.ok() || (r.status == CutSolveStatus::kSolverFailed &&
+                 r.solve.status == linalg::AugmentedStatus::kSingularModifiedSystem))
+    return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << to_string(r.status) << ": " << r.advice;
+}
+
+/// Random sweep sequences (RandomBlade); after every triangle: the augmented solution equals
+/// the reference, or the step reports a status.
+void random_cuts(const Body& body, int sequences, std::mt19937_64& rng, const char* name) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int compared = 0, cut_steps = 0, failed = 0;
+  double worst = 0, max_m = 0;
+  for (int s = 0; s < sequences; ++s) {
+    AugmentedCutOptions opt = test_options();
+    opt.cut.seed = rng();
+    opt.cut.remove_degeneracies = u(rng) < 0.7;
+    opt.update_deformed = u(rng) < 0.5;
+    AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
+    ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().advice;
+    const int n0 = session.system().factored_dofs();
+    {
+      const Reference ref = reference_solution(session, body.forces);
+      ASSERT_TRUE(ref.ok);
+      ASSERT_LE(relative_difference(session, ref), tolerance(ref)) << name << " initial";
+    }
+    RandomBlade blade(body, rng);
+    for (int k = 0; k < blade.moves(); ++k) {
+      for (const std::array<Vec3, 3>& tri : blade.next_move()) {
+        const AugmentedCutStepReport r = session.step(tri);
+        if (r.cut.faces_dissected > 0) ++cut_steps;
+        ASSERT_TRUE(admissible(r));
+        if (!r.ok()) {
+          ++failed;
+          break;
+        }
+        // Updated without refactoring: the factor in use is still that of K⁰.
+        ASSERT_EQ(session.system().factored_dofs(), n0);
+        if (opt.update_deformed) {  // the next sweep is placed in x = X + a
+          const Index v = session.mesh().num_nodes() - 1;
+          ASSERT_EQ(session.mesh().deformed(v),
+                    Vec3(session.mesh().reference(v) + session.displacement().col(v)));
+        }
+        const Reference ref = reference_solution(session, body.forces);
+        ASSERT_TRUE(ref.ok) << name << " sequence " << s << ": augmented ok, reference singular"
+                            << " m=" << r.solve.m << " amplification " << r.solve.amplification
+                            << " gmres its " << r.solve.gmres.iterations << " free comps "
+                            << r.cut.free_components << " removed " << r.cut.removed_nodes.size();
+        const double d = relative_difference(session, ref);
+        worst = std::max(worst, d / tolerance(ref));
+        ASSERT_LE(d, tolerance(ref)) << name << " sequence " << s << " move " << k
+                                     << " m=" << r.solve.m << " rcond=" << ref.rcond;
+        max_m = std::max(max_m, static_cast<double>(r.solve.m));
+        ++compared;
+      }
+      if (failed) break;
+    }
+    failed = 0;
+  }
+  // The sequences must cut (a test that never changes the system proves nothing).
+  EXPECT_GT(cut_steps, sequences / 4) << name;
+  std::cout << name << ": " << sequences << " sequences, " << compared << " steps compared, "
+            << cut_steps << " with dissected faces, max m " << max_m
+            << ", worst difference / tolerance " << worst << "\n";
+}
+
+TEST(AugmentedCut, RandomCutsOnACubeMatchAFreshFactorization) {
+  INCISE_SEEDED_RNG(rng, 606);
+  random_cuts(small_cube(), sequence_count(), rng, "cube");
+}
+
+TEST(AugmentedCut, RandomCutsOnABeamMatchAFreshFactorization) {
+  INCISE_SEEDED_RNG(rng, 607);
+  random_cuts(beam(), sequence_count(), rng, "beam");
+}
+
+/// Polls session.solve() until no background refactorization is pending (each solve swaps a
+/// finished job in); returns the report of the last solve. Ends when the job has finished: the
+/// session does not restart a job in the solve that dropped a failed one.
+AugmentedCutStepReport poll_until_swapped(AugmentedCutSession& session, int& polls) {
+  AugmentedCutStepReport q = session.solve();
+  ++polls;
+  while (!q.refactorization_swapped && session.system().refactorization_pending()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    q = session.solve();
+    ++polls;
+  }
+  return q;
+}
+
+/// Augmented paper §3.6 with AugmentedCutOptions::refactor_at_m: random cuts in the small cube
+/// with a small threshold (a) start background refactorizations, each swapped in by a later
+/// solve(); (b) m drops at the swap, to |𝓓| since nothing changed while the job ran, and the
+/// factor then covers every DOF; (c) after every step and every swap the solution equals a fresh
+/// factorization of the current system (reference_solution, tolerance()). Deterministic: after
+/// a step that started a job, session.solve() is polled until no job is pending; how many polls
+/// that takes depends on timing, and nothing asserted does.
+TEST(AugmentedCut, Sec3_6BackgroundRefactorizationAtThresholdMatchesAFreshFactorization) {
+  INCISE_SEEDED_RNG(rng, 608);
+  const Body body = small_cube();
+  // Columns a refactorization can remove (m − |𝓓|) that trigger one: small against the
+  // 50–150 columns one cutting step of the 3³ cube replaces, so that most cutting steps start one.
+  constexpr int kThreshold = 24;
+  const int sequences = incise::test::scaled(4);
+  int started = 0, swapped = 0, compared = 0, polls = 0;
+  for (int s = 0; s < sequences; ++s) {
+    AugmentedCutOptions opt = test_options();
+    opt.cut.seed = rng();
+    opt.refactor_at_m = kThreshold;
+    AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
+    ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().advice;
+    auto compare = [&](const char* when, int k) {
+      const Reference ref = reference_solution(session, body.forces);
+      ASSERT_TRUE(ref.ok) << when << ", sequence " << s << " move " << k;
+      ASSERT_LE(relative_difference(session, ref), tolerance(ref))
+          << when << ", sequence " << s << " move " << k << " rcond=" << ref.rcond;
+      ++compared;
+    };
+    RandomBlade blade(body, rng);
+    bool failed = false;
+    for (int k = 0; k < blade.moves() && !failed; ++k) {
+      for (const std::array<Vec3, 3>& tri : blade.next_move()) {
+        // Every started job was swapped in below: none is pending at a step.
+        ASSERT_FALSE(session.system().refactorization_pending());
+        const AugmentedCutStepReport r = session.step(tri);
+        ASSERT_TRUE(admissible(r));
+        if (!r.ok()) {
+          failed = true;
+          break;
+        }
+        ASSERT_FALSE(r.refactorization_swapped);
+        ASSERT_EQ(r.refactorization_started,
+                  r.solved && r.m_after_solve - r.solve.dirichlet >= kThreshold)
+            << "m " << r.m_after_solve << " |D| " << r.solve.dirichlet;
+        ASSERT_NO_FATAL_FAILURE(compare("after the step", k));
+        if (!r.refactorization_started) continue;
+        ++started;
+        ASSERT_TRUE(session.system().refactorization_pending());
+        // (a) Poll: each solve() swaps the job in if it has finished.
+        const AugmentedCutStepReport q = poll_until_swapped(session, polls);
+        ASSERT_TRUE(q.ok()) << q.advice;
+        ASSERT_FALSE(q.refactorization_started);  // m′ = 0 after the swap
+        ASSERT_TRUE(q.refactorization_swapped)
+            << "background factorization failed: "
+            << static_cast<int>(session.system().last_refactorization_status());
+        ++swapped;
+        // (b) m drops to the Dirichlet DOFs; the new factor covers all current DOFs.
+        EXPECT_LT(q.m_after_solve, q.m_before_solve);
+        EXPECT_EQ(q.m_before_solve, r.m_after_solve);
+        EXPECT_EQ(q.m_after_solve, q.solve.dirichlet);
+        EXPECT_EQ(session.system().factored_dofs(), session.system().num_dofs());
+        // (c) The solution with the new factor.
+        ASSERT_NO_FATAL_FAILURE(compare("after the swap", k));
+      }
+    }
+  }
+  EXPECT_GE(started, 1);
+  EXPECT_EQ(swapped, started);
+  std::cout << "cube, refactor_at_m " << kThreshold << ": " << sequences << " sequences, "
+            << started << " refactorizations started and swapped in, " << compared
+            << " solutions compared, " << polls << " polling solves\n";
+}
+
+/// A horizontal blade through the whole beam at z = 1.1 m: the upper part loses its fixed
+/// nodes. Policy kReport: reported as kFreeComponent, no solve, no crash.
+TEST(AugmentedCut, BeamCutInTwoWithReportPolicyIsAStatus) {
+  const Body body = beam();
+  AugmentedCutOptions opt = test_options();
+  opt.cut.free_components = FreeComponentPolicy::kReport;
+  AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
+  ASSERT_TRUE(session.initial_report().ok());
+  const double z = 1.1;
+  const AugmentedCutStepReport r1 = session.step(Vec3(-1, -1, z), Vec3(2, -1, z), Vec3(2, 2, z));
+  const AugmentedCutStepReport r2 = session.step(Vec3(-1, -1, z), Vec3(2, 2, z), Vec3(-1, 2, z));
+  EXPECT_GT(r1.cut.faces_dissected + r2.cut.faces_dissected, 0);
+  EXPECT_EQ(r2.status, CutSolveStatus::kFreeComponent) << to_string(r2.status);
+  EXPECT_FALSE(r2.solved);
+  EXPECT_FALSE(r2.advice.empty());
+  EXPECT_GE(r2.free_components, 1);
+}
+
+/// The same cut with policy kFixOnFace: the upper part is fixed on a face at its current
+/// displacement (Dirichlet constraints of the augmented system) and the solution equals the
+/// reference with those prescribed values.
+TEST(AugmentedCut, BeamCutInTwoWithFixOnFaceMatchesTheReference) {
+  const Body body = beam();
+  AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body),
+                              test_options());
+  const double z = 1.1;
+  const AugmentedCutStepReport r1 = session.step(Vec3(-1, -1, z), Vec3(2, -1, z), Vec3(2, 2, z));
+  const AugmentedCutStepReport r2 = session.step(Vec3(-1, -1, z), Vec3(2, 2, z), Vec3(-1, 2, z));
+  ASSERT_TRUE(r1.ok()) << r1.advice;
+  ASSERT_TRUE(r2.ok()) << r2.advice;
+  EXPECT_GT(r1.cut.components_fixed + r2.cut.components_fixed, 0);
+  EXPECT_GT(r1.constrained_fixed + r2.constrained_fixed, 0);
+  EXPECT_GT(r1.dofs_added + r2.dofs_added, 0);
+  const Reference ref = reference_solution(session, body.forces);
+  ASSERT_TRUE(ref.ok);
+  EXPECT_LE(relative_difference(session, ref), tolerance(ref));
+}
+
+/// §3.6 with Dirichlet DOFs: the beam cut in two, the upper part fixed on a face
+/// (FreeComponentPolicy::kFixOnFace), so its stiffness block is singular (rigid motions) and
+/// held only by the constraints. Refactorizations started before and after the separation are
+/// swapped in (the session's constraint springs keep K positive definite), and the solution
+/// equals the reference.
+TEST(AugmentedCut, Sec3_6RefactorizationAfterAPieceIsFixedOnAFace) {
+  const Body body = beam();
+  AugmentedCutOptions opt = test_options();
+  opt.refactor_at_m = 1;  // any replaced column triggers a job
+  AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
+  const double z = 1.1;
+  int polls = 0;
+  Index constrained = 0;
+  for (const std::array<Vec3, 3>& tri :
+       {std::array<Vec3, 3>{Vec3(-1, -1, z), Vec3(2, -1, z), Vec3(2, 2, z)},
+        {Vec3(-1, -1, z), Vec3(2, 2, z), Vec3(-1, 2, z)}}) {
+    const AugmentedCutStepReport r = session.step(tri);
+    ASSERT_TRUE(r.ok()) << r.advice;
+    constrained += r.constrained_fixed;
+    if (!r.refactorization_started) continue;  // the first triangle may only mark edges
+    const AugmentedCutStepReport q = poll_until_swapped(session, polls);
+    ASSERT_TRUE(q.ok()) << q.advice;
+    ASSERT_TRUE(q.refactorization_swapped)
+        << "background factorization failed, FactorStatus "
+        << static_cast<int>(session.system().last_refactorization_status());
+    EXPECT_EQ(q.m_after_solve, q.solve.dirichlet);  // nothing changed while the job ran
+    const Reference ref = reference_solution(session, body.forces);
+    ASSERT_TRUE(ref.ok);
+    EXPECT_LE(relative_difference(session, ref), tolerance(ref));
+  }
+  // The separating step fixed the upper part on a face, started a job and had it swapped in
+  // (above) with those constraints in K's snapshot.
+  EXPECT_GT(constrained, 0);
+  EXPECT_GT(session.system().factored_dofs(), 0);
+  EXPECT_EQ(session.system().factored_dofs(), session.system().num_dofs());
+  EXPECT_EQ(session.system().num_replaced(), static_cast<int>(constrained));
+}
+
+TEST(AugmentedCut, NonLinearMaterialIsRejected) {
+  const Body body = small_cube();
+  material::Parameters p;
+  p.youngs_modulus = 1e4;
+  p.poisson_ratio = 0.25;
+  EXPECT_THROW(AugmentedCutSession(body.mesh, material::Material("neohookean", p), body.fixed,
+                                   force_matrix(body)),
+               ParameterError);
+}
+
+TEST(AugmentedCut, NoFixedNodesIsAStatusNotACrash) {
+  const Body body = small_cube();
+  AugmentedCutSession session(body.mesh, linear_material(), {}, force_matrix(body), test_options());
+  EXPECT_EQ(session.initial_report().status, CutSolveStatus::kSolverFailed);
+  const AugmentedCutStepReport r =
+      session.step(Vec3(0.5, -1, 2), Vec3(0.5, 2, 2), Vec3(0.5, 2, 0.5));
+  EXPECT_FALSE(r.ok());
+}
+
+}  // namespace
+}  // namespace incise::interactive

@@ -1,0 +1,170 @@
+/// \file augmented_refactor_test.cpp
+/// Background re-factorization of Yeung et al. 2016 §3.6: while a second thread (own CHOLMOD
+/// common) factors a snapshot of K, updates and solves continue; when its factor is swapped in,
+/// m drops to the columns changed since the snapshot (plus the Dirichlet DOFs, which stay
+/// augmented), and solutions stay equal to a fresh factorization. Built also with the `tsan`
+/// preset (ThreadSanitizer) — see docs/augmented.md.
+
+#include "augmented_reference.hpp"
+#include "augmented_stand_in.hpp"
+
+#include <incise/mesh/generators.hpp>
+#include <incise_test/seed.hpp>
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <set>
+
+namespace incise::test {
+namespace {
+
+/// Same justification as in augmented_equivalence_test.cpp (tiny meshes, GMRES tol 1e-13).
+constexpr double kRelTol = 1e-9;
+
+/// Duplicates node p (§4.3.2) for elements with centroid x > x_p; returns false if no split.
+bool cut_node(CutModel& m, linalg::AugmentedSystem& aug, int p, std::set<int>* touched = nullptr) {
+  std::vector<int> moved;
+  int star = 0;
+  for (size_t e = 0; e < m.tets.size(); ++e) {
+    bool inc = false;
+    double cx = 0;
+    for (int a = 0; a < 4; ++a) {
+      inc = inc || m.tets[e][a] == p;
+      cx += 0.25 * m.points(0, m.tets[e][a]);
+    }
+    if (!inc || !m.active[e]) continue;
+    ++star;
+    if (cx > m.points(0, p)) moved.push_back(static_cast<int>(e));
+  }
+  if (moved.empty() || static_cast<int>(moved.size()) == star) return false;
+  const int q = static_cast<int>(m.points.cols());
+  m.points.conservativeResize(3, q + 1);
+  m.points.col(q) = m.points.col(p);
+  m.node_dof.push_back(aug.add_dofs(3));
+  m.num_dofs += 3;
+  for (int e : moved) {
+    aug.add_element(m.dofs(e), m.element_matrix(e), -1.0);
+    if (touched) {
+      for (int d : m.dofs(e))
+        if (d >= 0) touched->insert(d);
+    }
+    for (int a = 0; a < 4; ++a) {
+      if (m.tets[e][a] == p) m.tets[e][a] = q;
+    }
+    aug.add_element(m.dofs(e), m.element_matrix(e), +1.0);
+    if (touched) {
+      for (int d : m.dofs(e))
+        if (d >= 0) touched->insert(d);
+    }
+  }
+  return true;
+}
+
+void expect_equivalent(linalg::AugmentedSystem& aug, const CutModel& m, Eigen::VectorXd& f,
+                       const std::map<int, double>& dir) {
+  if (f.size() != m.num_dofs) {
+    const Eigen::Index old = f.size();
+    f.conservativeResize(m.num_dofs);
+    f.tail(m.num_dofs - old).setConstant(0.5);
+  }
+  aug.set_force(f);
+  Eigen::VectorXd a, r;
+  const linalg::AugmentedReport rep = aug.solve(a, r);
+  ASSERT_TRUE(rep.ok()) << rep.advice;
+  const ReferenceSolution ref = reference_solve(m.assemble(), f, dir);
+  ASSERT_TRUE(ref.ok);
+  EXPECT_LE((a - ref.a).norm(), kRelTol * ref.a.norm());
+  EXPECT_LE((r - ref.r).norm(), kRelTol * (ref.r.norm() + f.norm()));
+}
+
+// §3.6, Fig. 1: m + m′ drops to m′ when the fresh factor replaces the old one.
+TEST(AugmentedRefactor, SwapDropsMToChangesSinceStartSec3_6) {
+  CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
+  linalg::AugmentedSystem aug;
+  ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
+  Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
+  std::map<int, double> dir;
+  const int nodes = static_cast<int>(m.points.cols());
+  std::vector<int> plane;  // nodes on x = 0.2 (mid-plane), z > 0
+  for (int v = 0; v < nodes; ++v)
+    if (std::abs(m.points(0, v) - 0.2) < 1e-9 && m.node_dof[v] >= 0) plane.push_back(v);
+  ASSERT_GE(plane.size(), 6u);
+  for (int k = 0; k < 3; ++k) ASSERT_TRUE(cut_node(m, aug, plane[k]));
+  aug.impose_dirichlet(0, 0.01);
+  dir[0] = 0.01;
+  expect_equivalent(aug, m, f, dir);
+  const int m_before = aug.num_replaced();
+  ASSERT_TRUE(aug.start_refactorization());
+  EXPECT_FALSE(aug.start_refactorization());  // one job at a time
+  // Changes while the job runs: one more cut (its columns must stay augmented).
+  const int nb_before = aug.num_dofs();
+  std::set<int> touched;
+  ASSERT_TRUE(cut_node(m, aug, plane[3], &touched));
+  ASSERT_TRUE(aug.wait_for_refactorization());
+  EXPECT_EQ(aug.last_refactorization_status(), linalg::FactorStatus::kOk);
+  EXPECT_EQ(aug.factored_dofs(), nb_before);
+  const int m_after = aug.num_replaced();
+  EXPECT_LT(m_after, m_before);
+  // Remaining columns: those changed by the 4th cut and the Dirichlet DOF.
+  for (int j : aug.replaced_columns()) EXPECT_TRUE(j == 0 || touched.count(j) != 0) << j;
+  expect_equivalent(aug, m, f, dir);
+  // With no change since a second snapshot, only the Dirichlet DOF stays in 𝓛.
+  ASSERT_TRUE(aug.start_refactorization());
+  ASSERT_TRUE(aug.wait_for_refactorization());
+  EXPECT_EQ(aug.num_replaced(), 1);
+  expect_equivalent(aug, m, f, dir);
+  aug.release_dirichlet(0);
+  dir.clear();
+  EXPECT_EQ(aug.num_replaced(), 0);
+  expect_equivalent(aug, m, f, dir);
+}
+
+// Updates and solves keep running in the foreground while background jobs start and finish
+// (polled in solve()); every solution equals a fresh factorization. The ThreadSanitizer build
+// of this test is the data-race check of §3.6. Step 3 runs its backward pass on two threads
+// (AugmentedOptions::solve_threads) meanwhile, so three threads share the factor data.
+TEST(AugmentedRefactor, ConcurrentUpdatesAndSolvesWhileFactoring) {
+  CutModel m = CutModel::from_mesh(mesh::make_beam(10, 0.1));
+  linalg::AugmentedOptions options;
+  options.solve_threads = 2;
+  linalg::AugmentedSystem aug(options);
+  ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
+  Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.1);
+  std::map<int, double> dir;
+  INCISE_SEEDED_RNG(rng, 23);
+  const int nodes = static_cast<int>(m.points.cols());
+  std::vector<int> candidates;
+  for (int v = 0; v < nodes; ++v)
+    if (m.node_dof[v] >= 0) candidates.push_back(v);
+  std::shuffle(candidates.begin(), candidates.end(), rng);
+  int swaps = 0, cuts = 0;
+  for (size_t k = 0; k < candidates.size() && cuts < scaled(12); ++k) {
+    if (!aug.refactorization_pending()) (void)aug.start_refactorization();
+    CutModel trial = m;
+    linalg::AugmentedSystem probe;  // check the cut keeps K nonsingular before applying it
+    (void)probe.initialize(trial.assemble());
+    if (!cut_node(trial, probe, candidates[k])) continue;
+    if (!reference_solve(trial.assemble(), Eigen::VectorXd::Zero(trial.num_dofs), dir).ok) continue;
+    ASSERT_TRUE(cut_node(m, aug, candidates[k]));
+    ++cuts;
+    if (k % 3 == 0) {
+      const int d = m.node_dof[candidates[(k + 1) % candidates.size()]];
+      if (d >= 0) {
+        aug.impose_dirichlet(d, 0.02);
+        dir[d] = 0.02;
+      }
+    }
+    const int before = aug.factored_dofs();
+    expect_equivalent(aug, m, f, dir);
+    if (::testing::Test::HasFatalFailure()) return;
+    if (aug.factored_dofs() != before) ++swaps;
+  }
+  if (aug.wait_for_refactorization()) ++swaps;
+  expect_equivalent(aug, m, f, dir);
+  EXPECT_GT(cuts, 0);
+  EXPECT_GT(swaps, 0);
+}
+
+}  // namespace
+}  // namespace incise::test
