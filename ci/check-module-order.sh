@@ -21,10 +21,11 @@ declare -A allowed=(
   [cut]="core mesh"
   [needle]="core mesh material fem linalg solver"
   [delaunay]="core mesh"
+  [fixtures]="core mesh io material fem linalg spectral solver"
   [interactive]="core mesh material fem linalg solver cut needle delaunay"
   [scene]="core mesh io material fem linalg spectral solver cut needle delaunay interactive"
-  [certify]="core mesh io material fem linalg spectral solver cut needle delaunay interactive scene"
-  [cli]="core mesh io material fem linalg spectral solver cut needle delaunay interactive scene certify"
+  [certify]="core mesh io material fem linalg spectral solver cut needle delaunay fixtures interactive scene"
+  [cli]="core mesh io material fem linalg spectral solver cut needle delaunay fixtures interactive scene certify"
 )
 
 bad=0

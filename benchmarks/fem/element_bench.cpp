@@ -13,6 +13,7 @@
 // peak of one core.
 #include <benchmark/benchmark.h>
 #include <incise/fem/elastic_problem.hpp>
+#include <incise/fixtures/deformations.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise_bench/context.hpp>
 
@@ -73,14 +74,11 @@ struct Batch {
 const Batch& batch() {
   static const Batch b = [] {
     Batch out;
-    std::mt19937_64 rng(4242);
+    fixtures::Rng rng(4242);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     while (out.refs.size() < kBatch) {
-      Mat34 z;
-      z << 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1;
-      for (int i = 0; i < 12; ++i) z(i) += 0.2 * u(rng);
-      const fem::TetReference r = fem::make_tet_reference(z);
-      if (r.volume < 0.05) continue;
+      const fem::TetReference r =
+          fem::make_tet_reference(fixtures::random_tetrahedron(rng, 0.2, 0.05));
       Mat34 x, d;
       for (int i = 0; i < 12; ++i) {
         x(i) = 0.05 * u(rng);
@@ -197,11 +195,8 @@ const mesh::MeshData& box() {
 }
 
 VecX box_state(const fem::ElasticProblem& pb) {
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  VecX x(pb.size());
-  for (Eigen::Index i = 0; i < x.size(); ++i) x[i] = 0.002 * u(rng);  // 4% of a cell
-  return x;
+  fixtures::Rng rng(7);
+  return fixtures::random_vector(rng, pb.size(), 0.002);  // 4% of a cell
 }
 
 void assembly_benchmark(benchmark::State& state, const std::string& name) {

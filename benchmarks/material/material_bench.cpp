@@ -4,10 +4,10 @@
 // vector-add baseline measured in this run and % of the nominal FMA peak.
 #include <benchmark/benchmark.h>
 #include <incise/core/flop_count.hpp>
+#include <incise/fixtures/deformations.hpp>
 #include <incise/material/material.hpp>
 #include <incise_bench/context.hpp>
 
-#include <random>
 #include <string>
 #include <vector>
 
@@ -25,14 +25,10 @@ struct Batch {
 const Batch& batch() {
   static const Batch b = [] {
     Batch out;
-    std::mt19937_64 rng(99);
-    std::uniform_real_distribution<double> u(-0.3, 0.3);
+    fixtures::Rng rng(99);
     while (out.c.size() < kBatch) {
-      Mat3 f = Mat3::Identity(), h;
-      for (int i = 0; i < 9; ++i) {
-        f(i) += u(rng);
-        h(i) = u(rng);
-      }
+      const Mat3 f = Mat3::Identity() + fixtures::random_matrix(rng, 0.3);
+      const Mat3 h = fixtures::random_matrix(rng, 0.3);
       if (f.determinant() < 0.2) continue;
       out.c.push_back(f.transpose() * f);
       out.h.push_back(h + h.transpose());

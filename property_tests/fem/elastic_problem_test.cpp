@@ -4,10 +4,10 @@
 /// motions of the deformed shape; lumped mass and gravity totals; fixed-DOF treatment;
 /// inverted elements reported as kInverted with Π = +∞.
 
-#include "../material/derivative_check.hpp"
-
 #include <incise/core/error.hpp>
 #include <incise/fem/elastic_problem.hpp>
+#include <incise/fixtures/deformations.hpp>
+#include <incise/fixtures/derivative_check.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise_test/seed.hpp>
 
@@ -22,6 +22,7 @@ using incise::EvalStatus;
 using incise::VecX;
 using incise::fem::ElasticProblem;
 using incise::fem::FixedDofTreatment;
+using incise::fixtures::random_vector;
 using incise::material::Material;
 
 // Best central difference of the 1e-2…1e-8 sweep: ~1e-9 relative on these smooth sums.
@@ -39,13 +40,6 @@ incise::material::Parameters test_parameters() {
 
 incise::mesh::MeshData small_box(incise::mesh::CubeSplit split = incise::mesh::CubeSplit::kSix) {
   return incise::mesh::make_box(2, 2, 3, 0.2, 0.25, 0.3, split);
-}
-
-VecX random_vector(std::mt19937_64& rng, Eigen::Index n, double scale) {
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  VecX v(n);
-  for (Eigen::Index i = 0; i < n; ++i) v[i] = scale * u(rng);
-  return v;
 }
 
 /// Displacement of a homogeneous deformation F plus a small random field (stays non-inverted).
@@ -97,12 +91,12 @@ TEST_P(ProblemProperty, AssembledEqualsMatrixFreeEqualsFiniteDifferences) {
       // Round-off of g·w: the element forces summed are of size ‖K‖(‖u‖ + h‖d‖), and cancel.
       const double terms =
           10.0 * p.tangent_matrix().norm() * (u.norm() + step * d.norm()) * w.norm();
-      const auto r = incise::test::check_directional_derivative(
+      const auto r = incise::fixtures::check_directional_derivative(
           phi, kd.dot(w), step, scale * w.norm() * 1e-3, g0.norm() * w.norm() + terms);
       EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
       // Taylor order on the whole gradient vector (a contraction can hide the quadratic term).
       std::string rep;
-      const double order = incise::test::vector_taylor_order<VecX>(
+      const double order = incise::fixtures::vector_taylor_order(
           [&](double t) {
             VecX g;
             EXPECT_EQ(p.gradient(u + t * d, g), EvalStatus::kOk);
@@ -134,7 +128,7 @@ TEST_P(ProblemProperty, GradientIsEnergyDerivativeWithLoads) {
     return e;
   };
   const double step = 0.01 * 0.2 / d.lpNorm<Eigen::Infinity>();
-  const auto r = incise::test::check_directional_derivative(
+  const auto r = incise::fixtures::check_directional_derivative(
       phi, g.dot(d), step, 1e-3 * g.norm() * d.norm(), std::abs(e0));
   EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
   EXPECT_GE(r.taylor_order, kMinTaylorOrder) << r.report;

@@ -3,10 +3,9 @@
 /// differences with a step sweep and Taylor order, tangent symmetry, force balance, and the
 /// det F ≤ 0 behaviour.
 
-#include "../material/deformations.hpp"
-#include "../material/derivative_check.hpp"
-
 #include <incise/fem/tet_kernels.hpp>
+#include <incise/fixtures/deformations.hpp>
+#include <incise/fixtures/derivative_check.hpp>
 #include <incise/material/material.hpp>
 #include <incise_test/seed.hpp>
 
@@ -36,16 +35,10 @@ incise::material::Parameters test_parameters() {
   return p;
 }
 
-/// A random, reasonably shaped, positively oriented reference tetrahedron (columns z1..z4).
+/// A random, reasonably shaped, positively oriented reference tetrahedron (columns z1..z4):
+/// corners moved by up to 0.25, volume > 0.05 (the unit corner tetrahedron has 1/6).
 Mat34 random_tet(std::mt19937_64& rng) {
-  Mat34 z;
-  z << 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1;
-  for (;;) {
-    const Mat34 p = z + 0.25 * Mat34::NullaryExpr([&]() {
-                          return std::uniform_real_distribution<double>(-1.0, 1.0)(rng);
-                        });
-    if (incise::fem::make_tet_reference(p).volume > 0.05) return p;
-  }
+  return incise::fixtures::random_tetrahedron(rng, 0.25, 0.05);
 }
 
 /// Nodal displacements realizing the affine map x ↦ F x + t on the reference nodes.
@@ -104,7 +97,7 @@ TEST_P(ElementProperty, ForceIsEnergyGradient_SweepAndTaylor) {
   const Material m = material();
   for_model(m, [&](auto k) {
     using K = decltype(k);
-    for (const auto& def : incise::test::deformation_families(rng)) {
+    for (const auto& def : incise::fixtures::deformation_families(rng)) {
       SCOPED_TRACE(def.family);
       const ElementCase s = make_setup(rng, def.f);
       Mat34 q;
@@ -116,7 +109,7 @@ TEST_P(ElementProperty, ForceIsEnergyGradient_SweepAndTaylor) {
       };
       const double dw = q.cwiseProduct(s.d).sum();
       const double unit = m.lame().mu * s.ref.volume * s.d.norm();
-      const auto r = incise::test::check_directional_derivative(phi, dw, s.step, unit);
+      const auto r = incise::fixtures::check_directional_derivative(phi, dw, s.step, unit);
       EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
       EXPECT_GE(r.taylor_order, kMinTaylorOrder) << r.report;
     }
@@ -128,7 +121,7 @@ TEST_P(ElementProperty, TangentIsForceDerivative_SweepAndTaylor) {
   const Material m = material();
   for_model(m, [&](auto k) {
     using K = decltype(k);
-    for (const auto& def : incise::test::deformation_families(rng)) {
+    for (const auto& def : incise::fixtures::deformation_families(rng)) {
       SCOPED_TRACE(def.family);
       const ElementCase s = make_setup(rng, def.f);
       const Mat34 w = random_direction(rng);  // contraction weight
@@ -153,7 +146,7 @@ TEST_P(ElementProperty, TangentIsForceDerivative_SweepAndTaylor) {
       };
       const double unit =
           scale * w.norm() / std::max(1.0, kt.norm() / (m.lame().mu * s.ref.volume)) + 1e-300;
-      const auto r = incise::test::check_directional_derivative(
+      const auto r = incise::fixtures::check_directional_derivative(
           phi, dq.cwiseProduct(w).sum(), s.step, unit, (q.norm() + m.lame().mu) * w.norm());
       // Forces carry relative round-off ε_eff ≈ ε·κ(F)² (C⁻¹ = F⁻¹F⁻ᵀ); the best central
       // difference then errs by ~ε_eff^(2/3) (balancing h² truncation against ε_eff/h), times a
@@ -171,7 +164,7 @@ TEST_P(ElementProperty, TangentSymmetricForcesBalanced) {
   const Material m = material();
   for_model(m, [&](auto k) {
     using K = decltype(k);
-    for (const auto& def : incise::test::deformation_families(rng)) {
+    for (const auto& def : incise::fixtures::deformation_families(rng)) {
       SCOPED_TRACE(def.family);
       const ElementCase s = make_setup(rng, def.f);
       Mat34 q;

@@ -3,10 +3,9 @@
 /// sweep + Taylor order), invariance, symmetry, stress-free reference, small-strain agreement
 /// with the linear model, closed-form homogeneous states, det F ≤ 0 behaviour, parameters.
 
-#include "deformations.hpp"
-#include "derivative_check.hpp"
-
 #include <incise/core/error.hpp>
+#include <incise/fixtures/deformations.hpp>
+#include <incise/fixtures/derivative_check.hpp>
 #include <incise/material/material.hpp>
 #include <incise_test/seed.hpp>
 
@@ -20,12 +19,13 @@
 namespace {
 
 using incise::Mat3;
+using incise::fixtures::check_directional_derivative;
+using incise::fixtures::deformation_families;
+using incise::fixtures::random_matrix;
+using incise::fixtures::random_rotation;
+using incise::fixtures::random_symmetric;
 using incise::material::Material;
 using incise::material::Parameters;
-using incise::test::deformation_families;
-using incise::test::random_matrix;
-using incise::test::random_rotation;
-using incise::test::random_symmetric;
 
 // Central differences with the best step of the 1e-2…1e-8 sweep reach ~1e-9 relative accuracy
 // for these smooth functions; 1e-6 leaves three digits of margin for near-inversion states.
@@ -81,7 +81,7 @@ TEST_P(MaterialProperty, StressIsTwiceEnergyDerivative_SweepAndTaylor) {
     const double s = 0.1;
     const auto phi = [&](double t) { return m.energy_density(c + t * h); };
     const double dw = 0.5 * m.stress(c).cwiseProduct(h).sum();  // dW = ½ S:H (S = 2∂W/∂C)
-    const auto r = incise::test::check_directional_derivative(phi, dw, s, m.lame().mu * h.norm());
+    const auto r = check_directional_derivative(phi, dw, s, m.lame().mu * h.norm());
     EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
     EXPECT_GE(r.taylor_order, kMinTaylorOrder) << r.report;
   }
@@ -101,7 +101,7 @@ TEST_P(MaterialProperty, StressDerivativeMatchesStress_SweepAndTaylor) {
     // Unit: stress derivative magnitude; near inversion C⁻¹ terms scale like 1/λ_min(C)².
     const double unit = m.lame().mu * h.norm() / std::pow(std::min(1.0, min_eig_c(d.f)), 2);
     const double terms = (m.stress(c).norm() + m.lame().mu * c.norm()) * w.norm();
-    const auto r = incise::test::check_directional_derivative(phi, ds, s, unit, terms);
+    const auto r = check_directional_derivative(phi, ds, s, unit, terms);
     EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
     EXPECT_GE(r.taylor_order, kMinTaylorOrder) << r.report;
   }

@@ -1,8 +1,10 @@
 /// Cantilever extremes (issue 4 verification items 2 and 6; DESIGN §3 "Extremes"): own weight vs
 /// beam theory, E over seven decades (iteration counts scale-invariant), ν → 0.5 (locking made
-/// visible, not hidden), loads large enough to invert elements (status, no NaN). Geometry and
-/// clamp as Table 3.1 (verification/papers/nienhuys2003_table3_1/cantilever.hpp).
-#include "cantilever.hpp"
+/// visible, not hidden), loads large enough to invert elements (status, no NaN). Geometry,
+/// clamp, beam-theory references and solve: the Table 3.1 cantilever of
+/// <incise/fixtures/cantilever.hpp>.
+#include <incise/fixtures/cantilever.hpp>
+#include <incise/fixtures/convergence.hpp>
 
 #include <gtest/gtest.h>
 
@@ -12,18 +14,21 @@
 namespace incise::verify {
 namespace {
 
+using fixtures::CantileverResult;
+using fixtures::CantileverSetup;
+using fixtures::Richardson;
+using fixtures::solve_cantilever;
+
 bool slow_run() {
   const char* v = std::getenv("INCISE_CANTILEVER_SLOW");
   return v && std::string(v) == "1";
 }
 
-// Own weight: uniform load q = ρ g h d per length. Euler–Bernoulli q l⁴/(8EI) = 3ρgl⁴/(2Eh²);
-// Timoshenko adds q l²/(2κGA) = ρ g l²/(2κG), κ = 5/6, G = E/2 (ν = 0).
+// Own weight ρ g: beam-theory tip deflections of fixtures::own_weight_euler_bernoulli and
+// own_weight_timoshenko.
 constexpr double kRho = 10.0, kG = 9.8;
-constexpr double kWeightEb =
-    3.0 * kRho * kG * kLength * kLength * kLength * kLength / (2.0 * kYoung * kHeight * kHeight);
-constexpr double kWeightTimoshenko =
-    kWeightEb + kRho * kG * kLength * kLength / (2.0 * 5.0 / 6.0 * kYoung / 2.0);
+constexpr double kWeightEb = fixtures::own_weight_euler_bernoulli(kRho, kG);
+constexpr double kWeightTimoshenko = fixtures::own_weight_timoshenko(kRho, kG);
 
 TEST(CantileverOwnWeight, ConvergesFromBelowToTimoshenko) {
   const std::vector<int> meshes =
@@ -53,9 +58,9 @@ TEST(CantileverOwnWeight, ConvergesFromBelowToTimoshenko) {
   }
   if (!slow_run()) return;
   const std::size_t k = res.size();
-  const Richardson rich =
-      richardson(1.0 / res[k - 3].nx, res[k - 3].avg_deflection, 1.0 / res[k - 2].nx,
-                 res[k - 2].avg_deflection, 1.0 / res[k - 1].nx, res[k - 1].avg_deflection);
+  const Richardson rich = fixtures::richardson(1.0 / res[k - 3].nx, res[k - 3].avg_deflection,
+                                               1.0 / res[k - 2].nx, res[k - 2].avg_deflection,
+                                               1.0 / res[k - 1].nx, res[k - 1].avg_deflection);
   ASSERT_TRUE(rich.ok);
   std::printf("order %.3f, Richardson limit %.5e m (%+.3f%% from Timoshenko)\n", rich.order,
               rich.limit, 100 * (rich.limit - kWeightTimoshenko) / kWeightTimoshenko);
@@ -106,8 +111,8 @@ TEST(CantileverExtremes, NearIncompressibleLockingIsVisible) {
     s.poisson = nu;
     s.max_iterations = 30000;
     const CantileverResult r = solve_cantilever(s);
-    const double g = kYoung / (2.0 * (1.0 + nu));
-    const double timo = kEulerBernoulli + kLoad * kLength / (5.0 / 6.0 * g * kHeight * kDepth);
+    const double timo = fixtures::timoshenko_tip_deflection(fixtures::kCantilever.tip_load,
+                                                            fixtures::kCantilever.young, nu);
     const double ratio = r.avg_deflection / timo;
     std::printf("nu = %.3f: %-14s %6ld it, tip/Timoshenko = %.4f\n", nu,
                 solver::to_string(r.reason), r.iterations, ratio);

@@ -3,7 +3,8 @@
 /// from the spectrum (FFTW) of an undamped explicit SS22 trajectory on the coarse mesh, against
 /// Euler–Bernoulli beam theory f₁ = (β₁²/2π)·√(EI/(ρA l⁴)), β₁ = 1.8751 (bending in h, the
 /// softer direction; E = 1e6 Pa, ν = 0, ρ = 1000 kg/m³).
-#include "cantilever.hpp"
+#include <incise/fixtures/cantilever.hpp>
+#include <incise/fixtures/convergence.hpp>
 
 #include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/solver/eigen_estimates.hpp>
@@ -16,17 +17,14 @@
 namespace incise::verify {
 namespace {
 
+using fixtures::CantileverSetup;
+using fixtures::Richardson;
+
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kRhoBeam = 1000.0;
 
-double euler_bernoulli_f1() {
-  const double beta = 1.87510407;
-  const double ei_over_rho_a = kYoung * kHeight * kHeight / 12.0 / kRhoBeam;  // EI/(ρA), I = dh³/12
-  return beta * beta / (2.0 * kPi) * std::sqrt(ei_over_rho_a) / (kLength * kLength);
-}
-
 TEST(CantileverFrequency, ConvergesFromAboveTowardsBeamTheory) {
-  const double f_eb = euler_bernoulli_f1();
+  const double f_eb = fixtures::euler_bernoulli_first_frequency(kRhoBeam);
   std::printf("Euler-Bernoulli first bending frequency %.5f Hz\n", f_eb);
   double prev = 1e300;
   std::vector<double> f;
@@ -35,9 +33,8 @@ TEST(CantileverFrequency, ConvergesFromAboveTowardsBeamTheory) {
     s.nx = nx;
     s.ny = s.nz = nx / 4;
     s.density = kRhoBeam;
-    mesh::MeshData m;
-    std::vector<Index> tip;
-    auto p = make_cantilever(s, m, tip);
+    const auto c = fixtures::make_cantilever(s);
+    fem::ElasticProblem* p = c.problem.get();
     const solver::EigenEstimate e =
         solver::smallest_eigenvalue(*p, VecX::Zero(p->size()), solver::EigenOptions{1e-10, 500});
     ASSERT_TRUE(e.converged()) << solver::to_string(e.reason);
@@ -52,7 +49,7 @@ TEST(CantileverFrequency, ConvergesFromAboveTowardsBeamTheory) {
   // Richardson limit of the three meshes (h ∝ 1/nx) against beam theory. Shear and rotary
   // inertia (Timoshenko) lower the 3D frequency by ≈ 1 % for l/h = 6; lumped mass and the
   // pre-asymptotic coarse meshes (order ≈ 1.4 on Table 3.1's deflections) leave a few %: 5 %.
-  const Richardson r = richardson(1.0 / 16, -f[0], 1.0 / 24, -f[1], 1.0 / 32, -f[2]);
+  const Richardson r = fixtures::richardson(1.0 / 16, -f[0], 1.0 / 24, -f[1], 1.0 / 32, -f[2]);
   if (r.ok) {
     std::printf("Richardson limit %.5f Hz (%+.2f%%), order %.2f\n", -r.limit,
                 100 * (-r.limit - f_eb) / f_eb, r.order);
@@ -66,9 +63,8 @@ TEST(CantileverFrequency, ConvergesFromAboveTowardsBeamTheory) {
 TEST(CantileverFrequency, SpectrumOfExplicitDynamicsMatchesEigenvalue) {
   CantileverSetup s;
   s.density = kRhoBeam;
-  mesh::MeshData m;
-  std::vector<Index> tip;
-  auto p = make_cantilever(s, m, tip);
+  const auto c = fixtures::make_cantilever(s);
+  fem::ElasticProblem* p = c.problem.get();
   const VecX zero = VecX::Zero(p->size());
   const solver::EigenEstimate small = solver::smallest_eigenvalue(*p, zero);
   const solver::EigenEstimate big = solver::largest_eigenvalue(*p, zero);

@@ -4,7 +4,7 @@
 /// each ε (iterations, counted flops, seconds). One traced run per (mesh, solver) gives every ε
 /// row: the row for ε is the first iterate with ‖r‖ ≤ ε‖f_ex‖. Written as CSV next to the binary.
 /// Default: mesh 16×4×4; `slow` (INCISE_TRADEOFF_ALL=1) adds 24×6×6 and 32×8×8.
-#include "cantilever.hpp"
+#include <incise/fixtures/cantilever.hpp>
 
 #include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/solver/eigen_estimates.hpp>
@@ -23,6 +23,8 @@
 
 namespace incise::verify {
 namespace {
+
+using fixtures::CantileverSetup;
 
 struct Sample {
   long iteration;
@@ -47,10 +49,10 @@ TEST(Tradeoff, ToleranceVsErrorAndCost) {
     s.nx = nx;
     s.ny = s.nz = nx / 4;
     s.density = 1.0;  // masses for dynamic relaxation only; no gravity load
-    mesh::MeshData m;
-    std::vector<Index> tip;
-    auto prob = make_cantilever(s, m, tip);
-    fem::ElasticProblem& p = *prob;
+    const fixtures::CantileverProblem c = fixtures::make_cantilever(s);
+    const mesh::MeshData& m = c.body.mesh;
+    const std::vector<Index>& tip = c.body.tip;
+    fem::ElasticProblem& p = *c.problem;
     const double fex = p.external_force_norm();
     auto tip_of = [&](const VecX& u) {
       double t = 0.0;

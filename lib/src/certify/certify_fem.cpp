@@ -9,6 +9,7 @@
 
 #include <incise/core/error.hpp>
 #include <incise/fem/elastic_problem.hpp>
+#include <incise/fixtures/deformations.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/scene/scene_builder.hpp>
@@ -25,14 +26,12 @@ Measurement measure_patch_test(const CertifyContext& /*ctx*/) {
   ReportTable t{"Affine displacement u = A x on a 3x3x3 box (six split)",
                 {"material", "max interior |g| (N)", "max |g| (N)", "ratio"},
                 {}};
-  std::mt19937_64 rng(20031107);
-  std::uniform_real_distribution<double> uni(-0.05, 0.05);
+  fixtures::Rng rng(20031107);
   const auto m = mesh::make_box(3, 3, 3, 1, 1, 1, mesh::CubeSplit::kSix);
   double worst = 0;
   for (const auto& name : material::registered_material_names()) {
     fem::ElasticProblem p(m, scene::make_material(table_4_1_material(name)));
-    Mat3 a;
-    for (int i = 0; i < 9; ++i) a(i / 3, i % 3) = uni(rng);
+    const Mat3 a = fixtures::random_matrix(rng, 0.05);
     VecX u(p.size());
     for (Index i = 0; i < m.num_points(); ++i) u.segment<3>(3 * i) = a * m.points.col(i);
     VecX g;

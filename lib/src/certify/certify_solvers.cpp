@@ -6,14 +6,16 @@
 //                                (thesis §4.1-4.5, the speed/accuracy trade)
 //   augmented_cut_vs_cut_first   the interactive cut updated by the augmented solver (Yeung,
 //                                Crouch & Pothen 2016 §3) equals cutting first and solving by CG
-// The solves go through the scene layer (build_scene, run_scene), as `incise run` does.
+// The solves go through the scene layer (build_scene, run_scene), as `incise run` does; the
+// cantilever scene is built from the Table 3.1 fixture (<incise/fixtures/cantilever.hpp>).
 
+#include <incise/fixtures/cantilever.hpp>
 #include <incise/scene/scene_builder.hpp>
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
 
 #include <algorithm>
-#include <cmath>
+#include <iterator>
 #include <limits>
 
 #include "certify_checks.hpp"
@@ -22,17 +24,19 @@ namespace incise::certify::detail {
 
 namespace {
 
-/// The thesis §3.3 cantilever (Table 3.1) as a scene: 4n x n x n cubes, linear, one end fixed,
-/// 3 N on the tip nodes, tip probe.
+/// The thesis §3.3 cantilever (fixtures::kCantilever) as a scene: 4n x n x n cubes, clamped at
+/// x = 0, the tip load split equally over the tip nodes (fixtures::TipLoad::kEqualPerNode, as
+/// in reference_data/scenes/cantilever.json), tip probe.
 scene::SceneSpec cantilever_spec(int n, double tolerance) {
+  const fixtures::CantileverConstants& c = fixtures::kCantilever;
   scene::SceneSpec s;
   s.file = "<certify cantilever>";
   s.mesh.source = scene::MeshSpec::Source::kBox;
   s.mesh.nx = 4 * n, s.mesh.ny = n, s.mesh.nz = n;
-  s.mesh.lx = 1.2, s.mesh.ly = 0.2, s.mesh.lz = 0.3;
-  s.material.model = "linear";
-  s.material.E = 1e6;
-  s.material.nu = 0.0;
+  s.mesh.lx = c.length, s.mesh.ly = c.height, s.mesh.lz = c.depth;
+  s.material.model = c.material;
+  s.material.E = c.young;
+  s.material.nu = c.poisson;
   scene::Region fixed;
   fixed.kind = scene::Region::Kind::kPlane;
   fixed.axis = 0;
@@ -41,8 +45,8 @@ scene::SceneSpec cantilever_spec(int n, double tolerance) {
   scene::LoadSpec load;
   load.kind = scene::LoadSpec::Kind::kNodal;
   load.region = fixed;
-  load.region.value = 1.2;
-  load.vector = Vec3(0, -3, 0);
+  load.region.value = c.length;
+  load.vector = Vec3(0, -c.tip_load, 0);
   s.loads.push_back(load);
   s.solver.tolerance = tolerance;
   s.solver.max_iterations = 100000;
@@ -80,14 +84,10 @@ scene::SceneSpec cylinder_spec(const std::string& model, bool quick) {
 
 Measurement measure_cantilever(const CertifyContext& ctx) {
   Measurement r;
-  const double y_exact = 4 * 3.0 / (1e6 * 0.3) * std::pow(1.2 / 0.2, 3);  // 8.64e-3 m
-  // Published reference values, thesis Table 3.1 (avg error %, iterations) for n×4 cubes.
-  struct T {
-    int n;
-    double avg_error, iterations;
-  };
-  std::vector<T> thesis = {
-      {4, 29.0, 377}, {6, 15.1, 561}, {8, 8.6, 723}, {10, 5.2, 882}, {12, 3.2, 1044}};
+  const double y_exact = fixtures::kEulerBernoulli;  // 8.64e-3 m
+  // Published reference values, thesis Table 3.1 (avg error %, iterations) for 4n x n x n cubes.
+  std::vector<fixtures::Table3_1Row> thesis(std::begin(fixtures::kTable3_1),
+                                            std::end(fixtures::kTable3_1));
   if (ctx.quick) thesis.resize(2);
   ReportTable t{"Tip deflection error vs Euler-Bernoulli y = 4F/(Ed)(l/h)^3 = 8.64e-3 m",
                 {"mesh (l x h x d)", "nodes", "CG iterations", "thesis iterations",
@@ -97,8 +97,8 @@ Measurement measure_cantilever(const CertifyContext& ctx) {
   std::vector<Series> conv;
   double worst = -1e300, prev_err = 1e300;
   bool ok = true;
-  for (const T& row : thesis) {
-    scene::BuiltScene b = scene::build_scene(cantilever_spec(row.n, 1e-8));
+  for (const fixtures::Table3_1Row& row : thesis) {
+    scene::BuiltScene b = scene::build_scene(cantilever_spec(row.n, fixtures::kCantilever.epsilon));
     const scene::SceneRunResult res = scene::run_scene(b);
     if (!res.report.converged()) {
       ok = false;
@@ -109,14 +109,14 @@ Measurement measure_cantilever(const CertifyContext& ctx) {
     const double err = 100 * (1 - y / y_exact);
     ok = ok && err > 0 && err < prev_err;
     prev_err = err;
-    worst = std::max(worst, err - row.avg_error);
+    worst = std::max(worst, err - row.avg_error_pct);
     const std::string mesh =
         std::to_string(4 * row.n) + " x " + std::to_string(row.n) + " x " + std::to_string(row.n);
-    t.rows.push_back({mesh, std::to_string(b.mesh.num_points()),
-                      std::to_string(res.report.iterations), fmt(row.iterations), fmt(y), fmt(err),
-                      fmt(row.avg_error)});
+    t.rows.push_back(
+        {mesh, std::to_string(b.mesh.num_points()), std::to_string(res.report.iterations),
+         fmt(static_cast<double>(row.iterations)), fmt(y), fmt(err), fmt(row.avg_error_pct)});
     ours.x.push_back(b.mesh.num_points()), ours.y.push_back(err);
-    ref.x.push_back(b.mesh.num_points()), ref.y.push_back(row.avg_error);
+    ref.x.push_back(b.mesh.num_points()), ref.y.push_back(row.avg_error_pct);
     Series c{mesh, {}, {}, {}, false};
     for (std::size_t i = 0; i < res.report.residual_history.size(); ++i) {
       c.x.push_back(static_cast<double>(i));

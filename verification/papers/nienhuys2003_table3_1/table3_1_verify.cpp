@@ -1,31 +1,31 @@
 /// Thesis §3.3, Table 3.1: tip deflection of the cantilever by linear FEM + matrix-free CG
-/// (‖r‖ < 1e-8‖f_ex‖) on the five structured meshes, beside the published numbers.
+/// (‖r‖ < 1e-8‖f_ex‖) on the five structured meshes, beside the published numbers. The beam,
+/// its references, the published table and the solve: <incise/fixtures/cantilever.hpp>.
 /// Default run: the three coarse meshes (425, 1225, 2673 nodes). INCISE_TABLE3_1_ALL=1 (set by
 /// the `slow`-labelled ctest entry) adds the 4961- and 8281-node meshes of the table and two
 /// finer ones (56×14×14, 64×16×16) for the asymptotic order and the Richardson limit.
-#include "cantilever.hpp"
+#include <incise/fixtures/cantilever.hpp>
+#include <incise/fixtures/convergence.hpp>
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
 #include <vector>
 
 namespace incise::verify {
 namespace {
 
-struct Published {
-  int nx;
-  Index nodes;
-  long iterations;
-  double avg_error_pct, max_error_pct;
-};
-// Table 3.1 of the thesis (reference values, errors relative to Euler–Bernoulli 8.64e-3 m).
-constexpr Published kTable31[] = {{16, 425, 377, 29.0, 29.3}, {24, 1225, 561, 15.1, 15.3},
-                                  {32, 2673, 723, 8.6, 8.8},  {40, 4961, 882, 5.2, 5.3},
-                                  {48, 8181, 1044, 3.2, 3.3},  // 8181: sic, 49·13·13 = 8281
-                                  {56, 0, 0, 0.0, 0.0},        // beyond the table
-                                  {64, 0, 0, 0.0, 0.0}};
+using fixtures::CantileverResult;
+using fixtures::kEulerBernoulli;
+using fixtures::kTimoshenko;
+using fixtures::Richardson;
+
+// The meshes nx × nx/4 × nx/4: Table 3.1's five (fixtures::kTable3_1, n = nx/4), then two
+// beyond the table.
+constexpr int kMeshes[] = {16, 24, 32, 40, 48, 56, 64};
+constexpr std::size_t kPublishedRows = std::size(fixtures::kTable3_1);
 
 bool all_meshes() {
   const char* v = std::getenv("INCISE_TABLE3_1_ALL");
@@ -35,28 +35,32 @@ bool all_meshes() {
 TEST(CantileverTable3_1, ConvergesToTimoshenkoFromBelow) {
   const int count = all_meshes() ? 7 : 3;
   std::vector<CantileverResult> res;
-  std::printf("Table 3.1 (thesis §3.3): l×h×d = 1.2×0.2×0.3 m, E = 1e6 Pa, nu = 0, F = 3 N\n");
+  const fixtures::CantileverConstants& c = fixtures::kCantilever;
+  std::printf("Table 3.1 (thesis §3.3): l×h×d = %g×%g×%g m, E = %g Pa, nu = %g, F = %g N\n",
+              c.length, c.height, c.depth, c.young, c.poisson, c.tip_load);
   std::printf("Euler-Bernoulli %.4e m, Timoshenko %.4e m; errors relative to Euler-Bernoulli\n",
               kEulerBernoulli, kTimoshenko);
   std::printf("%-12s %6s | %6s %8s %8s | %6s %8s %8s %8s | %8s\n", "elements", "nodes", "it(th)",
               "avg%(th)", "max%(th)", "it", "avg%", "max%", "min%", "vsTimo%");
   for (int i = 0; i < count; ++i) {
-    const Published& t = kTable31[i];
-    const CantileverResult r = solve_cantilever(t.nx, t.nx / 4, t.nx / 4);
+    const int nx = kMeshes[i];
+    const CantileverResult r = fixtures::solve_cantilever(nx, nx / 4, nx / 4);
     ASSERT_EQ(r.reason, solver::StopReason::kConverged) << solver::to_string(r.reason);
     // Same meshes as the thesis ((nx+1)(ny+1)(nz+1) nodes; the thesis prints 8181 for 48×12×12).
-    ASSERT_EQ(r.nodes, (t.nx + 1) * (t.nx / 4 + 1) * (t.nx / 4 + 1));
+    ASSERT_EQ(r.nodes, (nx + 1) * (nx / 4 + 1) * (nx / 4 + 1));
     res.push_back(r);
     const double avg = 100 * (kEulerBernoulli - r.avg_deflection) / kEulerBernoulli;
     // Largest error = smallest deflection and vice versa.
     const double mx = 100 * (kEulerBernoulli - r.min_deflection) / kEulerBernoulli;
     const double mn = 100 * (kEulerBernoulli - r.max_deflection) / kEulerBernoulli;
-    if (t.nodes > 0)
-      std::printf("%3dx%2dx%2d   %6d | %6ld %8.1f %8.1f |", t.nx, t.nx / 4, t.nx / 4, r.nodes,
+    if (static_cast<std::size_t>(i) < kPublishedRows) {
+      const fixtures::Table3_1Row& t = fixtures::kTable3_1[i];
+      ASSERT_EQ(4 * t.n, nx);
+      std::printf("%3dx%2dx%2d   %6d | %6ld %8.1f %8.1f |", nx, nx / 4, nx / 4, r.nodes,
                   t.iterations, t.avg_error_pct, t.max_error_pct);
-    else
-      std::printf("%3dx%2dx%2d   %6d | %6s %8s %8s |", t.nx, t.nx / 4, t.nx / 4, r.nodes, "-", "-",
-                  "-");
+    } else {
+      std::printf("%3dx%2dx%2d   %6d | %6s %8s %8s |", nx, nx / 4, nx / 4, r.nodes, "-", "-", "-");
+    }
     std::printf(" %6ld %8.2f %8.2f %8.2f | %8.2f\n", r.iterations, avg, mx, mn,
                 100 * (kTimoshenko - r.avg_deflection) / kTimoshenko);
   }
@@ -75,9 +79,9 @@ TEST(CantileverTable3_1, ConvergesToTimoshenkoFromBelow) {
   }
   // Observed order and Richardson extrapolation from the three finest meshes run, with h ∝ 1/nx.
   const std::size_t k = res.size();
-  const Richardson rich =
-      richardson(1.0 / res[k - 3].nx, res[k - 3].avg_deflection, 1.0 / res[k - 2].nx,
-                 res[k - 2].avg_deflection, 1.0 / res[k - 1].nx, res[k - 1].avg_deflection);
+  const Richardson rich = fixtures::richardson(1.0 / res[k - 3].nx, res[k - 3].avg_deflection,
+                                               1.0 / res[k - 2].nx, res[k - 2].avg_deflection,
+                                               1.0 / res[k - 1].nx, res[k - 1].avg_deflection);
   ASSERT_TRUE(rich.ok);
   std::printf(
       "observed order p = %.3f from nx = %d, %d, %d; Richardson limit %.5e m (%+.3f%% "
@@ -91,9 +95,9 @@ TEST(CantileverTable3_1, ConvergesToTimoshenkoFromBelow) {
   // exactly quadratic in h while δ_h carries large higher-order terms when c h² is not small
   // (c h² ≈ 0.3 at nx = 16). That is why the displacement order is pre-asymptotic (≈ 1.4 on
   // 16/24/32) while the compliance order is already ≈ 2 there.
-  const Richardson flex = richardson(1.0 / res[k - 3].nx, 1.0 / res[k - 3].avg_deflection,
-                                     1.0 / res[k - 2].nx, 1.0 / res[k - 2].avg_deflection,
-                                     1.0 / res[k - 1].nx, 1.0 / res[k - 1].avg_deflection);
+  const Richardson flex = fixtures::richardson(
+      1.0 / res[k - 3].nx, 1.0 / res[k - 3].avg_deflection, 1.0 / res[k - 2].nx,
+      1.0 / res[k - 2].avg_deflection, 1.0 / res[k - 1].nx, 1.0 / res[k - 1].avg_deflection);
   ASSERT_TRUE(flex.ok);
   std::printf(
       "compliance 1/delta: observed order p = %.3f; Richardson limit delta = %.5e m "
