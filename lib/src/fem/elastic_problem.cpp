@@ -1,6 +1,7 @@
 #include <incise/core/error.hpp>
 #include <incise/core/flop_count.hpp>
 #include <incise/fem/elastic_problem.hpp>
+#include <incise/mesh/tet_faces.hpp>
 
 #include <algorithm>
 #include <array>
@@ -355,10 +356,9 @@ double ElasticProblem::add_traction_on_plane(int axis, double value, const Vec3&
   INCISE_CHECK(traction.allFinite(), "add_traction_on_plane: traction must be finite");
   // Faces with all three vertices on the plane; a face shared by two tetrahedra is interior.
   std::map<std::array<Index, 3>, int> faces;
-  static constexpr int kFaceOfTet[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
   auto on_plane = [&](Index v) { return std::abs(points_(axis, v) - value) <= tolerance; };
   for (Index e = 0; e < num_elements(); ++e)
-    for (const auto& f : kFaceOfTet) {
+    for (const auto& f : mesh::kTetFace) {
       std::array<Index, 3> tri{cells_(f[0], e), cells_(f[1], e), cells_(f[2], e)};
       if (!on_plane(tri[0]) || !on_plane(tri[1]) || !on_plane(tri[2])) continue;
       std::sort(tri.begin(), tri.end());
