@@ -275,23 +275,16 @@ BuiltScene build_scene(const SceneSpec& spec) {
         const auto sel = select_nodes(b.mesh, l.region);
         std::vector<char> in(static_cast<std::size_t>(n), 0);
         for (Index i : sel) in[i] = 1;
-        int used = 0;
-        for (Eigen::Index f = 0; f < bfaces.cols(); ++f) {
-          if (!(in[bfaces(0, f)] && in[bfaces(1, f)] && in[bfaces(2, f)])) continue;
-          const Vec3 a = b.mesh.points.col(bfaces(0, f));
-          const double area = 0.5 * (b.mesh.points.col(bfaces(1, f)) - a)
-                                        .cross(b.mesh.points.col(bfaces(2, f)) - a)
-                                        .norm();
-          // Consistent load of a constant traction on a linear triangle: t·A/3 per vertex.
-          for (int k = 0; k < 3; ++k)
-            b.external_force.segment<3>(3 * bfaces(k, f)) += l.vector * area / 3.0;
-          ++used;
-        }
-        if (used == 0)
+        std::vector<Eigen::Index> loaded;  // boundary triangles with all 3 vertices inside
+        for (Eigen::Index f = 0; f < bfaces.cols(); ++f)
+          if (in[bfaces(0, f)] && in[bfaces(1, f)] && in[bfaces(2, f)]) loaded.push_back(f);
+        if (loaded.empty())
           region_error(spec, l.region.path,
                        "region contains no boundary triangle (all 3 vertices inside) for the "
                        "surface load",
                        b.mesh);
+        fem::add_surface_traction(b.mesh.points, bfaces(Eigen::all, loaded), l.vector,
+                                  b.external_force);
         break;
       }
     }
