@@ -477,9 +477,9 @@ TEST(CutRobustness, CapAndSpindleRecipesRemoveSingleFlatElements) {
       for (int j = 0; j < 4 && flat_element < 0; ++j) {
         const Index d = m.element(e)[static_cast<size_t>(j)];
         if (m.on_boundary(d) || m.neighbor(e, j) < 0) continue;  // interior d, interior face
-        const Index ia = m.element(e)[static_cast<size_t>(kTetFace[j][0])];
-        const Index ib = m.element(e)[static_cast<size_t>(kTetFace[j][1])];
-        const Index ic = m.element(e)[static_cast<size_t>(kTetFace[j][2])];
+        const Index ia = m.element(e)[static_cast<size_t>(mesh::kTetFace[j][0])];
+        const Index ib = m.element(e)[static_cast<size_t>(mesh::kTetFace[j][1])];
+        const Index ic = m.element(e)[static_cast<size_t>(mesh::kTetFace[j][2])];
         const Vec3 a = m.reference(ia), b = m.reference(ib), c = m.reference(ic);
         Vec3 n = (b - a).cross(c - a).normalized();
         if (n.dot(m.reference(d) - a) < 0) n = -n;  // towards d: inside e

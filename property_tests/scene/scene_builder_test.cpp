@@ -90,22 +90,6 @@ TEST(SceneBuilder, SurfaceTractionIntegratesToTractionTimesArea) {
   EXPECT_NEAR(fz / (-100 * 1.2 * 0.2), 1.0, kSumTol);
 }
 
-TEST(SceneBuilder, BoundaryFacesCoverTheBoxSurface) {
-  const auto b = build(cantilever());
-  const auto f = incise::scene::boundary_faces(b.mesh);
-  double area = 0;
-  Eigen::Vector3d flux = Eigen::Vector3d::Zero();  // Σ outward area vectors of a closed surface = 0
-  for (Eigen::Index k = 0; k < f.cols(); ++k) {
-    const Eigen::Vector3d a = b.mesh.points.col(f(0, k));
-    const Eigen::Vector3d n =
-        0.5 * (b.mesh.points.col(f(1, k)) - a).cross(b.mesh.points.col(f(2, k)) - a);
-    area += n.norm();
-    flux += n;
-  }
-  EXPECT_NEAR(area, 2 * (1.2 * 0.2 + 1.2 * 0.3 + 0.2 * 0.3), kSumTol);
-  EXPECT_LT(flux.norm(), kSumTol);
-}
-
 TEST(SceneBuilder, ScalpelSweepTriangles) {
   Json j = cantilever();
   j["tools"] = {{{"type", "scalpel"},

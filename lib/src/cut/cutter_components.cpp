@@ -149,7 +149,7 @@ bool Cutter::local_component_check(const std::vector<std::pair<Index, Index>>& s
       while (j < 4 && mesh_.neighbor(e, j) >= 0) ++j;
       if (j == 4) continue;
       for (int k = 0; k < 3; ++k) {
-        const Index v = mesh_.element(e)[static_cast<size_t>(kTetFace[j][k])];
+        const Index v = mesh_.element(e)[static_cast<size_t>(mesh::kTetFace[j][k])];
         if (!mesh_.fixed(v)) r.fixed_nodes.push_back(v);
         mesh_.set_fixed(v, true);
       }
@@ -195,7 +195,7 @@ void Cutter::check_components(CutStepReport& r) {
     ++r.free_components;
     if (options_.free_components == FreeComponentPolicy::kFixOnFace && face_e >= 0) {
       for (int k = 0; k < 3; ++k) {
-        const Index v = mesh_.element(face_e)[static_cast<size_t>(kTetFace[face_j][k])];
+        const Index v = mesh_.element(face_e)[static_cast<size_t>(mesh::kTetFace[face_j][k])];
         if (!mesh_.fixed(v)) r.fixed_nodes.push_back(v);
         mesh_.set_fixed(v, true);
       }

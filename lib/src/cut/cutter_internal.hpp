@@ -18,13 +18,13 @@ namespace incise::cut {
 
 namespace detail {
 
-/// Face j of element t (nodes kTetFace[j]) with its node indices sorted ascending; when
+/// Face j of element t (nodes mesh::kTetFace[j]) with its node indices sorted ascending; when
 /// `parity` is given it receives the parity (0 even, 1 odd) of the sorting permutation, i.e.
-/// the orientation of kTetFace[j] relative to the sorted order.
+/// the orientation of mesh::kTetFace[j] relative to the sorted order.
 inline std::array<Index, 3> sorted_face(const Tet& t, int j, int* parity = nullptr) {
-  std::array<Index, 3> f{t[static_cast<size_t>(kTetFace[j][0])],
-                         t[static_cast<size_t>(kTetFace[j][1])],
-                         t[static_cast<size_t>(kTetFace[j][2])]};
+  std::array<Index, 3> f{t[static_cast<size_t>(mesh::kTetFace[j][0])],
+                         t[static_cast<size_t>(mesh::kTetFace[j][1])],
+                         t[static_cast<size_t>(mesh::kTetFace[j][2])]};
   int p = 0;
   for (int pass = 0; pass < 2; ++pass) {
     for (int i = 0; i < 2 - pass; ++i) {

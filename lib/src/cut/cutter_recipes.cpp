@@ -281,7 +281,7 @@ bool Cutter::try_recipe(Index e, CutStepReport& r) {
   auto cap = [&](int apex) {
     const Index d = t[static_cast<size_t>(apex)];
     Index f3[3];
-    for (int k = 0; k < 3; ++k) f3[k] = t[static_cast<size_t>(kTetFace[apex][k])];
+    for (int k = 0; k < 3; ++k) f3[k] = t[static_cast<size_t>(mesh::kTetFace[apex][k])];
     std::vector<Index> old;
     for (Index f : mesh_.star(f3[0])) {
       if (has(mesh_.element(f), f3[1]) && has(mesh_.element(f), f3[2])) old.push_back(f);

@@ -61,9 +61,9 @@ bool Cutter::snap_node(Index v, const Vec3& o, const Vec3& n, double scale, CutS
       const int lv = mesh_.local_index(e, v);
       for (int j = 0; j < 4; ++j) {
         if (j == lv || mesh_.neighbor(e, j) >= 0) continue;
-        const Vec3 a = mesh_.deformed(t[static_cast<size_t>(kTetFace[j][0])]);
-        const Vec3 b = mesh_.deformed(t[static_cast<size_t>(kTetFace[j][1])]);
-        const Vec3 c = mesh_.deformed(t[static_cast<size_t>(kTetFace[j][2])]);
+        const Vec3 a = mesh_.deformed(t[static_cast<size_t>(mesh::kTetFace[j][0])]);
+        const Vec3 b = mesh_.deformed(t[static_cast<size_t>(mesh::kTetFace[j][1])]);
+        const Vec3 c = mesh_.deformed(t[static_cast<size_t>(mesh::kTetFace[j][2])]);
         Vec3 nf = (b - a).cross(c - a);
         const double area2 = nf.norm();
         if (!(area2 > 0)) continue;
@@ -140,7 +140,7 @@ void Cutter::snap(const Vec3 (&tri)[3], const std::vector<std::pair<Index, int>>
   std::vector<Index> nodes;
   for (const auto& [e, j] : faces)
     for (int k = 0; k < 3; ++k)
-      nodes.push_back(mesh_.element(e)[static_cast<size_t>(kTetFace[j][k])]);
+      nodes.push_back(mesh_.element(e)[static_cast<size_t>(mesh::kTetFace[j][k])]);
   std::sort(nodes.begin(), nodes.end());
   nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
   const double scale =

@@ -1,4 +1,5 @@
 #include <incise/cut/predicates.hpp>
+#include <incise/mesh/tet_faces.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -64,7 +65,6 @@ bool barycentric(const Vec3& p, const Vec3 (&t)[4], double (&lambda)[4]) {
 
 bool triangle_meets_tetrahedron(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3 (&t)[4]) {
   static constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-  static constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   for (const auto& e : kEdges) {
     if (intersect_segment_triangle(t[e[0]], t[e[1]], a, b, c).hit) return true;
   }
@@ -72,7 +72,7 @@ bool triangle_meets_tetrahedron(const Vec3& a, const Vec3& b, const Vec3& c, con
   for (int i = 0; i < 3; ++i) {
     const Vec3& p = *tri[i];
     const Vec3& q = *tri[(i + 1) % 3];
-    for (const auto& f : kFaces) {
+    for (const auto& f : mesh::kTetFace) {
       if (intersect_segment_triangle(p, q, t[f[0]], t[f[1]], t[f[2]]).hit) return true;
     }
   }

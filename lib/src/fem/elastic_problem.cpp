@@ -1,13 +1,12 @@
 #include <incise/core/error.hpp>
 #include <incise/core/flop_count.hpp>
 #include <incise/fem/elastic_problem.hpp>
+#include <incise/mesh/tet_faces.hpp>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <map>
 #include <sstream>
 
 namespace incise::fem {
@@ -349,30 +348,35 @@ void ElasticProblem::add_gravity(const Vec3& g) {
     f_ext_.segment<3>(3 * v) += mass_.segment<3>(3 * v).cwiseProduct(g);
 }
 
+double add_surface_traction(const Eigen::Matrix3Xd& points, const mesh::CellMatrix& faces,
+                            const Vec3& traction, VecX& f) {
+  INCISE_CHECK(faces.rows() == 3, "add_surface_traction: faces need 3 vertex indices each");
+  INCISE_CHECK(f.size() == 3 * points.cols(), "add_surface_traction: f needs 3 entries per point");
+  INCISE_CHECK(traction.allFinite(), "add_surface_traction: traction must be finite");
+  INCISE_CHECK(faces.size() == 0 || (faces.minCoeff() >= 0 && faces.maxCoeff() < points.cols()),
+               "add_surface_traction: face vertex index out of range");
+  double total = 0.0;
+  for (Eigen::Index t = 0; t < faces.cols(); ++t) {
+    const Vec3 x0 = points.col(faces(0, t));
+    const double area =
+        0.5 * (points.col(faces(1, t)) - x0).cross(points.col(faces(2, t)) - x0).norm();
+    total += area;
+    for (int k = 0; k < 3; ++k) f.segment<3>(3 * faces(k, t)) += (area / 3.0) * traction;
+  }
+  return total;
+}
+
 double ElasticProblem::add_traction_on_plane(int axis, double value, const Vec3& traction,
                                              double tolerance) {
   INCISE_CHECK(axis >= 0 && axis < 3, "add_traction_on_plane: axis must be 0, 1 or 2");
   INCISE_CHECK(traction.allFinite(), "add_traction_on_plane: traction must be finite");
-  // Faces with all three vertices on the plane; a face shared by two tetrahedra is interior.
-  std::map<std::array<Index, 3>, int> faces;
-  static constexpr int kFaceOfTet[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  const mesh::CellMatrix boundary = mesh::boundary_faces(cells_);
   auto on_plane = [&](Index v) { return std::abs(points_(axis, v) - value) <= tolerance; };
-  for (Index e = 0; e < num_elements(); ++e)
-    for (const auto& f : kFaceOfTet) {
-      std::array<Index, 3> tri{cells_(f[0], e), cells_(f[1], e), cells_(f[2], e)};
-      if (!on_plane(tri[0]) || !on_plane(tri[1]) || !on_plane(tri[2])) continue;
-      std::sort(tri.begin(), tri.end());
-      ++faces[tri];
-    }
-  double total = 0.0;
-  for (const auto& [tri, count] : faces) {
-    if (count != 1) continue;
-    const Vec3 x0 = points_.col(tri[0]);
-    const double area = 0.5 * (points_.col(tri[1]) - x0).cross(points_.col(tri[2]) - x0).norm();
-    total += area;
-    for (Index v : tri) f_ext_.segment<3>(3 * v) += (area / 3.0) * traction;
-  }
-  return total;
+  std::vector<Eigen::Index> in_plane;
+  for (Eigen::Index t = 0; t < boundary.cols(); ++t)
+    if (on_plane(boundary(0, t)) && on_plane(boundary(1, t)) && on_plane(boundary(2, t)))
+      in_plane.push_back(t);
+  return add_surface_traction(points_, boundary(Eigen::all, in_plane), traction, f_ext_);
 }
 
 void ElasticProblem::clear_loads() {

@@ -1,6 +1,6 @@
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
-#include <incise/fem/tet_kernels.hpp>
+#include <incise/fem/stiffness.hpp>
 #include <incise/interactive/augmented_cut_session.hpp>
 
 #include <algorithm>
@@ -53,30 +53,34 @@ AugmentedCutSession::AugmentedCutSession(const mesh::MeshData& mesh,
   }
   displacement_ = Eigen::Matrix3Xd::Zero(3, n);
 
-  // K⁰: every live element, fixed DOFs left out.
+  // K⁰: every live element, fixed and unused nodes' DOFs left out (assembled by fem; an
+  // element with non-positive reference volume has no stiffness and is counted).
   const Index cap = mesh_->element_capacity();
   records_.resize(static_cast<size_t>(cap));
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(static_cast<size_t>(mesh_->num_elements()) * 144);
+  mesh::MeshData body;
+  body.points = mesh_->reference_matrix();
+  body.cells.resize(4, mesh_->num_elements());
+  Index cells = 0;
   for (Index e = 0; e < cap; ++e) {
     if (!mesh_->alive(e)) continue;
     Record& rec = records_[static_cast<size_t>(e)];
     rec.nodes = mesh_->element(e);
     for (int a = 0; a < 4; ++a) rec.x.col(a) = mesh_->reference(rec.nodes[static_cast<size_t>(a)]);
-    if (fem::make_tet_reference(rec.x).volume <= 0) ++inverted_;
-    const Eigen::Matrix<double, 12, 12> ke = element_stiffness(rec.x);
-    const std::vector<int> d = element_dofs(rec.nodes);
-    for (int i = 0; i < 12; ++i) {
-      if (d[static_cast<size_t>(i)] < 0) continue;
-      for (int j = 0; j < 12; ++j) {
-        if (d[static_cast<size_t>(j)] >= 0)
-          triplets.emplace_back(d[static_cast<size_t>(i)], d[static_cast<size_t>(j)], ke(i, j));
-      }
+    if (!(fem::make_tet_reference(rec.x).volume > 0)) {
+      ++inverted_;
+      continue;
     }
+    for (int a = 0; a < 4; ++a) body.cells(a, cells) = rec.nodes[static_cast<size_t>(a)];
+    ++cells;
   }
-  linalg::SparseMatrix k0(dofs, dofs);
-  k0.setFromTriplets(triplets.begin(), triplets.end());
-  k0.makeCompressed();
+  body.cells.conservativeResize(4, cells);
+  std::vector<bool> no_dof(static_cast<size_t>(3 * n));
+  for (Index v = 0; v < n; ++v)
+    for (int i = 0; i < 3; ++i)
+      no_dof[static_cast<size_t>(3 * v + i)] = node_dof_[static_cast<size_t>(v)] < 0;
+  const linalg::SparseMatrix k0 =
+      linalg::remove_fixed_dofs(fem::assemble_stiffness(body, material_), no_dof).matrix;
+  INCISE_ASSERT(k0.rows() == dofs, "K0 rows are the DOFs in node order");
   if (dofs > 0 && k0.diagonal().mean() > 0) constraint_spring_ = k0.diagonal().mean();
   const double cpu0 = thread_cpu_seconds();
   const Timer timer;
@@ -96,20 +100,6 @@ AugmentedCutSession::AugmentedCutSession(const mesh::MeshData& mesh,
 
 AugmentedCutSession::~AugmentedCutSession() = default;
 
-Eigen::Matrix<double, 12, 12> AugmentedCutSession::element_stiffness(
-    const Eigen::Matrix<double, 3, 4>& x) const {
-  const fem::TetReference ref = fem::make_tet_reference(x);
-  Eigen::Matrix<double, 12, 12> k = Eigen::Matrix<double, 12, 12>::Zero();
-  if (!(ref.volume > 0)) return k;
-  const Eigen::Matrix<double, 3, 4> u = Eigen::Matrix<double, 3, 4>::Zero();
-  Eigen::Matrix<double, 3, 4> q;
-  // The linear model is defined for every deformation: forces_and_tangent cannot fail here.
-  (void)fem::TetKernel<material::LinearElastic, double>::forces_and_tangent(
-      material_.lame(), ref.z_inv, ref.b, ref.volume, u, q, k);
-  // Symmetric up to round-off; keep the symmetric part (AugmentedSystem needs symmetry).
-  return 0.5 * (k + k.transpose());
-}
-
 std::vector<int> AugmentedCutSession::element_dofs(const cut::Tet& t) const {
   std::vector<int> d(12, -1);
   for (int a = 0; a < 4; ++a) {
@@ -122,8 +112,9 @@ std::vector<int> AugmentedCutSession::element_dofs(const cut::Tet& t) const {
 
 void AugmentedCutSession::add_record(Index slot, double scale) {
   const Record& rec = records_[static_cast<size_t>(slot)];
-  if (fem::make_tet_reference(rec.x).volume <= 0) inverted_ += scale > 0 ? 1 : -1;
-  const Eigen::Matrix<double, 12, 12> ke = element_stiffness(rec.x);
+  fem::Mat12T<double> ke;  // zero when the reference volume is not positive
+  if (!fem::element_stiffness(material_, rec.x, fem::Mat34T<double>::Zero(), ke))
+    inverted_ += scale > 0 ? 1 : -1;
   system_->add_element(element_dofs(rec.nodes), ke, scale);
 }
 

@@ -6,9 +6,9 @@
 #include <incise/io/read_mesh.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
+#include <incise/mesh/tet_faces.hpp>
 
 #include <algorithm>
-#include <map>
 #include <sstream>
 
 #include "json_reader.hpp"
@@ -108,31 +108,6 @@ std::vector<Index> select_nodes(const mesh::MeshData& m, const Region& r) {
     }
     if (in) out.push_back(i);
   }
-  return out;
-}
-
-mesh::CellMatrix boundary_faces(const mesh::MeshData& m) {
-  INCISE_CHECK(m.dimension == 3, "boundary_faces needs a tetrahedral mesh");
-  // Face k of tet (v0..v3) is opposite vertex k; these vertex orders are outward for a
-  // positively oriented tetrahedron.
-  static const int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-  std::map<std::array<Index, 3>, std::pair<int, std::array<Index, 3>>> count;
-  for (Index c = 0; c < m.num_cells(); ++c) {
-    for (const auto& f : kFace) {
-      std::array<Index, 3> v{m.cells(f[0], c), m.cells(f[1], c), m.cells(f[2], c)};
-      std::array<Index, 3> key = v;
-      std::sort(key.begin(), key.end());
-      auto& e = count[key];
-      ++e.first;
-      e.second = v;
-    }
-  }
-  std::vector<std::array<Index, 3>> faces;
-  for (const auto& kv : count)
-    if (kv.second.first == 1) faces.push_back(kv.second.second);
-  mesh::CellMatrix out(3, static_cast<Eigen::Index>(faces.size()));
-  for (std::size_t i = 0; i < faces.size(); ++i)
-    for (int k = 0; k < 3; ++k) out(k, static_cast<Eigen::Index>(i)) = faces[i][k];
   return out;
 }
 
@@ -296,27 +271,20 @@ BuiltScene build_scene(const SceneSpec& spec) {
         break;
       }
       case LoadSpec::Kind::kSurface: {
-        if (bfaces.size() == 0) bfaces = boundary_faces(b.mesh);
+        if (bfaces.size() == 0) bfaces = mesh::boundary_faces(b.mesh);
         const auto sel = select_nodes(b.mesh, l.region);
         std::vector<char> in(static_cast<std::size_t>(n), 0);
         for (Index i : sel) in[i] = 1;
-        int used = 0;
-        for (Eigen::Index f = 0; f < bfaces.cols(); ++f) {
-          if (!(in[bfaces(0, f)] && in[bfaces(1, f)] && in[bfaces(2, f)])) continue;
-          const Vec3 a = b.mesh.points.col(bfaces(0, f));
-          const double area = 0.5 * (b.mesh.points.col(bfaces(1, f)) - a)
-                                        .cross(b.mesh.points.col(bfaces(2, f)) - a)
-                                        .norm();
-          // Consistent load of a constant traction on a linear triangle: t·A/3 per vertex.
-          for (int k = 0; k < 3; ++k)
-            b.external_force.segment<3>(3 * bfaces(k, f)) += l.vector * area / 3.0;
-          ++used;
-        }
-        if (used == 0)
+        std::vector<Eigen::Index> loaded;  // boundary triangles with all 3 vertices inside
+        for (Eigen::Index f = 0; f < bfaces.cols(); ++f)
+          if (in[bfaces(0, f)] && in[bfaces(1, f)] && in[bfaces(2, f)]) loaded.push_back(f);
+        if (loaded.empty())
           region_error(spec, l.region.path,
                        "region contains no boundary triangle (all 3 vertices inside) for the "
                        "surface load",
                        b.mesh);
+        fem::add_surface_traction(b.mesh.points, bfaces(Eigen::all, loaded), l.vector,
+                                  b.external_force);
         break;
       }
     }

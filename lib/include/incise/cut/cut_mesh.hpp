@@ -10,12 +10,14 @@
 /// so watchers registered on `connectivity()` see every change. Elements are addressed by
 /// their slot index (an `Index`), with the vertex order of `Connectivity::cells()`: the
 /// canonical sorted vertices with the first two swapped for a negative sign, so that local
-/// node k is `element(e)[k]` and local face j is the face opposite local node j. All queries
+/// node k is `element(e)[k]` and local face j is the face opposite local node j, with the vertex
+/// order mesh::kTetFace[j] (outward for a positively oriented element). All queries
 /// are local (stars from the vertex→element incidence), so the cost of a cut depends on the
 /// cut, not on the mesh size.
 #include <incise/core/types.hpp>
 #include <incise/mesh/connectivity.hpp>
 #include <incise/mesh/mesh_data.hpp>
+#include <incise/mesh/tet_faces.hpp>
 
 #include <array>
 #include <cstdint>
@@ -27,9 +29,6 @@ namespace incise::cut {
 /// Four node indices of an oriented tetrahedron (positive reference volume when valid).
 using Tet = std::array<Index, 4>;
 
-/// Local face j of a tetrahedron is the face opposite node j, oriented outward:
-/// kTetFace[j] lists its three local nodes.
-inline constexpr int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 /// The six edges of a tetrahedron as local node pairs.
 inline constexpr int kTetEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
 

@@ -62,6 +62,15 @@ std::vector<Index> nodes_on_plane(const mesh::MeshData& mesh, int axis, double v
 /// Nodes inside the closed box [lo, hi] (metres).
 std::vector<Index> nodes_in_box(const mesh::MeshData& mesh, const Vec3& lo, const Vec3& hi);
 
+/// Consistent nodal loads of a uniform dead-load traction t (N/m², reference configuration) on
+/// linear triangles: each column of `faces` (3 vertex indices into `points`, m) of area A adds
+/// A·t/3 to the three DOFs 3·v + i of `f` (N) of each of its vertices v — the exact consistent
+/// load of a constant traction on a linear triangle, totalling t·A. Returns Σ A (m²). Throws
+/// UsageError when `faces` has not 3 rows, `f` not 3·points.cols() entries, a vertex index is
+/// out of range or t is not finite.
+double add_surface_traction(const Eigen::Matrix3Xd& points, const mesh::CellMatrix& faces,
+                            const Vec3& traction, VecX& f);
+
 /// Elastic body made of linear tetrahedra of one material. See file comment for conventions.
 /// Element loops visit the elements in an internal order (sorted by smallest node index, for
 /// memory locality) four at a time; element and node numbering seen by callers are the mesh's.
@@ -86,8 +95,8 @@ class ElasticProblem : public Problem {
   /// quarter of ρ·g·v(τ) from every incident tetrahedron (§2.5).
   void add_gravity(const Vec3& g);
   /// Add a uniform dead-load traction t (N/m², reference configuration) on the boundary faces
-  /// lying in the plane {x : x[axis] = value} (within `tolerance` m): each boundary triangle of
-  /// area A gives A·t/3 to each of its vertices (exact consistent load for linear elements).
+  /// (mesh::boundary_faces) lying in the plane {x : x[axis] = value} (within `tolerance` m),
+  /// by add_surface_traction: A·t/3 per vertex of each triangle of area A.
   /// Returns the total area loaded (m²); 0 when no boundary face lies in the plane.
   double add_traction_on_plane(int axis, double value, const Vec3& traction,
                                double tolerance = 1e-9);

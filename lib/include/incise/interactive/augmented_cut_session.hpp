@@ -12,7 +12,8 @@
 ///   `moved_nodes` (snapping changes reference positions), is compared with the element the
 ///   system holds for that slot; if its nodes or reference positions differ, the old element
 ///   stiffness is subtracted (AugmentedSystem::add_element(·, Kₑ, −1)) and the new one added
-///   (+1). Kₑ is the linear-elastic tetrahedron tangent (thesis (2.22), §3.1);
+///   (+1). Kₑ is the linear-elastic tetrahedron stiffness fem::element_stiffness (thesis
+///   (2.22), §3.1; zero for a non-positive reference volume), K⁰ fem::assemble_stiffness;
 /// - nodes created by the step (`new_nodes`) get three new DOFs (add_dofs); copies of a node
 ///   fixed from the start stay fixed (no DOFs, zero displacement);
 /// - nodes fixed by the component policy (`fixed_nodes`, FreeComponentPolicy::kFixOnFace) and
@@ -193,10 +194,6 @@ class AugmentedCutSession {
   /// Current displacement of every node (3 × num_nodes, m): the last successful solution;
   /// zero for nodes fixed from the start.
   const Eigen::Matrix3Xd& displacement() const { return displacement_; }
-  /// Element stiffness Kₑ (12×12, node-major DOF order 3a+i) of the linear-elastic
-  /// tetrahedron with reference nodes `x` (columns, m), symmetrized; zero when the volume
-  /// is not positive. The matrix the session adds and subtracts.
-  Eigen::Matrix<double, 12, 12> element_stiffness(const Eigen::Matrix<double, 3, 4>& x) const;
 
  private:
   struct LastSolve {  // outcome of the last solve_into (reused when a step changes nothing)

@@ -64,10 +64,6 @@ BuiltScene build_scene(const SceneSpec& spec);
 /// Nodes of `mesh` in `region`, sorted. Plane tolerance 0 means 1e-9 × bounding-box diagonal.
 std::vector<Index> select_nodes(const mesh::MeshData& mesh, const Region& region);
 
-/// Boundary triangles of a tetrahedral mesh (faces belonging to exactly one tetrahedron),
-/// oriented outward, as a 3 × m matrix of vertex indices.
-mesh::CellMatrix boundary_faces(const mesh::MeshData& mesh);
-
 /// Sweep triangles of a scalpel (thesis §3.2): for each path segment p_i → p_{i+1} the quad
 /// (p_i, p_{i+1}, p_{i+1}+b, p_i+b) split into two triangles, b the blade vector.
 std::vector<std::array<Vec3, 3>> sweep_triangles(const ToolSpec& tool);

@@ -1,0 +1,44 @@
+#include <incise/core/error.hpp>
+#include <incise/mesh/tet_faces.hpp>
+
+#include <algorithm>
+#include <array>
+#include <vector>
+
+namespace incise::mesh {
+
+CellMatrix boundary_faces(const CellMatrix& tets) {
+  INCISE_CHECK(tets.rows() == 4, "boundary_faces needs tetrahedra (4 vertex indices per cell)");
+  struct Face {
+    std::array<Index, 3> key;  // sorted vertices: equal for the two sides of an interior face
+    std::array<Index, 3> oriented;
+  };
+  std::vector<Face> faces;
+  faces.reserve(4 * static_cast<std::size_t>(tets.cols()));
+  for (Eigen::Index c = 0; c < tets.cols(); ++c)
+    for (const auto& f : kTetFace) {
+      Face face{{}, {tets(f[0], c), tets(f[1], c), tets(f[2], c)}};
+      face.key = face.oriented;
+      std::sort(face.key.begin(), face.key.end());
+      faces.push_back(face);
+    }
+  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
+  std::vector<std::size_t> single;  // faces whose key occurs once
+  for (std::size_t i = 0; i < faces.size();) {
+    std::size_t j = i + 1;
+    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
+    if (j == i + 1) single.push_back(i);
+    i = j;
+  }
+  CellMatrix out(3, static_cast<Eigen::Index>(single.size()));
+  for (std::size_t k = 0; k < single.size(); ++k)
+    for (int r = 0; r < 3; ++r) out(r, static_cast<Eigen::Index>(k)) = faces[single[k]].oriented[r];
+  return out;
+}
+
+CellMatrix boundary_faces(const MeshData& mesh) {
+  INCISE_CHECK(mesh.dimension == 3, "boundary_faces needs a tetrahedral mesh");
+  return boundary_faces(mesh.cells);
+}
+
+}  // namespace incise::mesh
