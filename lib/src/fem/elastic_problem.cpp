@@ -348,6 +348,19 @@ void ElasticProblem::add_gravity(const Vec3& g) {
     f_ext_.segment<3>(3 * v) += mass_.segment<3>(3 * v).cwiseProduct(g);
 }
 
+mesh::CellMatrix boundary_faces_on_plane(const Eigen::Matrix3Xd& points,
+                                         const mesh::CellMatrix& tets, int axis, double value,
+                                         double tolerance) {
+  INCISE_CHECK(axis >= 0 && axis < 3, "boundary_faces_on_plane: axis must be 0, 1 or 2");
+  const mesh::CellMatrix boundary = mesh::boundary_faces(tets);
+  auto on_plane = [&](Index v) { return std::abs(points(axis, v) - value) <= tolerance; };
+  std::vector<Eigen::Index> in_plane;
+  for (Eigen::Index t = 0; t < boundary.cols(); ++t)
+    if (on_plane(boundary(0, t)) && on_plane(boundary(1, t)) && on_plane(boundary(2, t)))
+      in_plane.push_back(t);
+  return boundary(Eigen::all, in_plane);
+}
+
 double add_surface_traction(const Eigen::Matrix3Xd& points, const mesh::CellMatrix& faces,
                             const Vec3& traction, VecX& f) {
   INCISE_CHECK(faces.rows() == 3, "add_surface_traction: faces need 3 vertex indices each");
@@ -368,15 +381,9 @@ double add_surface_traction(const Eigen::Matrix3Xd& points, const mesh::CellMatr
 
 double ElasticProblem::add_traction_on_plane(int axis, double value, const Vec3& traction,
                                              double tolerance) {
-  INCISE_CHECK(axis >= 0 && axis < 3, "add_traction_on_plane: axis must be 0, 1 or 2");
   INCISE_CHECK(traction.allFinite(), "add_traction_on_plane: traction must be finite");
-  const mesh::CellMatrix boundary = mesh::boundary_faces(cells_);
-  auto on_plane = [&](Index v) { return std::abs(points_(axis, v) - value) <= tolerance; };
-  std::vector<Eigen::Index> in_plane;
-  for (Eigen::Index t = 0; t < boundary.cols(); ++t)
-    if (on_plane(boundary(0, t)) && on_plane(boundary(1, t)) && on_plane(boundary(2, t)))
-      in_plane.push_back(t);
-  return add_surface_traction(points_, boundary(Eigen::all, in_plane), traction, f_ext_);
+  return add_surface_traction(
+      points_, boundary_faces_on_plane(points_, cells_, axis, value, tolerance), traction, f_ext_);
 }
 
 void ElasticProblem::clear_loads() {

@@ -62,6 +62,13 @@ std::vector<Index> nodes_on_plane(const mesh::MeshData& mesh, int axis, double v
 /// Nodes inside the closed box [lo, hi] (metres).
 std::vector<Index> nodes_in_box(const mesh::MeshData& mesh, const Vec3& lo, const Vec3& hi);
 
+/// Boundary faces (mesh::boundary_faces of the tetrahedra `tets`, outward) whose three vertices
+/// lie within `tolerance` (m) of the plane {x : x[axis] = value}. Throws UsageError when axis is
+/// not 0, 1 or 2.
+mesh::CellMatrix boundary_faces_on_plane(const Eigen::Matrix3Xd& points,
+                                         const mesh::CellMatrix& tets, int axis, double value,
+                                         double tolerance = 1e-9);
+
 /// Consistent nodal loads of a uniform dead-load traction t (N/m², reference configuration) on
 /// linear triangles: each column of `faces` (3 vertex indices into `points`, m) of area A adds
 /// A·t/3 to the three DOFs 3·v + i of `f` (N) of each of its vertices v — the exact consistent
