@@ -2,12 +2,12 @@
 /// \file cli_util.hpp
 /// Small helpers shared by the run / certify / bench subcommands.
 
+#include <incise/core/atomic_file.hpp>
 #include <incise/core/error.hpp>
 
 #include <array>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -20,20 +20,8 @@ inline std::string option_value(const std::vector<std::string>& args, std::size_
   return args[++i];
 }
 
-/// Writes `text` to `path` through a temporary file renamed into place, creating parent
-/// folders; a reader never sees a half-written file. Throws Error on failure.
-inline void write_file_atomic(const std::string& path, const std::string& text) {
-  namespace fs = std::filesystem;
-  const fs::path p(path);
-  if (!p.parent_path().empty()) fs::create_directories(p.parent_path());
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream o(tmp, std::ios::binary);
-    o << text;
-    if (!o) throw Error("cannot write " + tmp);
-  }
-  fs::rename(tmp, p);
-}
+/// Atomic file writes (core/atomic_file.hpp), for the subcommands.
+using incise::write_file_atomic;
 
 /// Folder of the running executable (from /proc/self/exe), or "" when unknown.
 inline std::string executable_dir() {

@@ -2,23 +2,18 @@
 // scene (docs/scenes.md), run its solver with progress, print a summary (iterations, flops,
 // time, final residual, probes, what was built and what it cost), write the scene's outputs.
 //
-// Nothing is written before the scene has been parsed and built completely; output files are
-// written to a temporary name and renamed into place.
+// Nothing is written before the scene has been parsed and built completely; the library writes
+// the outputs (scene/scene_outputs.hpp), this file prints.
 
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
-#include <incise/interactive/augmented_cut_session.hpp>
-#include <incise/io/write_mesh.hpp>
+#include <incise/scene/scene_outputs.hpp>
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
 
 #include <unistd.h>
-#include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -30,25 +25,10 @@ namespace incise::cli {
 
 namespace {
 
-namespace fs = std::filesystem;
-using Json = nlohmann::json;
-
-io::DataArray displacement_array(const VecX& u) {
-  io::DataArray a;
-  a.name = "displacement";
-  a.components = 3;
-  a.values.assign(u.data(), u.data() + u.size());
-  return a;
-}
-
 std::string join_vec(const Vec3& v) {
   std::ostringstream os;
   os << std::setprecision(6) << "[" << v[0] << ", " << v[1] << ", " << v[2] << "]";
   return os.str();
-}
-
-Json vec_json(const Vec3& v) {
-  return Json::array({v[0], v[1], v[2]});
 }
 
 }  // namespace
@@ -86,7 +66,6 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   Timer total;
   const scene::SceneSpec spec = scene::load_scene(scene_path);
   scene::BuiltScene built = scene::build_scene(spec);
-  const scene::OutputSpec& outs = spec.outputs;
 
   out << "scene: " << scene_path << (spec.name.empty() ? "" : "  (" + spec.name + ")") << "\n";
   out << "solver: " << scene::to_string(spec.solver.method) << ", tolerance "
@@ -104,8 +83,7 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   double r0 = -1;
   int last_decile = -1;
   Timer bar_timer;  // redraw the bar at most every 0.1 s
-  long frames = 0;
-  std::vector<std::string> frame_files;
+  scene::FrameWriter frames(built);
   auto observer = [&](const solver::IterationInfo& info) {
     if (r0 < 0) r0 = info.residual_norm;
     double frac = 0;
@@ -128,28 +106,12 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
             << ", |r| = " << info.residual_norm << " N (target " << threshold << " N)\n";
       }
     }
-    if (!outs.vtu.empty() && outs.vtu_every > 0 && info.iteration % outs.vtu_every == 0) {
-      const std::string f = outs.vtu + "_" + std::to_string(info.iteration) + ".vtu";
-      fs::path parent = fs::path(f).parent_path();
-      if (!parent.empty()) fs::create_directories(parent);
-      io::write_vtu(f, built.mesh, {displacement_array(*info.u)});
-      frame_files.push_back(f);
-      ++frames;
-    }
+    frames.iteration(info);
   };
   // Interactive cutting run ("augmented" with tools): one line (or bar frame) per solve.
   auto cut_observer = [&](const scene::CutStepRow& row, std::size_t total_steps,
                           const interactive::AugmentedCutSession& session) {
-    if (!outs.vtu.empty() && outs.vtu_every > 0 && row.step % outs.vtu_every == 0) {
-      // A frame of the cut mesh after this step (frames are numbered by step).
-      const std::string f = outs.vtu + "_" + std::to_string(row.step) + ".vtu";
-      fs::path parent = fs::path(f).parent_path();
-      if (!parent.empty()) fs::create_directories(parent);
-      const Eigen::Matrix3Xd& d = session.displacement();
-      io::write_vtu(f, scene::live_mesh_data(session.mesh()),
-                    {displacement_array(Eigen::Map<const VecX>(d.data(), d.size()))});
-      ++frames;
-    }
+    frames.cut_step(row, session);
     if (progress == "bar") {
       const double frac = total_steps ? double(row.step) / double(total_steps) : 1.0;
       const int width = 30, filled = static_cast<int>(frac * width);
@@ -225,121 +187,8 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   out << "== not built\n";
   for (const auto& s : built.not_built) out << "  " << s << "\n";
 
-  // Outputs.
-  std::vector<std::string> written;
-  if (!outs.csv.empty() && !res.cut_steps.empty()) {
-    std::ostringstream csv;
-    csv << std::setprecision(10)
-        << "step,tool,status,degenerate_sweep,faces_dissected,nodes_snapped,new_nodes,nodes,"
-           "tetrahedra,m,dirichlet,gmres_iterations,gmres_relative_residual,nnz_l,cut_seconds,"
-           "update_seconds,update_cpu_seconds";
-    for (const auto& p : built.probes)
-      csv << "," << p.spec.name << "_x," << p.spec.name << "_y," << p.spec.name << "_z";
-    csv << "\n";
-    for (const auto& c : res.cut_steps) {
-      std::string status = c.status;  // CSV field: no commas or quotes
-      for (char& ch : status)
-        if (ch == ',' || ch == '"') ch = ';';
-      csv << c.step << "," << c.tool << "," << status << "," << c.degenerate_sweep << ","
-          << c.faces_dissected << "," << c.nodes_snapped << "," << c.new_nodes << "," << c.nodes
-          << "," << c.tetrahedra << "," << c.m << "," << c.dirichlet << "," << c.gmres_iterations
-          << "," << c.gmres_relative_residual << "," << c.nnz_l << "," << c.seconds_cut << ","
-          << c.seconds_update << "," << c.cpu_seconds_update;
-      for (const auto& v : c.probes) csv << "," << v[0] << "," << v[1] << "," << v[2];
-      csv << "\n";
-    }
-    write_file_atomic(outs.csv, csv.str());
-    written.push_back(outs.csv);
-  } else if (!outs.csv.empty()) {
-    std::ostringstream csv;
-    csv << std::setprecision(10)
-        << "iteration,residual_norm,relative_residual,energy,flops,seconds";
-    for (const auto& p : built.probes)
-      csv << "," << p.spec.name << "_x," << p.spec.name << "_y," << p.spec.name << "_z";
-    csv << "\n";
-    for (const auto& row : res.trace) {
-      csv << row.iteration << "," << row.residual_norm << "," << row.residual_norm / fnorm << ","
-          << row.energy << "," << row.flops << "," << row.seconds;
-      for (const auto& v : row.probes) csv << "," << v[0] << "," << v[1] << "," << v[2];
-      csv << "\n";
-    }
-    write_file_atomic(outs.csv, csv.str());
-    written.push_back(outs.csv);
-  }
-  if (!outs.vtu.empty()) {
-    const std::string f = outs.vtu + ".vtu";
-    fs::path parent = fs::path(f).parent_path();
-    if (!parent.empty()) fs::create_directories(parent);
-    const std::string tmp = f + ".tmp";
-    io::write_vtu(tmp, built.mesh, {displacement_array(res.u)});
-    fs::rename(tmp, f);
-    written.push_back(f);
-    if (frames > 0)
-      written.push_back(std::to_string(frames) + " frames " + outs.vtu +
-                        (res.cut_steps.empty() ? "_<it>.vtu" : "_<step>.vtu"));
-  }
-  if (!summary_json.empty()) {
-    Json j;
-    j["scene"] = scene_path;
-    j["name"] = spec.name;
-    j["method"] = scene::to_string(spec.solver.method);
-    j["method_detail"] = res.method_detail;
-    j["result"] = solver::to_string(rep.reason);
-    j["converged"] = rep.converged();
-    j["iterations"] = rep.iterations;
-    j["inner_iterations"] = rep.inner_iterations;
-    j["residual_norm"] = rep.residual_norm;
-    j["relative_residual"] = rep.residual_norm / fnorm;
-    j["tolerance"] = spec.solver.tolerance;
-    j["energy"] = rep.energy;
-    j["flops"] = rep.flops;
-    j["solver_seconds"] = rep.seconds;
-    j["total_seconds"] = total.seconds();
-    j["mesh"] = {{"nodes", built.mesh.num_points()},
-                 {"tetrahedra", built.mesh.num_cells()},
-                 {"fixed_nodes", built.fixed_nodes.size()}};
-    for (const auto& p : res.probes) {
-      Json pj = {{"name", p.name}, {"displacement", vec_json(p.value)}};
-      if (p.reference) {
-        pj["reference"] = vec_json(*p.reference);
-        pj["relative_error"] = p.relative_error;
-      }
-      j["probes"].push_back(pj);
-    }
-    for (const auto& s : built.steps)
-      j["built"].push_back({{"what", s.what},
-                            {"seconds", s.seconds},
-                            {"bytes", s.bytes},
-                            {"flops", s.flops >= 0 ? Json(s.flops) : Json(nullptr)}});
-    j["not_built"] = built.not_built;
-    for (const auto& c : res.cut_steps) {
-      Json cj = {{"step", c.step},
-                 {"tool", c.tool},
-                 {"status", c.status},
-                 {"degenerate_sweep", c.degenerate_sweep},
-                 {"faces_dissected", c.faces_dissected},
-                 {"nodes_snapped", c.nodes_snapped},
-                 {"new_nodes", c.new_nodes},
-                 {"nodes", c.nodes},
-                 {"tetrahedra", c.tetrahedra},
-                 {"m", c.m},
-                 {"dirichlet", c.dirichlet},
-                 {"gmres_iterations", c.gmres_iterations},
-                 {"gmres_relative_residual", c.gmres_relative_residual},
-                 {"nnz_l", c.nnz_l},
-                 {"refactorization_started", c.refactorization_started},
-                 {"refactorization_swapped", c.refactorization_swapped},
-                 {"cut_seconds", c.seconds_cut},
-                 {"update_seconds", c.seconds_update},
-                 {"update_cpu_seconds", c.cpu_seconds_update}};
-      for (std::size_t k = 0; k < c.probes.size() && k < built.probes.size(); ++k)
-        cj["probes"][built.probes[k].spec.name] = vec_json(c.probes[k]);
-      j["cut_steps"].push_back(cj);
-    }
-    j["outputs"] = written;
-    write_file_atomic(summary_json, j.dump(2) + "\n");
-    written.push_back(summary_json);
-  }
+  const std::vector<std::string> written =
+      scene::write_outputs(built, res, {summary_json, total.seconds(), frames.frames()});
   if (!written.empty()) {
     out << "== wrote\n";
     for (const auto& w : written) out << "  " << w << "\n";

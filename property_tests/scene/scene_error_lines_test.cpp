@@ -94,8 +94,18 @@ TEST(SceneErrorLines, ValidSceneRecordsTheLineOfEveryValue) {
 }
 
 TEST(SceneErrorLines, OutOfRangeValueNamesItsLine) {
-  EXPECT_EQ(parse_error(edited("\"nu\": 0.0", "\"nu\": 0.7")),
-            "scene.json:9: /material/nu: expected a number in (-1, 0.5), got 0.7");
+  EXPECT_EQ(parse_error(edited("\"nx\": 2", "\"nx\": 0")),
+            "scene.json:4: /mesh/nx: expected an integer in [1, 1000], got 0");
+}
+
+// material::validate judges the parameters; the parser names the line of the rejected one.
+TEST(SceneErrorLines, InadmissibleMaterialParameterNamesItsLine) {
+  EXPECT_EQ(parse_error(edited("\"nu\": 0.0", "\"nu\": 0.5")),
+            "scene.json:9: /material/nu: material parameter nu (Poisson ratio) = 0.5 is "
+            "inadmissible: must satisfy -1 < nu < 0.5");
+  EXPECT_EQ(parse_error(edited("\"E\": 1e6", "\"E\": -2")),
+            "scene.json:8: /material/E: material parameter E (Young's modulus) = -2 is "
+            "inadmissible: must be finite and > 0 Pa");
 }
 
 TEST(SceneErrorLines, WrongTypeInANestedArrayNamesItsLine) {

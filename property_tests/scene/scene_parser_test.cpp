@@ -2,13 +2,17 @@
 // scene is rejected with a ParseError naming the JSON path and the expected form.
 
 #include <incise/core/error.hpp>
+#include <incise/material/material.hpp>
 #include <incise/scene/scene_parser.hpp>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
+#include <tuple>
 
 #include "incise_test/seed.hpp"
 
@@ -54,13 +58,16 @@ TEST(SceneParser, ValidCantileverParses) {
   EXPECT_EQ(s.mesh.nx, 4);
   EXPECT_DOUBLE_EQ(s.mesh.lx, 1.2);
   EXPECT_EQ(s.material.model, "linear");
-  EXPECT_DOUBLE_EQ(s.material.E, 1e6);
+  EXPECT_DOUBLE_EQ(s.material.parameters.youngs_modulus, 1e6);
+  EXPECT_DOUBLE_EQ(s.material.parameters.poisson_ratio, 0.0);
+  EXPECT_DOUBLE_EQ(s.material.parameters.density, 1000.0);  // material::Parameters' default
   ASSERT_EQ(s.fixed.size(), 1u);
   EXPECT_EQ(s.fixed[0].axis, 0);
   ASSERT_EQ(s.loads.size(), 1u);
   EXPECT_EQ(s.loads[0].kind, incise::scene::LoadSpec::Kind::kNodal);
   EXPECT_DOUBLE_EQ(s.loads[0].vector[1], -3.0);
   EXPECT_EQ(s.solver.method, incise::scene::SolverSpec::Method::kCG);
+  EXPECT_EQ(s.solver.preconditioner, incise::solver::Preconditioner::kNone);
   EXPECT_DOUBLE_EQ(s.solver.tolerance, 1e-8);
   ASSERT_EQ(s.outputs.probes.size(), 1u);
   EXPECT_TRUE(s.outputs.probes[0].use_region);
@@ -110,30 +117,71 @@ TEST(SceneParserBad, WrongTypeStringForNumber) {
   Json j = valid_scene();
   j["material"]["nu"] = "0.3";
   const std::string e = error_of(j);
-  EXPECT_NE(e.find("/material/nu: expected a number in (-1, 0.5), got string \"0.3\""),
-            std::string::npos)
+  EXPECT_NE(e.find("/material/nu: expected a finite number, got string \"0.3\""), std::string::npos)
       << e;
 }
 
+// Material parameters are judged by material::validate alone; its message is reported at the
+// path of the parameter it rejects.
 TEST(SceneParserBad, PoissonRatioOutOfRange) {
   Json j = valid_scene();
-  j["material"]["nu"] = 0.7;
+  j["material"]["nu"] = 0.5;
   const std::string e = error_of(j);  // "scene.json:<line of "nu">: ..."
-  EXPECT_EQ(e.substr(e.find(": /")), ": /material/nu: expected a number in (-1, 0.5), got 0.7");
+  EXPECT_EQ(e.substr(e.find(": /")),
+            ": /material/nu: material parameter nu (Poisson ratio) = 0.5 is inadmissible: must "
+            "satisfy -1 < nu < 0.5");
   EXPECT_EQ(e.rfind("scene.json:", 0), 0u) << e;
 }
 
 TEST(SceneParserBad, NonPositiveYoungModulus) {
   Json j = valid_scene();
   j["material"]["E"] = 0;
-  EXPECT_NE(error_of(j).find("/material/E: expected a number > 0, got 0"), std::string::npos);
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/material/E: material parameter E (Young's modulus) = 0 is inadmissible"),
+            std::string::npos)
+      << e;
+}
+
+TEST(SceneParserBad, NegativeGamma) {
+  Json j = valid_scene();
+  j["material"] = {{"model", "veronda-westmann"}, {"E", 1e4}, {"nu", 0.3}, {"gamma", -1}};
+  j["solver"]["method"] = "newton";
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/material/gamma: material parameter gamma (Veronda-Westmann nonlinearity) = "
+                   "-1 is inadmissible"),
+            std::string::npos)
+      << e;
+}
+
+TEST(SceneParserBad, NegativeDensity) {
+  Json j = valid_scene();
+  j["material"]["rho"] = -1;
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/material/rho: material parameter rho (density) = -1 is inadmissible"),
+            std::string::npos)
+      << e;
+}
+
+TEST(SceneParser, VerondaWestmannMaterialHoldsItsParameters) {
+  Json j = valid_scene();
+  j["material"] = {
+      {"model", "veronda-westmann"}, {"E", 1e4}, {"nu", 0.3}, {"gamma", 8}, {"rho", 1070}};
+  j["solver"]["method"] = "newton";
+  j["solver"]["preconditioner"] = "jacobi";
+  const auto s = parse_scene(j.dump(), "scene.json", "");
+  EXPECT_EQ(s.material.model, "veronda-westmann");
+  EXPECT_DOUBLE_EQ(s.material.parameters.youngs_modulus, 1e4);
+  EXPECT_DOUBLE_EQ(s.material.parameters.poisson_ratio, 0.3);
+  EXPECT_DOUBLE_EQ(s.material.parameters.gamma, 8.0);
+  EXPECT_DOUBLE_EQ(s.material.parameters.density, 1070.0);
+  EXPECT_EQ(s.solver.preconditioner, incise::solver::Preconditioner::kJacobi);
 }
 
 TEST(SceneParserBad, MissingRequiredKey) {
   Json j = valid_scene();
   j["material"].erase("E");
   const std::string e = error_of(j);
-  EXPECT_NE(e.find("/material: missing required key \"E\" (expected a number > 0)"),
+  EXPECT_NE(e.find("/material: missing required key \"E\" (expected a finite number)"),
             std::string::npos)
       << e;
 }
@@ -165,6 +213,33 @@ TEST(SceneParserBad, UnknownEnumValue) {
   const std::string e = error_of(j);
   EXPECT_NE(e.find("/solver/method: expected one of \"cg\", \"nonlinear-cg\", \"newton\", "
                    "\"dynamic-ss22\", \"augmented\", got string \"gauss-seidel\""),
+            std::string::npos)
+      << e;
+  // The list is the method's name table.
+  EXPECT_NE(e.find("expected " + incise::scene::kMethodNames.one_of() + ", got"), std::string::npos)
+      << e;
+}
+
+// Every name of a method parses to its value (the name table read both ways).
+TEST(SceneParser, EveryMethodNameParsesToItsValue) {
+  for (const auto& [method, name] : incise::scene::kMethodNames.entries) {
+    SCOPED_TRACE(name);
+    Json j = valid_scene();
+    j["solver"] = {{"method", name}};
+    if (method == incise::scene::SolverSpec::Method::kDynamicSS22) j["material"]["rho"] = 1000;
+    const auto s = parse_scene(j.dump(), "scene.json", "");
+    EXPECT_EQ(s.solver.method, method);
+    EXPECT_STREQ(incise::scene::to_string(s.solver.method), name);
+  }
+}
+
+TEST(SceneParserBad, DensityZeroWhereAGravityLoadNeedsIt) {
+  Json j = valid_scene();
+  j["loads"].push_back({{"type", "gravity"}, {"g", {0, 0, -9.8}}});
+  j["material"]["rho"] = 0;
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/material/rho: expected a number > 0 (density in kg/m^3), got 0: the gravity "
+                   "load at /loads/1 needs a density"),
             std::string::npos)
       << e;
 }
@@ -308,11 +383,13 @@ Json augmented_cut_scene() {
 }
 
 TEST(SceneParser, CutConfigurationParses) {
+  using incise::scene::SolverSpec;
   const auto s = parse_scene(augmented_cut_scene().dump(), "scene.json", "");
-  EXPECT_FALSE(s.solver.cut_deformed);
+  EXPECT_EQ(s.solver.cut_configuration, SolverSpec::CutConfiguration::kReference);
   Json j = augmented_cut_scene();
   j["solver"].erase("cut_configuration");
-  EXPECT_TRUE(parse_scene(j.dump(), "scene.json", "").solver.cut_deformed);  // default
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.cut_configuration,
+            SolverSpec::CutConfiguration::kDeformed);  // default
 }
 
 TEST(SceneParserBad, CutConfigurationOnANonAugmentedSolver) {
@@ -415,11 +492,22 @@ TEST(SceneParserBad, SolveThreadsOnANonAugmentedSolverOrWithoutTool) {
 
 // schur_preconditioner (docs/scenes.md, interactive cutting run; eq. 17 of Yeung et al. 2016).
 TEST(SceneParser, SchurPreconditionerParses) {
+  using incise::linalg::SchurPreconditioner;
+  using incise::linalg::SchurSolver;
   Json j = augmented_cut_scene();
-  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.schur_preconditioner, "explicit");
-  for (const char* v : {"explicit", "hsj", "spai", "none"}) {
-    j["solver"]["schur_preconditioner"] = v;
-    EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.schur_preconditioner, v);
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.schur_solver,
+            SchurSolver::kDirectCached);  // default "explicit"
+  const std::tuple<const char*, SchurSolver, SchurPreconditioner> cases[] = {
+      {"explicit", SchurSolver::kDirectCached, SchurPreconditioner::kDiagonal},
+      {"hsj", SchurSolver::kGmres, SchurPreconditioner::kDiagonal},
+      {"spai", SchurSolver::kGmres, SchurPreconditioner::kTridiagonalSpai},
+      {"none", SchurSolver::kGmres, SchurPreconditioner::kNone}};
+  for (const auto& [name, schur_solver, preconditioner] : cases) {
+    SCOPED_TRACE(name);
+    j["solver"]["schur_preconditioner"] = name;
+    const auto s = parse_scene(j.dump(), "scene.json", "");
+    EXPECT_EQ(s.solver.schur_solver, schur_solver);
+    EXPECT_EQ(s.solver.schur_preconditioner, preconditioner);
   }
 }
 
@@ -427,8 +515,10 @@ TEST(SceneParserBad, SchurPreconditionerUnknownOrMisplaced) {
   Json j = augmented_cut_scene();
   j["solver"]["schur_preconditioner"] = "jacobi";
   std::string e = error_of(j);
-  EXPECT_NE(e.find("/solver/schur_preconditioner: expected one of"), std::string::npos) << e;
-  EXPECT_NE(e.find("\"explicit\""), std::string::npos) << e;
+  EXPECT_NE(e.find("/solver/schur_preconditioner: expected one of \"explicit\", \"hsj\", "
+                   "\"spai\", \"none\", got string \"jacobi\""),
+            std::string::npos)
+      << e;
   j = augmented_cut_scene();
   j["solver"].erase("cut_configuration");
   j["solver"]["method"] = "cg";
@@ -456,6 +546,33 @@ TEST(SceneParserBad, RefactorAtMWithoutTool) {
   EXPECT_NE(e.find("/solver/refactor_at_m: not allowed here: the scene names no tool"),
             std::string::npos)
       << e;
+}
+
+// docs/scenes.md lists every value of every enum a scene names, as the tables name them.
+TEST(SceneDocs, NameEveryValueOfEverySceneEnum) {
+  std::ifstream in(incise::test::source_path("docs/scenes.md"));
+  ASSERT_TRUE(in);
+  std::ostringstream os;
+  os << in.rdbuf();
+  const std::string doc = os.str();
+  std::vector<std::string> names = {incise::scene::kExplicitSchurName};
+  auto add = [&names](const auto& table) {
+    for (const std::string& n : table.names()) names.push_back(n);
+  };
+  add(incise::scene::kMeshSourceNames);
+  add(incise::scene::kCubeSplitNames);
+  add(incise::scene::kRegionKindNames);
+  add(incise::scene::kLoadKindNames);
+  add(incise::scene::kMethodNames);
+  add(incise::scene::kCutConfigurationNames);
+  add(incise::scene::kToolKindNames);
+  add(incise::scene::kProbeQuantityNames);
+  add(incise::solver::kPreconditionerNames);
+  add(incise::linalg::kSchurPreconditionerNames);
+  for (const std::string& n : incise::material::registered_material_names()) names.push_back(n);
+  for (const std::string& n : names)
+    EXPECT_NE(doc.find("`\"" + n + "\"`"), std::string::npos)
+        << "docs/scenes.md lacks `\"" << n << "\"`";
 }
 
 }  // namespace

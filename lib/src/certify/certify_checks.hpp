@@ -34,10 +34,10 @@ inline std::string fmt(double v) {
 inline scene::MaterialSpec table_4_1_material(const std::string& model) {
   scene::MaterialSpec m;
   m.model = model;
-  m.E = 1e4;
-  m.nu = 0.3;
-  m.gamma = model == "veronda-westmann" ? 8.0 : 0.0;
-  m.rho = 1000;
+  m.parameters.youngs_modulus = 1e4;
+  m.parameters.poisson_ratio = 0.3;
+  m.parameters.gamma = model == "veronda-westmann" ? 8.0 : 0.0;
+  m.parameters.density = 1000;
   return m;
 }
 

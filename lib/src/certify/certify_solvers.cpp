@@ -35,8 +35,8 @@ scene::SceneSpec cantilever_spec(int n, double tolerance) {
   s.mesh.nx = 4 * n, s.mesh.ny = n, s.mesh.nz = n;
   s.mesh.lx = c.length, s.mesh.ly = c.height, s.mesh.lz = c.depth;
   s.material.model = c.material;
-  s.material.E = c.young;
-  s.material.nu = c.poisson;
+  s.material.parameters.youngs_modulus = c.young;
+  s.material.parameters.poisson_ratio = c.poisson;
   scene::Region fixed;
   fixed.kind = scene::Region::Kind::kPlane;
   fixed.axis = 0;
@@ -170,7 +170,7 @@ Measurement measure_solver_trade(const CertifyContext& ctx) {
   const double tol_ref = 1e-8, tol = ctx.tolerance("solver_equivalence_cylinder", "residual");
   scene::SceneSpec spec = cylinder_spec("neohookean", ctx.quick);
   spec.solver.method = scene::SolverSpec::Method::kNewton;
-  spec.solver.preconditioner = "jacobi";
+  spec.solver.preconditioner = solver::Preconditioner::kJacobi;
   spec.solver.tolerance = tol_ref;
   scene::BuiltScene ref_scene = scene::build_scene(spec);
   const scene::SceneRunResult ref = scene::run_scene(ref_scene);
@@ -200,7 +200,7 @@ Measurement measure_solver_trade(const CertifyContext& ctx) {
   for (auto method :
        {scene::SolverSpec::Method::kNonlinearCG, scene::SolverSpec::Method::kDynamicSS22}) {
     spec.solver.method = method;
-    spec.solver.preconditioner = "none";
+    spec.solver.preconditioner = solver::Preconditioner::kNone;
     spec.solver.tolerance = tol;
     scene::BuiltScene b = scene::build_scene(spec);
     const scene::SceneRunResult res = scene::run_scene(b);
@@ -236,7 +236,7 @@ Measurement measure_augmented_cut(const CertifyContext& ctx) {
   // (builder cuts, then CG) makes exactly the same mesh.
   scene::SceneSpec spec = scene::load_scene(ctx.data_dir + "/scenes/cube_cut_augmented.json");
   spec.outputs = scene::OutputSpec{};
-  spec.solver.cut_deformed = false;
+  spec.solver.cut_configuration = scene::SolverSpec::CutConfiguration::kReference;
   scene::BuiltScene aug_scene = scene::build_scene(spec);
   const scene::SceneRunResult aug = scene::run_scene(aug_scene);
   scene::SceneSpec cg_spec = spec;

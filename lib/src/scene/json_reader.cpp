@@ -181,16 +181,8 @@ std::string JsonObject::string(const std::string& key, const std::string& fallba
   return has(key) ? string(key) : (known_.insert(key), fallback);
 }
 
-namespace {
-std::string describe_choices(const std::vector<std::string>& choices) {
-  std::string s = "one of ";
-  for (std::size_t i = 0; i < choices.size(); ++i) s += (i ? ", \"" : "\"") + choices[i] + "\"";
-  return s;
-}
-}  // namespace
-
 std::string JsonObject::choice(const std::string& key, const std::vector<std::string>& choices) {
-  const std::string form = describe_choices(choices);
+  const std::string form = one_of(choices);
   const Json& v = require(key, form);
   if (!v.is_string() ||
       std::find(choices.begin(), choices.end(), v.get<std::string>()) == choices.end())

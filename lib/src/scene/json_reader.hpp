@@ -6,6 +6,7 @@
 // closest one. Every failure throws incise::ParseError("<file>", 0, "<path>: <message>").
 
 #include <incise/core/error.hpp>
+#include <incise/core/name_table.hpp>
 #include <incise/core/types.hpp>
 
 #include <nlohmann/json.hpp>
@@ -72,6 +73,15 @@ class JsonObject {
   std::string choice(const std::string& key, const std::vector<std::string>& choices);
   std::string choice(const std::string& key, const std::vector<std::string>& choices,
                      const std::string& fallback);
+  /// A name from `table`, as its enum value.
+  template <class Enum, std::size_t N>
+  Enum choice(const std::string& key, const NameTable<Enum, N>& table) {
+    return *table.find(choice(key, table.names()));
+  }
+  template <class Enum, std::size_t N>
+  Enum choice(const std::string& key, const NameTable<Enum, N>& table, Enum fallback) {
+    return has(key) ? choice(key, table) : (known_.insert(key), fallback);
+  }
   Vec3 vec3(const std::string& key);
   Vec3 vec3(const std::string& key, const Vec3& fallback);
   /// A nested object (required).

@@ -123,12 +123,7 @@ std::vector<std::array<Vec3, 3>> sweep_triangles(const ToolSpec& tool) {
 }
 
 material::Material make_material(const MaterialSpec& spec) {
-  material::Parameters mp;
-  mp.youngs_modulus = spec.E;
-  mp.poisson_ratio = spec.nu;
-  mp.gamma = spec.gamma;
-  mp.density = spec.rho;
-  return material::Material(spec.model, mp);
+  return material::Material(spec.model, spec.parameters);
 }
 
 Vec3 probe_value(const ResolvedProbe& probe, const VecX& u) {

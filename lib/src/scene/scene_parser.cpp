@@ -15,37 +15,6 @@
 
 namespace incise::scene {
 
-const char* to_string(SolverSpec::Method m) {
-  switch (m) {
-    case SolverSpec::Method::kCG: return "cg";
-    case SolverSpec::Method::kNonlinearCG: return "nonlinear-cg";
-    case SolverSpec::Method::kNewton: return "newton";
-    case SolverSpec::Method::kDynamicSS22: return "dynamic-ss22";
-    case SolverSpec::Method::kAugmented: return "augmented";
-  }
-  return "?";
-}
-
-const char* to_string(Region::Kind k) {
-  switch (k) {
-    case Region::Kind::kPlane: return "plane";
-    case Region::Kind::kBox: return "box";
-    case Region::Kind::kSphere: return "sphere";
-    case Region::Kind::kTag: return "tag";
-  }
-  return "?";
-}
-
-const char* to_string(LoadSpec::Kind k) {
-  switch (k) {
-    case LoadSpec::Kind::kGravity: return "gravity";
-    case LoadSpec::Kind::kPoint: return "point";
-    case LoadSpec::Kind::kNodal: return "nodal";
-    case LoadSpec::Kind::kSurface: return "surface";
-  }
-  return "?";
-}
-
 namespace {
 
 using detail::fail;
@@ -58,20 +27,27 @@ constexpr int kMaxIterations = 100000000;
 
 const std::vector<std::string> kMeshExtensions = {".mesh", ".msh", ".node", ".off"};
 
+// `a <what> object {"type": "a"|"b", ...}`: the expected form of an object whose `type` is a
+// name from `table`.
+template <class Table>
+std::string typed_object(const std::string& what, const Table& table) {
+  std::string s = "a " + what + " object {\"type\": ";
+  const std::vector<std::string> names = table.names();
+  for (std::size_t i = 0; i < names.size(); ++i) s += (i ? "|\"" : "\"") + names[i] + "\"";
+  return s + ", ...}";
+}
+
 Region parse_region(const Json& j, const std::string& path, const std::string& file) {
-  JsonObject o(j, path, file,
-               "a region object {\"type\": \"plane\"|\"box\"|\"sphere\"|\"tag\", ...}");
+  JsonObject o(j, path, file, typed_object("region", kRegionKindNames));
   Region r;
   r.path = path;
-  const std::string type = o.choice("type", {"plane", "box", "sphere", "tag"});
-  if (type == "plane") {
-    r.kind = Region::Kind::kPlane;
+  r.kind = o.choice("type", kRegionKindNames);
+  if (r.kind == Region::Kind::kPlane) {
     const std::string axis = o.choice("axis", {"x", "y", "z"});
     r.axis = axis[0] - 'x';
     r.value = o.number("value", detail::any_finite());
     r.tolerance = o.number("tolerance", detail::non_negative(), 0.0);
-  } else if (type == "box") {
-    r.kind = Region::Kind::kBox;
+  } else if (r.kind == Region::Kind::kBox) {
     r.lo = o.vec3("min");
     r.hi = o.vec3("max");
     for (int a = 0; a < 3; ++a) {
@@ -80,12 +56,10 @@ Region parse_region(const Json& j, const std::string& path, const std::string& f
              "expected max >= min in every coordinate (coordinate " + std::to_string(a) +
                  " has max " + std::to_string(r.hi[a]) + " < min " + std::to_string(r.lo[a]) + ")");
     }
-  } else if (type == "sphere") {
-    r.kind = Region::Kind::kSphere;
+  } else if (r.kind == Region::Kind::kSphere) {
     r.center = o.vec3("center");
     r.radius = o.number("radius", detail::positive());
   } else {
-    r.kind = Region::Kind::kTag;
     r.tag = o.integer("tag", std::numeric_limits<int>::min(), std::numeric_limits<int>::max());
   }
   o.finish();
@@ -94,13 +68,8 @@ Region parse_region(const Json& j, const std::string& path, const std::string& f
 
 MeshSpec parse_mesh(JsonObject o, const std::string& file, const std::string& base_dir) {
   MeshSpec m;
-  const std::string type = o.choice("type", {"file", "box", "cylinder"});
-  auto split = [&o]() {
-    return o.choice("split", {"six", "five"}, "six") == "six" ? mesh::CubeSplit::kSix
-                                                              : mesh::CubeSplit::kFive;
-  };
-  if (type == "file") {
-    m.source = MeshSpec::Source::kFile;
+  m.source = o.choice("type", kMeshSourceNames);
+  if (m.source == MeshSpec::Source::kFile) {
     const std::string rel = o.string("path");
     const std::string p = detail::child_path(o.path(), "path");
     std::filesystem::path fp(rel);
@@ -116,17 +85,15 @@ MeshSpec parse_mesh(JsonObject o, const std::string& file, const std::string& ba
       fail(file, p, "mesh file not found: " + fp.lexically_normal().string());
     m.file = fp.lexically_normal().string();
     m.scale = o.number("scale", detail::positive(), 1.0);
-  } else if (type == "box") {
-    m.source = MeshSpec::Source::kBox;
+  } else if (m.source == MeshSpec::Source::kBox) {
     m.nx = o.integer("nx", 1, kMaxCells);
     m.ny = o.integer("ny", 1, kMaxCells);
     m.nz = o.integer("nz", 1, kMaxCells);
     m.lx = o.number("lx", detail::positive());
     m.ly = o.number("ly", detail::positive());
     m.lz = o.number("lz", detail::positive());
-    m.split = split();
+    m.split = o.choice("split", kCubeSplitNames, mesh::CubeSplit::kSix);
   } else {
-    m.source = MeshSpec::Source::kCylinder;
     m.radius = o.number("radius", detail::positive());
     m.length = o.number("length", detail::positive());
     m.rings = o.integer("rings", 1, kMaxCells);
@@ -136,47 +103,73 @@ MeshSpec parse_mesh(JsonObject o, const std::string& file, const std::string& ba
   return m;
 }
 
-MaterialSpec parse_material(JsonObject o, bool needs_rho, const std::string& rho_reason) {
+// material::validate(p), its ParameterError reported at the JSON path of the inadmissible
+// parameter. validate judges each parameter on its own, so that parameter is the first whose
+// value alone (the others at their admissible defaults) is rejected; a rule between parameters
+// would be reported at the material object.
+void validate_material(const JsonObject& o, const material::Parameters& p) {
+  try {
+    material::validate(p);
+  } catch (const ParameterError& e) {
+    using P = material::Parameters;
+    const std::pair<const char*, double P::*> keys[] = {{"E", &P::youngs_modulus},
+                                                        {"nu", &P::poisson_ratio},
+                                                        {"gamma", &P::gamma},
+                                                        {"rho", &P::density}};
+    for (const auto& [key, member] : keys) {
+      P alone;
+      alone.*member = p.*member;
+      try {
+        material::validate(alone);
+      } catch (const ParameterError&) {
+        fail(o.file(), detail::child_path(o.path(), key), e.what());
+      }
+    }
+    fail(o.file(), o.path(), e.what());
+  }
+}
+
+// `rho_reason` is non-empty when the scene needs a density (gravity, dynamic solver): then
+// "rho" is required and must be > 0.
+MaterialSpec parse_material(JsonObject o, const std::string& rho_reason) {
   MaterialSpec m;
   m.model = o.choice("model", material::registered_material_names());
-  m.E = o.number("E", detail::positive());
-  m.nu = o.number("nu", Range{-1.0, 0.5, true, true});
-  if (m.model == "veronda-westmann") {
-    m.gamma = o.number("gamma", detail::positive());
+  material::Parameters& p = m.parameters;
+  p.youngs_modulus = o.number("E", detail::any_finite());
+  p.poisson_ratio = o.number("nu", detail::any_finite());
+  if (m.model == material::VerondaWestmann::kName) {
+    p.gamma = o.number("gamma", detail::any_finite());
   } else {
     o.forbid("gamma", "only the \"veronda-westmann\" model has the nonlinearity gamma (§4.3.4)");
   }
-  if (needs_rho) {
-    if (!o.has("rho"))
-      fail(
-          o.file(), o.path(),
-          "missing required key \"rho\" (expected a number > 0, density in kg/m^3): " + rho_reason);
-  }
-  m.rho = o.number("rho", detail::positive(), 1000.0);
+  if (!rho_reason.empty() && !o.has("rho"))
+    fail(o.file(), o.path(),
+         "missing required key \"rho\" (expected a number > 0, density in kg/m^3): " + rho_reason);
+  p.density = o.number("rho", detail::any_finite(), p.density);
+  validate_material(o, p);
+  if (!rho_reason.empty() && !(p.density > 0))
+    fail(o.file(), detail::child_path(o.path(), "rho"),
+         "expected a number > 0 (density in kg/m^3), got " + detail::show(*o.get("rho")) + ": " +
+             rho_reason);
   o.finish();
   return m;
 }
 
 LoadSpec parse_load(const Json& j, const std::string& path, const std::string& file) {
-  JsonObject o(j, path, file,
-               "a load object {\"type\": \"gravity\"|\"point\"|\"nodal\"|\"surface\", ...}");
+  JsonObject o(j, path, file, typed_object("load", kLoadKindNames));
   LoadSpec l;
   l.path = path;
-  const std::string type = o.choice("type", {"gravity", "point", "nodal", "surface"});
-  if (type == "gravity") {
-    l.kind = LoadSpec::Kind::kGravity;
+  l.kind = o.choice("type", kLoadKindNames);
+  if (l.kind == LoadSpec::Kind::kGravity) {
     l.vector = o.vec3("g");
-  } else if (type == "point") {
-    l.kind = LoadSpec::Kind::kPoint;
+  } else if (l.kind == LoadSpec::Kind::kPoint) {
     l.at = o.vec3("at");
     l.vector = o.vec3("force");
-  } else if (type == "nodal") {
-    l.kind = LoadSpec::Kind::kNodal;
+  } else if (l.kind == LoadSpec::Kind::kNodal) {
     l.region = parse_region(o.require("region", "a region object"),
                             detail::child_path(path, "region"), file);
     l.vector = o.vec3("total_force");
   } else {
-    l.kind = LoadSpec::Kind::kSurface;
     l.region = parse_region(o.require("region", "a region object"),
                             detail::child_path(path, "region"), file);
     l.vector = o.vec3("traction");
@@ -187,19 +180,14 @@ LoadSpec parse_load(const Json& j, const std::string& path, const std::string& f
 
 SolverSpec parse_solver(JsonObject o) {
   SolverSpec s;
-  const std::string method =
-      o.choice("method", {"cg", "nonlinear-cg", "newton", "dynamic-ss22", "augmented"});
-  s.method = method == "cg"             ? SolverSpec::Method::kCG
-             : method == "nonlinear-cg" ? SolverSpec::Method::kNonlinearCG
-             : method == "newton"       ? SolverSpec::Method::kNewton
-             : method == "dynamic-ss22" ? SolverSpec::Method::kDynamicSS22
-                                        : SolverSpec::Method::kAugmented;
+  s.method = o.choice("method", kMethodNames);
   s.tolerance = o.number("tolerance", Range{0.0, 1.0, true, true}, 1e-8);
   s.max_iterations = o.integer("max_iterations", 1, kMaxIterations, 10000);
   s.time_budget = o.number("time_budget", detail::non_negative(), 0.0);
   const bool dynamic = s.method == SolverSpec::Method::kDynamicSS22;
   if (s.method == SolverSpec::Method::kCG || s.method == SolverSpec::Method::kNewton) {
-    s.preconditioner = o.choice("preconditioner", {"none", "jacobi"}, "none");
+    s.preconditioner =
+        o.choice("preconditioner", solver::kPreconditionerNames, solver::Preconditioner::kNone);
   } else {
     o.forbid("preconditioner", "only \"cg\" and \"newton\" take a preconditioner");
   }
@@ -214,12 +202,17 @@ SolverSpec parse_solver(JsonObject o) {
     o.forbid("spectral_tuning", why);
   }
   if (s.method == SolverSpec::Method::kAugmented) {
-    s.cut_deformed =
-        o.choice("cut_configuration", {"deformed", "reference"}, "deformed") == "deformed";
+    s.cut_configuration = o.choice("cut_configuration", kCutConfigurationNames,
+                                   SolverSpec::CutConfiguration::kDeformed);
     s.refactor_at_m = o.integer("refactor_at_m", 0, std::numeric_limits<int>::max(), 0);
     s.solve_threads = o.integer("solve_threads", 1, 64, 1);
-    s.schur_preconditioner =
-        o.choice("schur_preconditioner", schur_preconditioner_names(), "explicit");
+    std::vector<std::string> schur_names = {kExplicitSchurName};
+    for (const std::string& n : linalg::kSchurPreconditionerNames.names()) schur_names.push_back(n);
+    const std::string schur = o.choice("schur_preconditioner", schur_names, kExplicitSchurName);
+    if (schur != kExplicitSchurName) {
+      s.schur_solver = linalg::SchurSolver::kGmres;
+      s.schur_preconditioner = *linalg::kSchurPreconditionerNames.find(schur);
+    }
   } else {
     o.forbid("cut_configuration",
              "only the \"augmented\" method solves between sweep triangles (the others cut "
@@ -238,11 +231,10 @@ SolverSpec parse_solver(JsonObject o) {
 }
 
 ToolSpec parse_tool(const Json& j, const std::string& path, const std::string& file) {
-  JsonObject o(j, path, file, "a tool object {\"type\": \"scalpel\", ...}");
+  JsonObject o(j, path, file, typed_object("tool", kToolKindNames));
   ToolSpec t;
   t.path_json = path;
-  o.choice("type", {"scalpel"});
-  t.kind = ToolSpec::Kind::kScalpel;
+  t.kind = o.choice("type", kToolKindNames);
   const Json* p = o.array("path", "an array of at least 2 points [[x, y, z], ...]", false);
   if (p->size() < 2)
     detail::fail_expected(file, detail::child_path(path, "path"),
@@ -289,7 +281,7 @@ OutputSpec parse_outputs(JsonObject o) {
                               Json(pr.name));
       if (!names.insert(pr.name).second)
         fail(file, pp + "/name", "duplicate probe name \"" + pr.name + "\"");
-      pr.quantity = po.choice("quantity", {"displacement"}, "displacement");
+      pr.quantity = po.choice("quantity", kProbeQuantityNames, ProbeSpec::Quantity::kDisplacement);
       const bool has_at = po.has("at"), has_region = po.has("region");
       if (has_at == has_region)
         fail(file, pp,
@@ -319,8 +311,7 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
   root.integer("version", 1, 1, 1);
   s.name = root.string("name", "");
   s.description = root.string("description", "");
-  s.mesh = parse_mesh(root.object("mesh", "a mesh object {\"type\": \"file\"|\"box\"|...}"), file,
-                      base_dir);
+  s.mesh = parse_mesh(root.object("mesh", typed_object("mesh", kMeshSourceNames)), file, base_dir);
   s.solver = parse_solver(root.object("solver", "a solver object {\"method\": ...}"));
   const bool dynamic = s.solver.method == SolverSpec::Method::kDynamicSS22;
 
@@ -336,13 +327,15 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
   }
   if (dynamic && rho_reason.empty())
     rho_reason = "the \"dynamic-ss22\" solver needs a density for the lumped mass";
-  s.material = parse_material(root.object("material", "a material object {\"model\": ...}"),
-                              !rho_reason.empty(), rho_reason);
-  if (s.solver.method == SolverSpec::Method::kCG && s.material.model != "linear")
+  s.material =
+      parse_material(root.object("material", "a material object {\"model\": ...}"), rho_reason);
+  if (s.solver.method == SolverSpec::Method::kCG &&
+      s.material.model != material::LinearElastic::kName)
     fail(file, "/solver/method",
          "\"cg\" solves linear elasticity only (thesis §3.1); material \"" + s.material.model +
              "\" needs \"nonlinear-cg\", \"newton\" or \"dynamic-ss22\"");
-  if (s.solver.method == SolverSpec::Method::kAugmented && s.material.model != "linear")
+  if (s.solver.method == SolverSpec::Method::kAugmented &&
+      s.material.model != material::LinearElastic::kName)
     fail(file, "/solver/method",
          "\"augmented\" factorizes the constant linear stiffness; material \"" + s.material.model +
              "\" is nonlinear");

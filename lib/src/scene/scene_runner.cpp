@@ -119,18 +119,12 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
 
   Timer t;
   interactive::AugmentedCutOptions options;
-  options.update_deformed = spec.solver.cut_deformed;
+  options.update_deformed =
+      spec.solver.cut_configuration == SolverSpec::CutConfiguration::kDeformed;
   options.refactor_at_m = spec.solver.refactor_at_m;
   options.augmented.solve_threads = spec.solver.solve_threads;
-  const std::string& prec = spec.solver.schur_preconditioner;
-  const auto& names = schur_preconditioner_names();
-  INCISE_CHECK(std::find(names.begin(), names.end(), prec) != names.end(),
-               "SolverSpec::schur_preconditioner must be one of schur_preconditioner_names()");
-  options.augmented.schur_solver =
-      prec == "explicit" ? linalg::SchurSolver::kDirectCached : linalg::SchurSolver::kGmres;
-  options.augmented.preconditioner = prec == "spai" ? linalg::SchurPreconditioner::kTridiagonalSpai
-                                     : prec == "none" ? linalg::SchurPreconditioner::kNone
-                                                      : linalg::SchurPreconditioner::kDiagonal;
+  options.augmented.schur_solver = spec.solver.schur_solver;
+  options.augmented.preconditioner = spec.solver.schur_preconditioner;
   auto session = std::make_unique<interactive::AugmentedCutSession>(
       scene.mesh, mat, scene.fixed_nodes, forces, options);
   const interactive::AugmentedCutStepReport& init = session->initial_report();
@@ -247,11 +241,12 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   detail << "interactive cut with the augmented solver (Yeung et al. 2016 §3): K0 factored once "
             "(CHOLMOD, |L| = "
          << init.solve.nnz_l << "), then per sweep triangle: cut (thesis §3.2, in the "
-         << (spec.solver.cut_deformed ? "deformed" : "reference")
+         << to_string(spec.solver.cut_configuration)
          << " configuration), element stiffness changes and new DOFs as replaced columns, GMRES "
          << "on the Schur system (preconditioner: "
-         << (spec.solver.schur_preconditioner == "explicit" ? std::string("explicit H R^-1 J")
-                                                            : spec.solver.schur_preconditioner)
+         << (spec.solver.schur_solver == linalg::SchurSolver::kDirectCached
+                 ? "explicit H R^-1 J"
+                 : linalg::to_string(spec.solver.schur_preconditioner))
          << "), step 3 on " << spec.solver.solve_threads
          << (spec.solver.solve_threads == 1 ? " thread; " : " threads; ")
          << (spec.solver.refactor_at_m > 0 ? "background refactorization (§3.6) at m - |D| >= " +
@@ -321,10 +316,9 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
       solver::LinearCgOptions o;
       o.stop = stop;
       o.budget = budget;
-      o.preconditioner = s.preconditioner == "jacobi" ? solver::Preconditioner::kJacobi
-                                                      : solver::Preconditioner::kNone;
+      o.preconditioner = s.preconditioner;
       o.observer = record_row;
-      detail << "linear CG (matrix-free), preconditioner " << s.preconditioner;
+      detail << "linear CG (matrix-free), preconditioner " << solver::to_string(s.preconditioner);
       res.report = solver::linear_cg(p, res.u, o);
       break;
     }
@@ -342,10 +336,9 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
       solver::TruncatedNewtonOptions o;
       o.stop = stop;
       o.budget = budget;
-      o.preconditioner = s.preconditioner == "jacobi" ? solver::Preconditioner::kJacobi
-                                                      : solver::Preconditioner::kNone;
+      o.preconditioner = s.preconditioner;
       o.observer = record_row;
-      detail << "truncated Newton, inner CG preconditioner " << s.preconditioner;
+      detail << "truncated Newton, inner CG preconditioner " << solver::to_string(s.preconditioner);
       res.report = solver::truncated_newton(p, res.u, o);
       break;
     }

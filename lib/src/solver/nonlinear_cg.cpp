@@ -6,16 +6,11 @@
 namespace incise::solver {
 
 const char* to_string(BetaRule b) {
-  return b == BetaRule::kFletcherReeves ? "fletcher-reeves" : "polak-ribiere";
+  return kBetaRuleNames.name(b);
 }
 
 const char* to_string(LineSearchKind l) {
-  switch (l) {
-    case LineSearchKind::kNewton: return "newton";
-    case LineSearchKind::kSecant: return "secant";
-    case LineSearchKind::kScaleDependentSecant: return "scale-dependent-secant";
-  }
-  return "?";
+  return kLineSearchNames.name(l);
 }
 
 namespace {

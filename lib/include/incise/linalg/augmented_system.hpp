@@ -19,6 +19,7 @@
 /// (remove_fixed_dofs()) and are passed as −1 in element DOF lists. New DOFs get n₀, n₀+1, …
 /// in the order of add_dofs() calls.
 
+#include <incise/core/name_table.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
 #include <incise/linalg/gmres.hpp>
 
@@ -40,6 +41,19 @@ enum class SchurPreconditioner {
   kTridiagonalSpai  ///< S = tridiagonal sparse approximate inverse of R (Benson &
                     ///< Frederickson 1982): min ‖R S − I‖_F column by column
 };
+
+/// Names of the Schur preconditioners (the GMRES values of the scene key
+/// `schur_preconditioner`, docs/scenes.md): "hsj" is H S J with S = D⁻¹.
+inline constexpr NameTable<SchurPreconditioner, 3> kSchurPreconditionerNames{{{
+    {SchurPreconditioner::kDiagonal, "hsj"},
+    {SchurPreconditioner::kTridiagonalSpai, "spai"},
+    {SchurPreconditioner::kNone, "none"},
+}}};
+
+/// Name from kSchurPreconditionerNames.
+inline const char* to_string(SchurPreconditioner p) {
+  return kSchurPreconditionerNames.name(p);
+}
 
 /// How the m×m Schur system (H R⁻¹ J) a₂ = H R⁻¹ f̂ of eq. 17 is solved.
 enum class SchurSolver {

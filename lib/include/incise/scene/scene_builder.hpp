@@ -73,8 +73,8 @@ std::vector<std::array<Vec3, 3>> sweep_triangles(const ToolSpec& tool);
 /// no tags.
 mesh::MeshData live_mesh_data(const cut::CutMesh& cut_mesh);
 
-/// The material a scene names (model and SI parameters E, ν, γ, ρ); throws ParameterError for
-/// out-of-range parameters (material::Material's checks).
+/// The material a scene names (registry model and its parameters); throws ParameterError for an
+/// unknown model or inadmissible parameters (material::Material's checks).
 material::Material make_material(const MaterialSpec& spec);
 
 /// Mean displacement (m) over the probe's nodes; u holds 3 DOFs per node.

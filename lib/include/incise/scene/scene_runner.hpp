@@ -80,7 +80,7 @@ struct SceneRunResult {
   VecX u;                          ///< final displacements (m)
   double external_force_norm = 0;  ///< ‖f_ext‖₂ over free DOFs (N)
   std::vector<ProbeResult> probes;
-  std::vector<TraceRow> trace;  ///< one row per iteration (initial state first)
+  std::vector<TraceRow> trace;  ///< one row per iteration, from the first
   /// Interactive cutting run only: one row per solve (initial solve first). The report then
   /// holds iterations = number of solves, inner_iterations = total GMRES iterations and the
   /// residual ‖P(K u − f)‖ recomputed matrix-free on the final cut mesh (scene.problem).

@@ -5,10 +5,17 @@
 /// parser (scene_parser.hpp) produces a SceneSpec only when the whole file is valid; the builder
 /// (scene_builder.hpp) then constructs only the parts the spec names.
 ///
-/// Units are SI throughout: metres, pascals, newtons, kilograms, seconds.
+/// Units are SI throughout: metres, pascals, newtons, kilograms, seconds. Every enum a scene
+/// names by a string has one NameTable (core/name_table.hpp): the scene's own below, those of
+/// lower modules with their enums (solver::kPreconditionerNames,
+/// linalg::kSchurPreconditionerNames); material models are named by the material registry.
 
+#include <incise/core/name_table.hpp>
 #include <incise/core/types.hpp>
+#include <incise/linalg/augmented_system.hpp>
+#include <incise/material/parameters.hpp>
 #include <incise/mesh/generators.hpp>
+#include <incise/solver/linear_cg.hpp>
 
 #include <map>
 #include <optional>
@@ -38,6 +45,14 @@ struct Region {
   std::string path;            ///< JSON path of this region in the scene, for messages
 };
 
+/// Names of Region::Kind (scene key `type` of a region).
+inline constexpr NameTable<Region::Kind, 4> kRegionKindNames{{{
+    {Region::Kind::kPlane, "plane"},
+    {Region::Kind::kBox, "box"},
+    {Region::Kind::kSphere, "sphere"},
+    {Region::Kind::kTag, "tag"},
+}}};
+
 /// Where the mesh comes from.
 struct MeshSpec {
   /// Source of the mesh.
@@ -56,13 +71,25 @@ struct MeshSpec {
   int rings = 1, layers = 1;      ///< kCylinder: rings across the disk, layers along x
 };
 
-/// Material model name and parameters (thesis Table 4.1 names; SI units).
+/// Names of MeshSpec::Source (scene key `type` of the mesh).
+inline constexpr NameTable<MeshSpec::Source, 3> kMeshSourceNames{{{
+    {MeshSpec::Source::kFile, "file"},
+    {MeshSpec::Source::kBox, "box"},
+    {MeshSpec::Source::kCylinder, "cylinder"},
+}}};
+
+/// Names of mesh::CubeSplit (scene key `split` of a box mesh; only scenes name the splits).
+inline constexpr NameTable<mesh::CubeSplit, 2> kCubeSplitNames{{{
+    {mesh::CubeSplit::kSix, "six"},
+    {mesh::CubeSplit::kFive, "five"},
+}}};
+
+/// Material model and parameters (scene keys `model`, `E`, `nu`, `gamma`, `rho`).
 struct MaterialSpec {
-  std::string model;    ///< registry name, e.g. "linear", "st-venant-kirchhoff", "neo-hookean"
-  double E = 0.0;       ///< Young's modulus (Pa), > 0
-  double nu = 0.0;      ///< Poisson ratio, in (−1, 0.5)
-  double gamma = 0.0;   ///< Veronda–Westmann nonlinearity γ (§4.3.4), ≥ 0; 0 when unused
-  double rho = 1000.0;  ///< density (kg/m³), > 0
+  std::string model;  ///< registry name (material::registered_material_names()), e.g. "linear"
+  /// E (Pa), ν, γ (Veronda–Westmann, §4.3.4; 0 for the other models), ρ (kg/m³); admissible
+  /// as material::validate defines it (checked by the parser and by make_material).
+  material::Parameters parameters;
 };
 
 /// An external load.
@@ -81,13 +108,15 @@ struct LoadSpec {
   std::string path;            ///< JSON path, for messages
 };
 
-/// Solution method and its stopping rule / budgets.
-/// The values of SolverSpec::schur_preconditioner (scene key `schur_preconditioner`).
-inline const std::vector<std::string>& schur_preconditioner_names() {
-  static const std::vector<std::string> names = {"explicit", "hsj", "spai", "none"};
-  return names;
-}
+/// Names of LoadSpec::Kind (scene key `type` of a load).
+inline constexpr NameTable<LoadSpec::Kind, 4> kLoadKindNames{{{
+    {LoadSpec::Kind::kGravity, "gravity"},
+    {LoadSpec::Kind::kPoint, "point"},
+    {LoadSpec::Kind::kNodal, "nodal"},
+    {LoadSpec::Kind::kSurface, "surface"},
+}}};
 
+/// Solution method and its stopping rule / budgets.
 struct SolverSpec {
   /// Which solver.
   enum class Method {
@@ -97,20 +126,24 @@ struct SolverSpec {
     kDynamicSS22,  ///< explicit dynamic relaxation with the SS22 scheme (§2.5)
     kAugmented     ///< CHOLMOD factorization + augmented system (Yeung et al. 2016)
   };
+  /// Interactive cutting run: the configuration each sweep triangle is applied to.
+  enum class CutConfiguration {
+    kDeformed,  ///< the deformed body X + u of the last solution (the scalpel moves in world
+                ///< space, thesis §3.2)
+    kReference  ///< the reference configuration (the same cut as the builder's cut-first path)
+  };
   Method method = Method::kCG;
   double tolerance = 1e-8;  ///< stop when ‖r‖₂ ≤ tolerance·‖f_ext‖₂ (§3.1), in (0, 1)
-  int max_iterations = 10000;           ///< iteration (or time-step) budget, ≥ 1
-  double time_budget = 0.0;             ///< wall-clock budget (s); 0 = unlimited
-  std::string preconditioner = "none";  ///< "none" or "jacobi" (CG, Newton inner CG)
+  int max_iterations = 10000;  ///< iteration (or time-step) budget, ≥ 1
+  double time_budget = 0.0;    ///< wall-clock budget (s); 0 = unlimited
+  /// CG and Newton's inner CG (scene key `preconditioner`).
+  solver::Preconditioner preconditioner = solver::Preconditioner::kNone;
   double time_step = 0.0;  ///< dynamic: Δt (s); 0 → 0.9 × critical step 2/√λ_max (§4.1)
   double damping = -1.0;  ///< dynamic: damping η (1/s), ≥ 0; −1 → automatic: critical damping
                           ///< 2√λ₁ (§4.1) or, with spectral_tuning, from the FFT
   bool spectral_tuning = false;  ///< dynamic: estimate damping from an FFT of the trace
-  /// Interactive cutting run ("augmented" with tools) only: whether each sweep triangle is
-  /// applied to the deformed body X + u of the last solution (true, the default: the scalpel
-  /// moves in world space, thesis §3.2) or to the reference configuration (false: the same
-  /// cut as the builder's cut-first path). Scene key `cut_configuration`.
-  bool cut_deformed = true;
+  /// Interactive cutting run ("augmented" with tools) only. Scene key `cut_configuration`.
+  CutConfiguration cut_configuration = CutConfiguration::kDeformed;
   /// Interactive cutting run only: interactive::AugmentedCutOptions::refactor_at_m, the augmented
   /// paper's §3.6 background refactorization — started after a solve once m − |𝓓| replaced
   /// columns (a count) have accumulated; 0 = never. Scene key `refactor_at_m`.
@@ -119,12 +152,34 @@ struct SolverSpec {
   /// step 3's full backward substitution (1 = serial; the result is bit-identical for any
   /// value). Scene key `solve_threads`, 1 … 64.
   int solve_threads = 1;
-  /// Interactive cutting run only: how GMRES on eq. 17 (the Schur system) is preconditioned —
-  /// "explicit" (the default: the explicit H R⁻¹ J in capacitance form,
-  /// linalg::SchurSolver::kDirectCached), or the paper's §3.5 choices "hsj" (S = D⁻¹), "spai"
-  /// (tridiagonal sparse approximate inverse) and "none". Scene key `schur_preconditioner`.
-  std::string schur_preconditioner = "explicit";
+  /// Interactive cutting run only: how eq. 17 (the Schur system) is solved and preconditioned,
+  /// as in linalg::AugmentedOptions. Scene key `schur_preconditioner`: "explicit" (the default)
+  /// is linalg::SchurSolver::kDirectCached, the explicit H R⁻¹ J in capacitance form; the
+  /// paper's §3.5 choices (linalg::kSchurPreconditionerNames: "hsj", "spai", "none") are
+  /// SchurSolver::kGmres with that preconditioner.
+  linalg::SchurSolver schur_solver = linalg::SchurSolver::kDirectCached;
+  /// Used when schur_solver is kGmres.
+  linalg::SchurPreconditioner schur_preconditioner = linalg::SchurPreconditioner::kDiagonal;
 };
+
+/// Names of SolverSpec::Method (scene key `method`).
+inline constexpr NameTable<SolverSpec::Method, 5> kMethodNames{{{
+    {SolverSpec::Method::kCG, "cg"},
+    {SolverSpec::Method::kNonlinearCG, "nonlinear-cg"},
+    {SolverSpec::Method::kNewton, "newton"},
+    {SolverSpec::Method::kDynamicSS22, "dynamic-ss22"},
+    {SolverSpec::Method::kAugmented, "augmented"},
+}}};
+
+/// Names of SolverSpec::CutConfiguration (scene key `cut_configuration`).
+inline constexpr NameTable<SolverSpec::CutConfiguration, 2> kCutConfigurationNames{{{
+    {SolverSpec::CutConfiguration::kDeformed, "deformed"},
+    {SolverSpec::CutConfiguration::kReference, "reference"},
+}}};
+
+/// The value of the scene key `schur_preconditioner` that selects linalg::SchurSolver::
+/// kDirectCached; its other values are the names in linalg::kSchurPreconditionerNames.
+inline constexpr const char* kExplicitSchurName = "explicit";
 
 /// A cutting tool. The scalpel is swept along a path; consecutive blade positions span the
 /// sweep triangles of thesis §3.2.
@@ -137,15 +192,29 @@ struct ToolSpec {
   std::string path_json;      ///< JSON path, for messages
 };
 
+/// Names of ToolSpec::Kind (scene key `type` of a tool).
+inline constexpr NameTable<ToolSpec::Kind, 1> kToolKindNames{{{
+    {ToolSpec::Kind::kScalpel, "scalpel"},
+}}};
+
 /// A quantity recorded during and after the run.
 struct ProbeSpec {
-  std::string name;               ///< unique, [A-Za-z0-9_.-]+
-  std::string quantity;           ///< "displacement" (m)
+  /// What the probe measures.
+  enum class Quantity {
+    kDisplacement  ///< displacement u (m)
+  };
+  std::string name;  ///< unique, [A-Za-z0-9_.-]+
+  Quantity quantity = Quantity::kDisplacement;
   bool use_region = false;        ///< false: node nearest to `at`; true: average over region
   Vec3 at = Vec3::Zero();         ///< location (m)
   Region region;                  ///< averaging region
   std::optional<Vec3> reference;  ///< optional expected value (m), reported with the error
 };
+
+/// Names of ProbeSpec::Quantity (scene key `quantity` of a probe).
+inline constexpr NameTable<ProbeSpec::Quantity, 1> kProbeQuantityNames{{{
+    {ProbeSpec::Quantity::kDisplacement, "displacement"},
+}}};
 
 /// Files the run writes.
 struct OutputSpec {
@@ -173,9 +242,18 @@ struct SceneSpec {
   std::map<std::string, long> lines;
 };
 
-/// Names used in scene files for enums ("cg", "nonlinear-cg", ...).
-const char* to_string(SolverSpec::Method m);
-const char* to_string(Region::Kind k);
-const char* to_string(LoadSpec::Kind k);
+/// Names used in scene files (from the tables above).
+inline const char* to_string(SolverSpec::Method m) {
+  return kMethodNames.name(m);
+}
+inline const char* to_string(SolverSpec::CutConfiguration c) {
+  return kCutConfigurationNames.name(c);
+}
+inline const char* to_string(Region::Kind k) {
+  return kRegionKindNames.name(k);
+}
+inline const char* to_string(LoadSpec::Kind k) {
+  return kLoadKindNames.name(k);
+}
 
 }  // namespace incise::scene

@@ -4,6 +4,7 @@
 /// fixed-DOF handling by zeroing the constrained residual) and its Jacobi-preconditioned variant
 /// (the E Eᵀ = diag K preconditioner of §2.4.1 / §4.6).
 
+#include <incise/core/name_table.hpp>
 #include <incise/solver/report.hpp>
 
 #include <functional>
@@ -17,6 +18,17 @@ enum class Preconditioner {
   kJacobi  ///< diagonal scaling by diag K(u) (Problem::hessian_diagonal); falls back to kNone
            ///< when the problem provides no diagonal or a diagonal entry is ≤ 0
 };
+
+/// Names of the preconditioners (scene key `preconditioner`, docs/scenes.md).
+inline constexpr NameTable<Preconditioner, 2> kPreconditionerNames{{{
+    {Preconditioner::kNone, "none"},
+    {Preconditioner::kJacobi, "jacobi"},
+}}};
+
+/// Name from kPreconditionerNames.
+inline const char* to_string(Preconditioner p) {
+  return kPreconditionerNames.name(p);
+}
 
 /// The step lengths α_k and direction updates β_k of a CG run, from which the Lanczos
 /// tridiagonal matrix of the (preconditioned) operator follows (Saad, Iterative Methods §6.7.3):

@@ -3,6 +3,7 @@
 /// Nonlinear conjugate gradients (thesis §2.4.2) with the line searches of §4.4.2: Newton,
 /// secant (4.9) and scale-dependent secant.
 
+#include <incise/core/name_table.hpp>
 #include <incise/solver/report.hpp>
 
 namespace incise::solver {
@@ -20,7 +21,20 @@ enum class LineSearchKind {
   kScaleDependentSecant  ///< secant also in the first step, from a gradient at α₋₁ (§4.4.2)
 };
 
-/// Human-readable names ("fletcher-reeves", "newton", ...).
+/// Names of the β rules.
+inline constexpr NameTable<BetaRule, 2> kBetaRuleNames{{{
+    {BetaRule::kFletcherReeves, "fletcher-reeves"},
+    {BetaRule::kPolakRibiere, "polak-ribiere"},
+}}};
+
+/// Names of the line searches.
+inline constexpr NameTable<LineSearchKind, 3> kLineSearchNames{{{
+    {LineSearchKind::kNewton, "newton"},
+    {LineSearchKind::kSecant, "secant"},
+    {LineSearchKind::kScaleDependentSecant, "scale-dependent-secant"},
+}}};
+
+/// Names from kBetaRuleNames, kLineSearchNames.
 const char* to_string(BetaRule b);
 const char* to_string(LineSearchKind l);
 

@@ -1,0 +1,64 @@
+#pragma once
+/// \file scene_outputs.hpp
+/// The files a scene's `outputs` name (docs/scenes.md), written by the library: the VTU frames
+/// during a run (FrameWriter, called from run_scene's observers), then the CSV trace, the final
+/// VTU and, on request, the run summary as JSON (write_outputs). Each file is written to a
+/// temporary name and renamed into place (core/atomic_file.hpp), parent folders are created;
+/// paths are relative to the current directory. Nothing is printed.
+
+#include <incise/scene/scene_builder.hpp>
+#include <incise/scene/scene_runner.hpp>
+#include <incise/solver/report.hpp>
+
+#include <string>
+#include <vector>
+
+namespace incise::interactive {
+class AugmentedCutSession;
+}  // namespace incise::interactive
+
+namespace incise::scene {
+
+/// Writes the VTU frames `outputs.vtu_every` asks for (none when it is 0 or `vtu` is empty):
+/// `<vtu>_<iteration>.vtu` of the scene's mesh with point array "displacement" (m) every
+/// vtu_every iterations, or in an interactive cutting run `<vtu>_<step>.vtu` of the cut mesh
+/// every vtu_every steps (step 0 = initial solve).
+class FrameWriter {
+ public:
+  /// Keeps a reference to `scene`, which must outlive the writer.
+  explicit FrameWriter(const BuiltScene& scene) : scene_(scene) {}
+  /// For run_scene's RunObserver: writes the frame of this iteration when one is due.
+  void iteration(const solver::IterationInfo& info);
+  /// For run_scene's CutStepObserver: writes the frame of this step when one is due.
+  void cut_step(const CutStepRow& row, const interactive::AugmentedCutSession& session);
+  /// Frames written so far.
+  long frames() const { return frames_; }
+
+ private:
+  const BuiltScene& scene_;
+  long frames_ = 0;
+};
+
+/// Options of write_outputs().
+struct OutputOptions {
+  std::string summary_json;  ///< path of the summary JSON ("" = none)
+  double total_seconds = 0;  ///< wall time of the whole run (s), reported in the summary
+  long frames = 0;           ///< VTU frames written during the run (FrameWriter::frames())
+};
+
+/// After run_scene(scene, ...): writes the CSV trace (`outputs.csv`: one row per iteration, or
+/// per solve of an interactive cutting run), the final state `<vtu>.vtu` and, when
+/// options.summary_json is set, summary_json() there. Returns what was written, in that order:
+/// the paths, with "<n> frames <vtu>_<it>.vtu" (or "_<step>.vtu") after the final VTU when
+/// options.frames > 0. Throws Error (or std::filesystem::filesystem_error) when a file cannot be
+/// written.
+std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunResult& result,
+                                       const OutputOptions& options = {});
+
+/// The run summary as JSON text (docs/scenes.md, `incise run --summary-json`): scene file, name,
+/// method, result, iterations, residual, energy, flops, times, mesh size, probes, built and
+/// not-built parts, the cut steps of an interactive cutting run, and `outputs` = `written`.
+std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
+                         double total_seconds, const std::vector<std::string>& written);
+
+}  // namespace incise::scene

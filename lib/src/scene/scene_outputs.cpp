@@ -1,0 +1,186 @@
+#include <incise/scene/scene_outputs.hpp>
+
+#include <incise/core/atomic_file.hpp>
+#include <incise/interactive/augmented_cut_session.hpp>
+#include <incise/io/write_mesh.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <iomanip>
+#include <sstream>
+
+namespace incise::scene {
+
+namespace {
+
+using Json = nlohmann::json;
+
+io::DataArray displacement_array(const VecX& u) {
+  io::DataArray a;
+  a.name = "displacement";
+  a.components = 3;
+  a.values.assign(u.data(), u.data() + u.size());
+  return a;
+}
+
+void write_vtu_atomic(const std::string& path, const mesh::MeshData& mesh, const VecX& u) {
+  write_atomically(
+      path, [&](const std::string& tmp) { io::write_vtu(tmp, mesh, {displacement_array(u)}); });
+}
+
+Json vec_json(const Vec3& v) {
+  return Json::array({v[0], v[1], v[2]});
+}
+
+/// Probe column names: <name>_x, <name>_y, <name>_z per probe.
+void probe_columns(std::ostream& csv, const BuiltScene& scene) {
+  for (const auto& p : scene.probes)
+    csv << "," << p.spec.name << "_x," << p.spec.name << "_y," << p.spec.name << "_z";
+  csv << "\n";
+}
+
+void probe_values(std::ostream& csv, const std::vector<Vec3>& probes) {
+  for (const auto& v : probes) csv << "," << v[0] << "," << v[1] << "," << v[2];
+  csv << "\n";
+}
+
+std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
+  std::ostringstream csv;
+  csv << std::setprecision(10);
+  if (!res.cut_steps.empty()) {
+    csv << "step,tool,status,degenerate_sweep,faces_dissected,nodes_snapped,new_nodes,nodes,"
+           "tetrahedra,m,dirichlet,gmres_iterations,gmres_relative_residual,nnz_l,cut_seconds,"
+           "update_seconds,update_cpu_seconds";
+    probe_columns(csv, scene);
+    for (const auto& c : res.cut_steps) {
+      std::string status = c.status;  // CSV field: no commas or quotes
+      for (char& ch : status)
+        if (ch == ',' || ch == '"') ch = ';';
+      csv << c.step << "," << c.tool << "," << status << "," << c.degenerate_sweep << ","
+          << c.faces_dissected << "," << c.nodes_snapped << "," << c.new_nodes << "," << c.nodes
+          << "," << c.tetrahedra << "," << c.m << "," << c.dirichlet << "," << c.gmres_iterations
+          << "," << c.gmres_relative_residual << "," << c.nnz_l << "," << c.seconds_cut << ","
+          << c.seconds_update << "," << c.cpu_seconds_update;
+      probe_values(csv, c.probes);
+    }
+  } else {
+    csv << "iteration,residual_norm,relative_residual,energy,flops,seconds";
+    probe_columns(csv, scene);
+    for (const auto& row : res.trace) {
+      csv << row.iteration << "," << row.residual_norm << ","
+          << row.residual_norm / res.external_force_norm << "," << row.energy << "," << row.flops
+          << "," << row.seconds;
+      probe_values(csv, row.probes);
+    }
+  }
+  return csv.str();
+}
+
+}  // namespace
+
+void FrameWriter::iteration(const solver::IterationInfo& info) {
+  const OutputSpec& outs = scene_.spec.outputs;
+  if (outs.vtu.empty() || outs.vtu_every <= 0 || info.iteration % outs.vtu_every != 0) return;
+  write_vtu_atomic(outs.vtu + "_" + std::to_string(info.iteration) + ".vtu", scene_.mesh, *info.u);
+  ++frames_;
+}
+
+void FrameWriter::cut_step(const CutStepRow& row, const interactive::AugmentedCutSession& session) {
+  const OutputSpec& outs = scene_.spec.outputs;
+  if (outs.vtu.empty() || outs.vtu_every <= 0 || row.step % outs.vtu_every != 0) return;
+  const Eigen::Matrix3Xd& d = session.displacement();
+  write_vtu_atomic(outs.vtu + "_" + std::to_string(row.step) + ".vtu",
+                   live_mesh_data(session.mesh()), Eigen::Map<const VecX>(d.data(), d.size()));
+  ++frames_;
+}
+
+std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunResult& result,
+                                       const OutputOptions& options) {
+  const OutputSpec& outs = scene.spec.outputs;
+  std::vector<std::string> written;
+  if (!outs.csv.empty()) {
+    write_file_atomic(outs.csv, trace_csv(scene, result));
+    written.push_back(outs.csv);
+  }
+  if (!outs.vtu.empty()) {
+    const std::string f = outs.vtu + ".vtu";
+    write_vtu_atomic(f, scene.mesh, result.u);
+    written.push_back(f);
+    if (options.frames > 0)
+      written.push_back(std::to_string(options.frames) + " frames " + outs.vtu +
+                        (result.cut_steps.empty() ? "_<it>.vtu" : "_<step>.vtu"));
+  }
+  if (!options.summary_json.empty()) {
+    write_file_atomic(options.summary_json,
+                      summary_json(scene, result, options.total_seconds, written));
+    written.push_back(options.summary_json);
+  }
+  return written;
+}
+
+std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
+                         double total_seconds, const std::vector<std::string>& written) {
+  const SceneSpec& spec = scene.spec;
+  const solver::SolverReport& rep = result.report;
+  Json j;
+  j["scene"] = spec.file;
+  j["name"] = spec.name;
+  j["method"] = to_string(spec.solver.method);
+  j["method_detail"] = result.method_detail;
+  j["result"] = solver::to_string(rep.reason);
+  j["converged"] = rep.converged();
+  j["iterations"] = rep.iterations;
+  j["inner_iterations"] = rep.inner_iterations;
+  j["residual_norm"] = rep.residual_norm;
+  j["relative_residual"] = rep.residual_norm / result.external_force_norm;
+  j["tolerance"] = spec.solver.tolerance;
+  j["energy"] = rep.energy;
+  j["flops"] = rep.flops;
+  j["solver_seconds"] = rep.seconds;
+  j["total_seconds"] = total_seconds;
+  j["mesh"] = {{"nodes", scene.mesh.num_points()},
+               {"tetrahedra", scene.mesh.num_cells()},
+               {"fixed_nodes", scene.fixed_nodes.size()}};
+  for (const auto& p : result.probes) {
+    Json pj = {{"name", p.name}, {"displacement", vec_json(p.value)}};
+    if (p.reference) {
+      pj["reference"] = vec_json(*p.reference);
+      pj["relative_error"] = p.relative_error;
+    }
+    j["probes"].push_back(pj);
+  }
+  for (const auto& s : scene.steps)
+    j["built"].push_back({{"what", s.what},
+                          {"seconds", s.seconds},
+                          {"bytes", s.bytes},
+                          {"flops", s.flops >= 0 ? Json(s.flops) : Json(nullptr)}});
+  j["not_built"] = scene.not_built;
+  for (const auto& c : result.cut_steps) {
+    Json cj = {{"step", c.step},
+               {"tool", c.tool},
+               {"status", c.status},
+               {"degenerate_sweep", c.degenerate_sweep},
+               {"faces_dissected", c.faces_dissected},
+               {"nodes_snapped", c.nodes_snapped},
+               {"new_nodes", c.new_nodes},
+               {"nodes", c.nodes},
+               {"tetrahedra", c.tetrahedra},
+               {"m", c.m},
+               {"dirichlet", c.dirichlet},
+               {"gmres_iterations", c.gmres_iterations},
+               {"gmres_relative_residual", c.gmres_relative_residual},
+               {"nnz_l", c.nnz_l},
+               {"refactorization_started", c.refactorization_started},
+               {"refactorization_swapped", c.refactorization_swapped},
+               {"cut_seconds", c.seconds_cut},
+               {"update_seconds", c.seconds_update},
+               {"update_cpu_seconds", c.cpu_seconds_update}};
+    for (std::size_t k = 0; k < c.probes.size() && k < scene.probes.size(); ++k)
+      cj["probes"][scene.probes[k].spec.name] = vec_json(c.probes[k]);
+    j["cut_steps"].push_back(cj);
+  }
+  j["outputs"] = written;
+  return j.dump(2) + "\n";
+}
+
+}  // namespace incise::scene

@@ -1,0 +1,180 @@
+// Scene outputs (docs/scenes.md, `outputs`): a library caller of run_scene gets the files a scene
+// names from FrameWriter (frames during the run) and write_outputs (CSV trace, final VTU, summary
+// JSON), each renamed into place, and the list of what was written.
+
+#include <incise/scene/scene_outputs.hpp>
+#include <incise/scene/scene_parser.hpp>
+#include <incise/scene/scene_runner.hpp>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "incise_test/seed.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+using namespace incise;
+
+/// An empty folder for one test's files.
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("incise_scene_outputs_test_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream os;
+  os << in.rdbuf();
+  return os.str();
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+/// Files below `dir` whose name ends in ".tmp" (none may be left behind).
+int temporary_files(const fs::path& dir) {
+  int n = 0;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) n += e.path().extension() == ".tmp";
+  return n;
+}
+
+/// Runs `built` with a FrameWriter on both observers and writes its outputs with a summary.
+std::vector<std::string> run_and_write(scene::BuiltScene& built, const std::string& summary,
+                                       scene::SceneRunResult& res) {
+  scene::FrameWriter frames(built);
+  res = scene::run_scene(
+      built, [&](const solver::IterationInfo& info) { frames.iteration(info); },
+      [&](const scene::CutStepRow& row, std::size_t,
+          const interactive::AugmentedCutSession& session) { frames.cut_step(row, session); });
+  return scene::write_outputs(built, res, {summary, 1.5, frames.frames()});
+}
+
+// The thesis cantilever on a 4x1x1 box by CG, with a trace, frames every 5 iterations, the final
+// state and a probe.
+TEST(SceneOutputs, RunSceneAndWriteOutputsWriteTheFilesTheSceneNames) {
+  const fs::path dir = fresh_dir("cg");
+  const std::string csv = (dir / "trace.csv").string(), stem = (dir / "vtu" / "state").string();
+  const std::string summary = (dir / "summary" / "run.json").string();
+  const Json j = {
+      {"mesh",
+       {{"type", "box"}, {"nx", 4}, {"ny", 1}, {"nz", 1}, {"lx", 1.2}, {"ly", 0.2}, {"lz", 0.3}}},
+      {"material", {{"model", "linear"}, {"E", 1e6}, {"nu", 0.0}}},
+      {"fixed", {{{"type", "plane"}, {"axis", "x"}, {"value", 0.0}}}},
+      {"loads",
+       {{{"type", "nodal"},
+         {"region", {{"type", "plane"}, {"axis", "x"}, {"value", 1.2}}},
+         {"total_force", {0, -3, 0}}}}},
+      {"solver", {{"method", "cg"}}},
+      {"outputs",
+       {{"csv", csv},
+        {"vtu", stem},
+        {"vtu_every", 5},
+        {"probes", {{{"name", "tip"}, {"at", {1.2, 0.2, 0.3}}}}}}}};
+  scene::BuiltScene built = scene::build_scene(scene::parse_scene(j.dump(), "scene.json", ""));
+  scene::SceneRunResult res;
+  const std::vector<std::string> written = run_and_write(built, summary, res);
+  ASSERT_TRUE(res.report.converged());
+  ASSERT_GE(res.trace.size(), 6u);  // at least one frame after the initial state
+
+  long frames = 0;
+  for (const auto& row : res.trace) {
+    if (row.iteration % 5 != 0) continue;
+    ++frames;
+    const fs::path frame = stem + "_" + std::to_string(row.iteration) + ".vtu";
+    EXPECT_TRUE(fs::is_regular_file(frame)) << frame;
+  }
+  const std::vector<std::string> expected = {
+      csv, stem + ".vtu", std::to_string(frames) + " frames " + stem + "_<it>.vtu", summary};
+  EXPECT_EQ(written, expected);
+
+  // The trace: a header with the probe's columns, then one row per iteration.
+  const std::vector<std::string> rows = lines_of(read(csv));
+  ASSERT_EQ(rows.size(), res.trace.size() + 1);
+  EXPECT_EQ(rows[0],
+            "iteration,residual_norm,relative_residual,energy,flops,seconds,tip_x,tip_y,"
+            "tip_z");
+  for (std::size_t k = 0; k < res.trace.size(); ++k)
+    EXPECT_EQ(rows[k + 1].rfind(std::to_string(res.trace[k].iteration) + ",", 0), 0u)
+        << rows[k + 1];
+
+  // The final state: the mesh with its displacement.
+  const std::string vtu = read(stem + ".vtu");
+  EXPECT_NE(vtu.find("NumberOfPoints=\"" + std::to_string(built.mesh.num_points()) + "\""),
+            std::string::npos);
+  EXPECT_NE(vtu.find("Name=\"displacement\""), std::string::npos);
+
+  // The summary names the run and lists the files written before it.
+  const Json s = Json::parse(read(summary));
+  EXPECT_EQ(s.at("scene"), "scene.json");
+  EXPECT_EQ(s.at("method"), "cg");
+  EXPECT_EQ(s.at("result"), "converged");
+  EXPECT_EQ(s.at("iterations"), res.report.iterations);
+  EXPECT_EQ(s.at("total_seconds"), 1.5);
+  EXPECT_EQ(s.at("probes").at(0).at("name"), "tip");
+  const std::vector<std::string> before_summary(expected.begin(), expected.end() - 1);
+  EXPECT_EQ(s.at("outputs"), Json(before_summary));
+  EXPECT_EQ(read(summary), scene::summary_json(built, res, 1.5, before_summary));
+  EXPECT_EQ(temporary_files(dir), 0);
+}
+
+// The augmented cutting demo: one CSV row and (vtu_every 1) one frame of the cut mesh per solve.
+TEST(SceneOutputs, InteractiveCutRunWritesOneRowAndOneFramePerSolve) {
+  const fs::path dir = fresh_dir("cut");
+  scene::SceneSpec spec =
+      scene::load_scene(test::source_path("reference_data/scenes/cube_cut_augmented.json"));
+  spec.outputs.csv = (dir / "steps.csv").string();
+  spec.outputs.vtu = (dir / "cube").string();
+  spec.outputs.vtu_every = 1;
+  scene::BuiltScene built = scene::build_scene(spec);
+  scene::SceneRunResult res;
+  const std::vector<std::string> written = run_and_write(built, "", res);
+  ASSERT_TRUE(res.report.converged());
+  const std::size_t solves = res.cut_steps.size();
+  ASSERT_GE(solves, 2u);
+  EXPECT_EQ(written, (std::vector<std::string>{
+                         spec.outputs.csv, spec.outputs.vtu + ".vtu",
+                         std::to_string(solves) + " frames " + spec.outputs.vtu + "_<step>.vtu"}));
+  const std::vector<std::string> rows = lines_of(read(spec.outputs.csv));
+  ASSERT_EQ(rows.size(), solves + 1);
+  EXPECT_EQ(rows[0].rfind("step,tool,status,", 0), 0u) << rows[0];
+  for (std::size_t k = 0; k < solves; ++k)
+    EXPECT_TRUE(fs::is_regular_file(spec.outputs.vtu + "_" + std::to_string(k) + ".vtu")) << k;
+  // The final state is on the final cut mesh (the run replaced built.mesh by it).
+  EXPECT_NE(read(spec.outputs.vtu + ".vtu")
+                .find("NumberOfPoints=\"" + std::to_string(built.mesh.num_points()) + "\""),
+            std::string::npos);
+  EXPECT_EQ(temporary_files(dir), 0);
+}
+
+// A scene without outputs: nothing is written and nothing is listed.
+TEST(SceneOutputs, SceneWithoutOutputsWritesNothing) {
+  const fs::path dir = fresh_dir("none");
+  scene::SceneSpec spec =
+      scene::load_scene(test::source_path("reference_data/scenes/cantilever.json"));
+  spec.outputs = scene::OutputSpec{};
+  spec.mesh.nx = 4, spec.mesh.ny = 1, spec.mesh.nz = 1;
+  scene::BuiltScene built = scene::build_scene(spec);
+  const fs::path cwd = fs::current_path();
+  fs::current_path(dir);  // relative outputs would land here
+  scene::SceneRunResult res;
+  const std::vector<std::string> written = run_and_write(built, "", res);
+  fs::current_path(cwd);
+  EXPECT_TRUE(written.empty());
+  EXPECT_TRUE(fs::is_empty(dir));
+}
+
+}  // namespace
