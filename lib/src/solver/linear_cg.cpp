@@ -1,6 +1,7 @@
 #include <incise/solver/linear_cg.hpp>
 
 #include <cmath>
+#include <limits>
 
 namespace incise::solver {
 namespace {
@@ -70,10 +71,43 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
   }
   long k = 0;
   StopReason reason = StopReason::kConverged;
+  bool confirmed = false;  // the true residual was evaluated at the final u
+  double last_replaced = std::numeric_limits<double>::infinity();
   while (true) {
     if (rnorm <= threshold) {
       reason = StopReason::kConverged;
-      break;
+      if (!options.recompute_residual) break;
+      // The recursive residual drifts from the true one by round-off (≈ eps·κ(K)·‖f‖). Confirm
+      // on the true gradient; when it misses the rule, replace the residual by the true one and
+      // restart CG from u (residual replacement), unless the previous replacement made no
+      // progress: then the true residual is at its round-off floor and the run stagnated.
+      VecX gt;
+      double e = 0.0;
+      st = problem.gradient(u, gt, &e);
+      if (st != EvalStatus::kOk || !gt.allFinite()) {
+        reason = failure_reason(st);
+        break;
+      }
+      r = -gt;
+      problem.project(r);
+      const double true_norm = r.norm();
+      g = gt;
+      energy = e;
+      rnorm = true_norm;
+      threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+      meter.add(4 * nn);
+      confirmed = true;
+      if (true_norm <= threshold) break;
+      if (true_norm >= last_replaced) {
+        reason = StopReason::kStagnated;
+        break;
+      }
+      last_replaced = true_norm;
+      confirmed = false;
+      precondition(inv_diag, r, z);
+      rz = r.dot(z);
+      d = z;
+      continue;
     }
     reason = meter.exhausted(options.budget, k);
     if (reason != StopReason::kConverged) break;
@@ -121,7 +155,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
   }
 
   if (!u.allFinite()) u = u0;  // never hand back NaN
-  if (options.recompute_residual && reason != StopReason::kNonFinite &&
+  if (options.recompute_residual && !confirmed && reason != StopReason::kNonFinite &&
       reason != StopReason::kInverted) {
     VecX gt;
     double e = 0.0;

@@ -43,8 +43,11 @@ struct LinearCgOptions {
   StoppingRule stop;  ///< (6.8) or (6.9)
   Budget budget;      ///< iteration / flop / time budgets
   Preconditioner preconditioner = Preconditioner::kNone;
-  /// After the loop, evaluate the true gradient once and report its residual (the recursive
-  /// residual r_{k+1} = r_k − α K d drifts from f − K u in floating point).
+  /// Confirm convergence on the true gradient (the recursive residual r_{k+1} = r_k − α K d
+  /// drifts from f − K u in floating point): when the recursive residual meets the rule but the
+  /// true one does not, CG restarts from u on the true residual (residual replacement); a
+  /// replacement that does not lower the true residual ends the run as kStagnated. The reported
+  /// residual is always the true one. false: trust the recursive residual (no extra gradient).
   bool recompute_residual = true;
   IterationObserver observer;  ///< called after every CG step with the current u
   /// When non-null, cleared and filled with α_k, β_k of every step (for condition estimates).
