@@ -3,7 +3,7 @@
 //   patch_test                affine displacements leave interior nodes force free (thesis §3.3
 //                             deformation test)
 //   matrix_free_vs_assembled  element-by-element K.d (4.4) equals the assembled sparse tangent
-//                             (thesis §3.1; DESIGN §3 equivalences)
+//                             (thesis §3.1; design.md §3 equivalences)
 //   flop_table_4_3            flops per tetrahedron counted with incise::Counted against the
 //                             thesis' hand counts, Table 4.3 (§4.3)
 

@@ -1,6 +1,6 @@
 // Certification checks on static and dynamic solves (`incise certify`, catalogue in certify.cpp):
 //   cantilever_table_3_1         tip deflection and CG iterations against thesis Table 3.1 (§3.3)
-//   cg_vs_cholmod                linear CG equals the CHOLMOD direct solve (DESIGN §3)
+//   cg_vs_cholmod                linear CG equals the CHOLMOD direct solve (docs/design.md §3)
 //   solver_equivalence_cylinder  nonlinear CG and SS22 dynamic relaxation reach the truncated
 //                                Newton minimizer on the §4.2 cylinder; residual against flops
 //                                (thesis §4.1-4.5, the speed/accuracy trade)

@@ -1,8 +1,8 @@
 #pragma once
 /// \file flop_count.hpp
 /// A counting scalar: element kernels are templates on the scalar type, and instantiating them
-/// once with `Counted` counts the floating-point operations they execute (DESIGN "Flop
-/// accounting", thesis §4.2 and Table 4.3: "multiplications, divisions, sums and differences
+/// once with `Counted` counts the floating-point operations they execute (docs/design.md
+/// §1.4, thesis §4.2 and Table 4.3: "multiplications, divisions, sums and differences
 /// were counted as one flop").
 ///
 /// Charges (per executed operation, accumulated in a thread-local counter):

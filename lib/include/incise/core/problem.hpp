@@ -1,9 +1,9 @@
 #pragma once
 /// \file problem.hpp
-/// The narrow interface through which every solver sees a mechanical problem (DESIGN §1:
-/// "energy, gradient, Hessian-vector product, projection"). The 3D elastic body (fem), the 2D
-/// needle model and synthetic test problems all implement it, so that one nonlinear CG, one
-/// truncated Newton and one dynamic relaxation serve them all.
+/// The narrow interface through which every solver sees a mechanical problem (docs/design.md
+/// §1.1: energy, gradient, Hessian-vector product, projection). The 3D elastic body (fem) and
+/// the synthetic test problems implement it, so that one nonlinear CG, one truncated Newton and
+/// one dynamic relaxation serve them all.
 ///
 /// Sign convention: the unknown u is the nodal displacement vector (length size()); Π(u) is the
 /// potential energy (2.40); gradient(u) = ∇Π(u) = f_int(u) − f_ext, i.e. the negated residual
