@@ -14,9 +14,9 @@
 namespace incise {
 
 /// Measured vector-add baseline in MFLOP/s (one flop per element add): best of 25 trials of
-/// about 20 ms thread CPU time each (the thesis used the best sustained rate; on our VM the
-/// rate dips by up to 2x for stretches of 50-300 ms, see baseline.cpp). Computed on the first
-/// call (about 0.5 s) and cached for the life of the process; thread-safe.
+/// about 20 ms thread CPU time each (the thesis used the best sustained rate; why the best and
+/// not the mean: baseline.cpp). Computed on the first call and cached for the life of the
+/// process; thread-safe.
 double vector_add_mflops();
 
 }  // namespace incise

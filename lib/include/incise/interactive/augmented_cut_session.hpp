@@ -2,39 +2,20 @@
 /// \file augmented_cut_session.hpp
 /// One interactive cutting session on a linear-elastic body whose static solution is kept
 /// current by the augmented-matrix solver (thesis §3.2 cut steps; Yeung, Crouch & Pothen 2016
-/// §3 column replacements, docs/augmented.md). It owns the cut mesh, the Cutter, the element
-/// stiffness bookkeeping and an linalg::AugmentedSystem.
+/// §3 column replacements). It owns the cut mesh, the Cutter and a linalg::AugmentedSystem.
 ///
-/// After every sweep-triangle step (Cutter::step) the CutStepReport — the single description
-/// of "what changed in this step", also used by the warm-restarted relaxation path — is
-/// translated into column replacements:
-/// - every element slot listed in `changed_elements`, or incident with a node in
-///   `moved_nodes` (snapping changes reference positions), is compared with the element the
-///   system holds for that slot; if its nodes or reference positions differ, the old element
-///   stiffness is subtracted (AugmentedSystem::add_element(·, Kₑ, −1)) and the new one added
-///   (+1). Kₑ is the linear-elastic tetrahedron stiffness fem::element_stiffness (thesis
-///   (2.22), §3.1; zero for a non-positive reference volume), K⁰ fem::assemble_stiffness;
-/// - nodes created by the step (`new_nodes`) get three new DOFs (add_dofs); copies of a node
-///   fixed from the start stay fixed (no DOFs, zero displacement);
-/// - nodes fixed by the component policy (`fixed_nodes`, FreeComponentPolicy::kFixOnFace) and
-///   nodes left without elements (`removed_nodes`) are held at their current displacement by
-///   Dirichlet constraints (impose_dirichlet), so no DOF is left without stiffness. Each
-///   constrained DOF d also gets a diagonal spring K_dd += k̄ (k̄ = mean diagonal of K⁰): it
-///   changes no displacement (a prescribed DOF's own diagonal enters only its reaction, which
-///   the session does not use), but keeps the current K positive definite — a piece held only
-///   by constraints, or a node without elements, would otherwise make K singular and every
-///   §3.6 refactorization of it fail;
-/// - then AugmentedSystem::solve() gives the new static displacement without refactoring.
+/// Each step() is one sweep triangle: Cutter::step, then the step's CutStepReport translated
+/// into column replacements (old element blocks subtracted, new ones added, new DOFs for new
+/// nodes, Dirichlet constraints for nodes fixed on a face or left without elements), then
+/// AugmentedSystem::solve(). The translation table, the DOF numbering and the diagonal spring
+/// that keeps K positive definite are in docs/cutting.md ("Integration with the augmented
+/// solver").
 ///
-/// DOF numbering: nodes fixed at construction have no DOFs (removed from K⁰,
-/// remove_fixed_dofs convention of augmented_system.hpp); the other used nodes of the initial
+/// DOF numbering: nodes fixed at construction have no DOFs; the other used nodes of the initial
 /// mesh get 3·k, 3·k+1, 3·k+2 in node order; new nodes get the next DOFs in creation order.
 ///
-/// Failure is a status (CutSolveStatus), never an exception: a component without fixed nodes
-/// (policy kReport) makes K singular and the solve is skipped; an element inverted in the
-/// reference configuration (only possible with refuse_inverting_snaps = false) has no valid
-/// stiffness; the augmented solve itself may report kSingularModifiedSystem (e.g. a piece held
-/// by a single fixed node) or kGmresNotConverged.
+/// Failure is a status (CutSolveStatus), never an exception: a free component (policy kReport),
+/// an element inverted in the reference configuration, or the augmented solve's own status.
 
 #include <incise/core/types.hpp>
 #include <incise/cut/cut_mesh.hpp>
@@ -61,13 +42,9 @@ struct AugmentedCutOptions {
     return o;
   }
   cut::CutOptions cut;  ///< the cutter's options (thesis defaults)
-  /// The augmented solver's options; the factorization of K⁰ is *supernodal* here (METIS
-  /// ordering kept): on the bulky 105k-tet box it took 2.4–4.7 s CPU (four runs) against 48 s for
-  /// the simplicial LDLᵀ that AugmentedOptions defaults to (thin beams), with equal step cost
-  /// (docs/cutting.md, cut_bench BM_AugmentedInteractiveStep). Eq. 17 uses the explicit
-  /// H R⁻¹ J in capacitance form: a cut adds the DOFs of a few nodes to 𝓛 per step, which
-  /// costs one restricted solve each, and GMRES then needs 1–3 iterations instead of dozens
-  /// with HSJ (solver update 113 vs 229 ms per step on the 105k-tet box, docs/cutting.md).
+  /// The augmented solver's options: K⁰ factored supernodally (METIS ordering kept), eq. 17
+  /// preconditioned by the explicit H R⁻¹ J in capacitance form (why, and the measurements
+  /// behind the choice: docs/cutting.md, docs/augmented.md).
   linalg::AugmentedOptions augmented = supernodal_defaults();
   /// After every successful solve set the cut mesh's deformed positions to X + a, so that the
   /// next sweep triangle is interpreted in the deformed configuration (§3.2). O(n) per step
