@@ -142,12 +142,6 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
   base->matrix.makeCompressed();
   if (!factor) factor = std::make_unique<CholmodFactor>(options.cholmod);
   base->factor = std::move(factor);
-  if (!Eigen::Map<const Eigen::VectorXd>(base->matrix.valuePtr(), base->matrix.nonZeros())
-           .allFinite()) {
-    base->status = FactorStatus::kInvalidInput;
-    base->message = "matrix has non-finite entries";
-    return base;
-  }
   base->status = base->factor->compute(base->matrix, pattern_signature(base->matrix));
   base->message = base->factor->message();
   if (base->status != FactorStatus::kOk) return base;
