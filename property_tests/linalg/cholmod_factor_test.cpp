@@ -225,6 +225,8 @@ TEST(CholmodFactor, MinPivotRatioFlagsNumericallySingularMatrices) {
   CholmodFactor f({CholmodKind::kSimplicialLdl, CholmodOrdering::kNatural});
   EXPECT_EQ(f.compute(a, 1), FactorStatus::kNotPositiveDefinite);
   EXPECT_NE(f.message().find("pivot ratio"), std::string::npos) << f.message();
+  EXPECT_EQ(f.message().find("failed"), std::string::npos) << f.message();  // no pivot failed
+  EXPECT_EQ(f.minor(), 2);
   CholmodOptions off{CholmodKind::kSimplicialLdl, CholmodOrdering::kNatural};
   off.min_pivot_ratio = 0;  // disables the check
   CholmodFactor g(off);

@@ -182,8 +182,10 @@ FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
     message_ = "matrix numerically singular (pivot ratio " + std::to_string(rcond_) + ")";
   }
   if (status_ == FactorStatus::kNotPositiveDefinite) {
-    message_ += " (pivot " + std::to_string(minor_) + " of " + std::to_string(n_) +
-                " failed: singular or indefinite — check constraints and inverted elements)";
+    const std::string where =
+        minor_ < n_ ? "pivot " + std::to_string(minor_) + " of " + std::to_string(n_) + " failed: "
+                    : std::string();
+    message_ += " (" + where + "singular or indefinite — check constraints and inverted elements)";
   }
   factorized_ = status_ == FactorStatus::kOk;
   return status_;
