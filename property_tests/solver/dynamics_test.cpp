@@ -1,10 +1,9 @@
-/// Dynamic relaxation (§2.5, §4.1, §4.4.1), eigenvalue estimates of M⁻¹K and the FFT frequency
-/// estimate: each against a dense reference or a closed form.
+/// Dynamic relaxation (§2.5, §4.1, §4.4.1) and eigenvalue estimates of M⁻¹K: each against a
+/// dense reference or a closed form. (The FFT frequency estimate: property_tests/spectral/.)
 #include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/solver/eigen_estimates.hpp>
 #include <incise/solver/energy_error.hpp>
 #include <incise/solver/linear_cg.hpp>
-#include <incise/spectral/dominant_frequency.hpp>
 #include <incise_test/seed.hpp>
 
 #include "test_problems.hpp"
@@ -232,24 +231,6 @@ TEST(EnergyError, TraceOfLinearCgIsMonotoneAndExcludesObserverCost) {
   EXPECT_GE(rep.flops, solver_problem_flops);
   EXPECT_LE(rep.flops, solver_problem_flops + std::uint64_t(rep.iterations + 1) * 30 * 30);
   EXPECT_NE(trace.first_below(1e-6), nullptr);
-}
-
-TEST(Spectral, DominantFrequencyOfSampledSinusoid) {
-  INCISE_SEEDED_RNG(rng, 71);
-  std::uniform_real_distribution<double> unif(0.0, 1.0);
-  for (int t = 0; t < test::scaled(5); ++t) {
-    const double f = 3.0 + 40.0 * unif(rng), dt = 1e-3, phase = 6.28 * unif(rng);
-    std::vector<double> s(2048);
-    for (int i = 0; i < 2048; ++i)
-      s[i] =
-          0.7 + std::sin(2 * kPi * f * i * dt + phase) + 0.1 * std::sin(2 * kPi * 3 * f * i * dt);
-    const spectral::FrequencyEstimate est = spectral::dominant_frequency(s, dt);
-    // Parabolic interpolation of a Hann-windowed peak: error well below a quarter bin.
-    EXPECT_NEAR(est.frequency, f, 0.25 * est.resolution);
-  }
-  EXPECT_EQ(spectral::dominant_frequency(std::vector<double>(64, 2.0), 0.1).frequency, 0.0);
-  EXPECT_THROW((void)spectral::dominant_frequency(std::vector<double>(3, 1.0), 0.1),
-               ParameterError);
 }
 
 }  // namespace

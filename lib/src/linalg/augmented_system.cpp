@@ -142,12 +142,6 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
   base->matrix.makeCompressed();
   if (!factor) factor = std::make_unique<CholmodFactor>(options.cholmod);
   base->factor = std::move(factor);
-  if (!Eigen::Map<const Eigen::VectorXd>(base->matrix.valuePtr(), base->matrix.nonZeros())
-           .allFinite()) {
-    base->status = FactorStatus::kInvalidInput;
-    base->message = "matrix has non-finite entries";
-    return base;
-  }
   base->status = base->factor->compute(base->matrix, pattern_signature(base->matrix));
   base->message = base->factor->message();
   if (base->status != FactorStatus::kOk) return base;
@@ -408,6 +402,220 @@ bool AugmentedSystem::wait_for_refactorization() {
   return swap_in(job_.get(), changed_since_snapshot_);
 }
 
+// ---------------------------------------------------------------------------------------------
+// Solution (§3.1–3.5). solve() runs the steps below in order; each names its equations.
+
+// The augmented structure of one solve: 𝓛 and 𝓓 (as flags), the columns of J (eq. 5; H of
+// eq. 6 is implied by 𝓛), f̂ (eq. 11), their sparsity on the base rows and its closures (§3.3).
+struct AugmentedSystem::Augmentation {
+  std::vector<int> l;                 // 𝓛, sorted
+  std::vector<int> l_base;            // the entries of 𝓛 below n_base (its first ones)
+  std::vector<char> is_dirichlet;     // per entry of 𝓛: in 𝓓 (J column e_{𝓛ᵢ})
+  std::vector<const Column*> j_cols;  // per entry of 𝓛: the stored column K_{*,𝓛ᵢ} (not 𝓓)
+  Eigen::VectorXd fhat;               // f̂ of eq. 11 (size n)
+  std::vector<int> f_idx;             // struct(f̂) on the base rows, ascending
+  std::vector<double> f_val;          // f̂ there
+  std::vector<int> j_struct;          // struct(J) on the base rows, ascending
+  std::vector<int> step3_struct;      // struct(f̂) ∪ struct(J): that of f̂ − J a₂ (step 3)
+  std::vector<int> closure_f;         // closure_L(f̂)           (step 1 forward)
+  std::vector<int> closure_y;         // closure_L(𝓛 ∩ base)     (backward, steps 1–2)
+  std::vector<int> closure_j;         // closure_L(J)            (step 2 forward)
+  std::vector<int> closure_step3;     // closure_L(f̂ − J a₂)     (step 3 forward)
+  Eigen::VectorXd jv;                 // workspace for J v (size n), zero between uses
+
+  int m() const { return static_cast<int>(l.size()); }
+
+  // jv += J v (dense accumulation; v has one entry per column of J).
+  void add_j_times(const Eigen::VectorXd& v) {
+    for (int i = 0; i < m(); ++i) {
+      const double vi = v(i);
+      if (vi == 0) continue;
+      if (is_dirichlet[i]) {
+        jv(l[i]) += vi;
+      } else {
+        for (const auto& [row, kv] : *j_cols[i]) jv(row) += kv * vi;
+      }
+    }
+  }
+  // jv ← 0 on struct(J), restoring the invariant after add_j_times().
+  void clear_jv() {
+    for (int i = 0; i < m(); ++i) {
+      if (is_dirichlet[i]) {
+        jv(l[i]) = 0;
+      } else {
+        for (const auto& e : *j_cols[i]) jv(e.first) = 0;
+      }
+    }
+  }
+};
+
+// Dense LU of an m×m approximation of H R⁻¹ J used as GMRES's right preconditioner: M = H S J
+// (§3.5) or the explicit capacitance matrix (SchurSolver::kDirectCached).
+struct AugmentedSystem::SchurLu {
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+  Eigen::VectorXd row_scale, col_scale;  // equilibration (empty: none)
+  bool usable = false;                   // factored, and its rcond estimate exceeds 1e-13
+
+  // Factors `s`, equilibrated first when asked (max-norm rows, then columns). A numerically
+  // singular matrix (rcond ≤ 1e-13) is not usable: GMRES then runs unpreconditioned, and its
+  // breakdown / stagnation / amplification checks report a singular system.
+  void factor(Eigen::MatrixXd s, bool equilibrate) {
+    if (equilibrate) {
+      row_scale = s.cwiseAbs().rowwise().maxCoeff().cwiseMax(1e-300).cwiseInverse();
+      s = row_scale.asDiagonal() * s;
+      col_scale = s.cwiseAbs().colwise().maxCoeff().transpose().cwiseMax(1e-300).cwiseInverse();
+      s = s * col_scale.asDiagonal();
+    }
+    lu.compute(s);
+    const double rc = lu.rcond();
+    usable = std::isfinite(rc) && rc > 1e-13;
+  }
+  // out = M⁻¹ v.
+  void apply(const Eigen::VectorXd& v, Eigen::VectorXd& out) const {
+    if (row_scale.size() == 0) {
+      out = lu.solve(v);
+    } else {
+      out = col_scale.cwiseProduct(lu.solve(row_scale.cwiseProduct(v)));
+    }
+  }
+};
+
+// The augmentation procedure of §3.1, items 1–3: 𝓛 and 𝓓, the columns of J (eq. 5) and f̂
+// (eq. 11, with f_d kept at constrained rows: the unknown becomes the reaction), and the
+// structures the closures are taken of. Reports (and returns false for) a J column with
+// non-finite entries or without stiffness.
+bool AugmentedSystem::augment(Augmentation& aug, AugmentedReport& report) {
+  const int n = n_;
+  const int nb = n_base_;
+  aug.l = replaced_columns();
+  const int m = aug.m();
+  report.m = m;
+  report.dirichlet = static_cast<int>(dirichlet_.size());
+  pos_in_l_.assign(static_cast<size_t>(n), -1);
+  for (int i = 0; i < m; ++i) pos_in_l_[aug.l[i]] = i;
+
+  // J columns (eq. 5) as pointers to stored columns; Dirichlet columns are e_{𝓛ᵢ}.
+  aug.j_cols.assign(m, nullptr);
+  aug.is_dirichlet.assign(m, 0);
+  for (int i = 0; i < m; ++i) {
+    const int j = aug.l[i];
+    if (dirichlet_.count(j) != 0) {
+      aug.is_dirichlet[i] = 1;
+      continue;
+    }
+    aug.j_cols[i] = changed_column(j);
+    bool any = false;
+    if (aug.j_cols[i] != nullptr) {
+      for (const auto& e : *aug.j_cols[i]) {
+        if (!std::isfinite(e.second)) {
+          report.status = AugmentedStatus::kNonFinite;
+          report.advice = "column " + std::to_string(j) + " of K has NaN/Inf entries";
+          return false;
+        }
+        any = any || std::abs(e.second) > 1e-13 * diag_scale_;
+      }
+    }
+    if (!any) {
+      report.status = AugmentedStatus::kSingularModifiedSystem;
+      report.advice = "DOF " + std::to_string(j) +
+                      " has no stiffness (empty column of K): attach it to elements, constrain "
+                      "it with impose_dirichlet(), or stop using it";
+      return false;
+    }
+  }
+
+  // f̂ = f − Σ_{d∈𝓓} K_{*,d} ā_d (eq. 11), and its structure on the base rows.
+  aug.fhat = f_;
+  for (const auto& [d, value] : dirichlet_) {
+    if (value == 0) continue;
+    if (const Column* c = changed_column(d)) {
+      for (const auto& [row, v] : *c) aug.fhat(row) -= v * value;
+    } else if (d < nb) {
+      for (SparseMatrix::InnerIterator it(base_->matrix, d); it; ++it)
+        aug.fhat(static_cast<int>(it.row())) -= it.value() * value;
+    }
+  }
+  for (int i = 0; i < nb; ++i) {
+    if (aug.fhat(i) != 0) {
+      aug.f_idx.push_back(i);
+      aug.f_val.push_back(aug.fhat(i));
+    }
+  }
+  // Structure of J and of 𝓛 on the base rows, and that of f̂ − J a₂ (step 3).
+  std::vector<char> in_j(static_cast<size_t>(nb), 0);
+  auto add_row = [&](int row) {
+    if (row < nb && !in_j[row]) {
+      in_j[row] = 1;
+      aug.j_struct.push_back(row);
+    }
+  };
+  for (int i = 0; i < m; ++i) {
+    if (aug.is_dirichlet[i]) {
+      add_row(aug.l[i]);
+    } else {
+      for (const auto& e : *aug.j_cols[i]) add_row(e.first);
+    }
+  }
+  std::sort(aug.j_struct.begin(), aug.j_struct.end());
+  for (int j : aug.l) {
+    if (j < nb) aug.l_base.push_back(j);
+  }
+  aug.step3_struct = aug.f_idx;
+  aug.step3_struct.insert(aug.step3_struct.end(), aug.j_struct.begin(), aug.j_struct.end());
+  std::sort(aug.step3_struct.begin(), aug.step3_struct.end());
+  aug.step3_struct.erase(std::unique(aug.step3_struct.begin(), aug.step3_struct.end()),
+                         aug.step3_struct.end());
+  aug.jv = Eigen::VectorXd::Zero(n);
+  return true;
+}
+
+// Elimination-tree closures of the right-hand sides and wanted sets of steps 1–3 (§3.3,
+// Appendix Thm. 1–3); their sizes go into the report (Fig. 4 of the paper).
+void AugmentedSystem::find_closures(Augmentation& aug, AugmentedReport& report) {
+  ClosureLdlSolver& solver = *base_->solver;
+  aug.closure_f = solver.closure(aug.f_idx);
+  aug.closure_y = solver.closure(aug.l_base);
+  aug.closure_j = solver.closure(aug.j_struct);
+  aug.closure_step3 = solver.closure(aug.step3_struct);
+  report.closure_f = static_cast<int>(aug.closure_f.size());
+  report.closure_y = static_cast<int>(aug.closure_y.size());
+  report.closure_ja2 = static_cast<int>(aug.closure_j.size());
+  report.closure_step3 = static_cast<int>(aug.closure_step3.size());
+}
+
+// M = H S J of §3.5 (m × m), S = D⁻¹ (kDiagonal) or the tridiagonal SPAI of R
+// (kTridiagonalSpai); S is the identity on the new DOFs.
+Eigen::MatrixXd AugmentedSystem::hsj_matrix(const Augmentation& aug) const {
+  const int n = n_;
+  const int nb = n_base_;
+  const int m = aug.m();
+  Eigen::MatrixXd mm = Eigen::MatrixXd::Zero(m, m);
+  auto s_entry = [&](int t, int r) -> double {  // S(t, r) for |t − r| ≤ 1
+    if (t >= nb || r >= nb) return t == r ? 1.0 : 0.0;
+    if (options_.preconditioner == SchurPreconditioner::kDiagonal) {
+      return t == r ? base_->s_diag(r) : 0.0;
+    }
+    if (t == r) return base_->spai_diag(r);
+    if (t == r - 1) return base_->spai_upper(t);
+    return base_->spai_lower(r);
+  };
+  for (int k = 0; k < m; ++k) {
+    auto visit = [&](int r, double v) {
+      for (int t = r - 1; t <= r + 1; ++t) {
+        if (t < 0 || t >= n || pos_in_l_[t] < 0) continue;
+        const double s = s_entry(t, r);
+        if (s != 0) mm(pos_in_l_[t], k) += s * v;
+      }
+    };
+    if (aug.is_dirichlet[k]) {
+      visit(aug.l[k], 1.0);
+    } else {
+      for (const auto& e : *aug.j_cols[k]) visit(e.first, e.second);
+    }
+  }
+  return mm;
+}
+
 // H R⁻¹ J in the capacitance form (SchurSolver::kDirectCached). Write J_k = R_{*,𝓛ₖ} + E_k for
 // a column that is not Dirichlet (E_k = K_{*,𝓛ₖ} − R_{*,𝓛ₖ}; R_{*,𝓛ₖ} = e_{𝓛ₖ} for a new DOF)
 // and J_k = e_{𝓛ₖ} for a Dirichlet column. E_k is nonzero only in rows whose own column
@@ -424,12 +632,9 @@ bool AugmentedSystem::wait_for_refactorization() {
 // Entries of E in rows outside 𝓛 (possible only if K lost its exact symmetry) are left out:
 // the matrix is then an approximation, which as GMRES's preconditioner costs iterations, not
 // accuracy.
-Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const std::vector<int>& l_list,
-                                                    const std::vector<char>& is_dir,
-                                                    const std::vector<const Column*>& jcols,
-                                                    const std::vector<int>& l_base,
-                                                    const std::vector<int>& c_y, int& solves) {
-  const int m = static_cast<int>(l_list.size());
+Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const Augmentation& aug, int& solves) {
+  const std::vector<int>& l_base = aug.l_base;
+  const int m = aug.m();
   const int nb = n_base_;
   const int mb = static_cast<int>(l_base.size());
   ClosureLdlSolver& solver = *base_->solver;
@@ -454,7 +659,7 @@ Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const std::vector<int>& l_li
   for (int k = 0; k < mb; ++k) {
     if (old[k] >= 0) continue;
     const std::vector<int> e{l_base[k]};
-    solver.solve_restricted(e, {1.0}, solver.closure(e), c_y, l_base, y);
+    solver.solve_restricted(e, {1.0}, solver.closure(e), aug.closure_y, l_base, y);
     ++solves;
     for (int i = 0; i < mb; ++i) {
       g(i, k) = y[i];
@@ -477,14 +682,14 @@ Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const std::vector<int>& l_li
     }
   };
   for (int k = 0; k < m; ++k) {
-    const int j = l_list[k];
-    if (is_dir[k]) {
+    const int j = aug.l[k];
+    if (aug.is_dirichlet[k]) {
       add_g_column(k, k, 1.0);
       continue;
     }
     s(k, k) += 1.0;
     // E_k = K_{*j} − R_{*j}: merge the stored column with the base column (both sorted).
-    const Column& kc = *jcols[k];
+    const Column& kc = *aug.j_cols[k];
     auto add_e = [&](int row, double v) {
       if (v != 0 && pos_in_l_[row] >= 0) add_g_column(k, pos_in_l_[row], v);
     };
@@ -508,237 +713,53 @@ Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const std::vector<int>& l_li
   return s;
 }
 
-// ---------------------------------------------------------------------------------------------
-// Solution (§3.2, §3.3).
-
-AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::VectorXd& reaction) {
-  Timer total;
-  AugmentedReport report;
-  if (job_.valid()) {
-    report.refactorization_swapped = poll_refactorization();
-    if (!job_.valid() && !report.refactorization_swapped) {
-      report.refactorization_status = last_refactor_status_;
-    }
-  }
-  displacement = Eigen::VectorXd::Zero(n_);
-  reaction = Eigen::VectorXd::Zero(n_);
-  report.n = n_;
-  if (!base_ || base_->status != FactorStatus::kOk) {
-    report.status = AugmentedStatus::kNoFactor;
-    report.advice = "initialize() with a positive definite K0 first";
-    if (base_) report.advice += " (last factorization: " + base_->message + ")";
-    return report;
-  }
-  if (!f_.allFinite()) {
-    report.status = AugmentedStatus::kNonFinite;
-    report.advice = "the force vector has NaN/Inf entries";
-    return report;
-  }
-  if (options_.prune_unchanged_columns) report.pruned_columns = prune_unchanged_columns();
-  Timer phase;
-  const int n = n_;
-  const int nb = n_base_;
-  ClosureLdlSolver& solver = *base_->solver;
-  report.nnz_l = base_->ldl->nnz_l();
-  const std::vector<int> l_list = replaced_columns();
-  const int m = static_cast<int>(l_list.size());
-  report.m = m;
-  report.dirichlet = static_cast<int>(dirichlet_.size());
-  pos_in_l_.assign(static_cast<size_t>(n), -1);
-  for (int i = 0; i < m; ++i) pos_in_l_[l_list[i]] = i;
-
-  // J columns (eq. 5) as pointers to stored columns; Dirichlet columns are e_{𝓛ᵢ}.
-  std::vector<const Column*> jcols(m, nullptr);
-  std::vector<char> is_dir(m, 0);
-  for (int i = 0; i < m; ++i) {
-    const int j = l_list[i];
-    if (dirichlet_.count(j) != 0) {
-      is_dir[i] = 1;
-      continue;
-    }
-    jcols[i] = changed_column(j);
-    bool any = false;
-    if (jcols[i] != nullptr) {
-      for (const auto& e : *jcols[i]) {
-        if (!std::isfinite(e.second)) {
-          report.status = AugmentedStatus::kNonFinite;
-          report.advice = "column " + std::to_string(j) + " of K has NaN/Inf entries";
-          return report;
-        }
-        any = any || std::abs(e.second) > 1e-13 * diag_scale_;
-      }
-    }
-    if (!any) {
-      report.status = AugmentedStatus::kSingularModifiedSystem;
-      report.advice = "DOF " + std::to_string(j) +
-                      " has no stiffness (empty column of K): attach it to elements, constrain "
-                      "it with impose_dirichlet(), or stop using it";
-      return report;
-    }
-  }
-  auto for_column = [&](int j, auto&& fn) {
-    if (const Column* c = changed_column(j)) {
-      for (const auto& [row, v] : *c) fn(row, v);
-    } else if (j < nb) {
-      for (SparseMatrix::InnerIterator it(base_->matrix, j); it; ++it)
-        fn(static_cast<int>(it.row()), it.value());
-    }
-  };
-
-  // f̂ of eq. 11 (with f_d kept at constrained rows: the unknown becomes the reaction).
-  Eigen::VectorXd fhat = f_;
-  for (const auto& [d, value] : dirichlet_) {
-    if (value != 0) for_column(d, [&](int row, double v) { fhat(row) -= v * value; });
-  }
-  std::vector<int> f_idx;
-  std::vector<double> f_val;
-  for (int i = 0; i < nb; ++i) {
-    if (fhat(i) != 0) {
-      f_idx.push_back(i);
-      f_val.push_back(fhat(i));
-    }
-  }
-  // Structure of J (rows < nb) and of 𝓛 (< nb).
-  std::vector<char> in_j(static_cast<size_t>(nb), 0);
-  std::vector<int> j_struct;
-  for (int i = 0; i < m; ++i) {
-    auto add_row = [&](int row) {
-      if (row < nb && !in_j[row]) {
-        in_j[row] = 1;
-        j_struct.push_back(row);
-      }
-    };
-    if (is_dir[i]) {
-      add_row(l_list[i]);
-    } else {
-      for (const auto& e : *jcols[i]) add_row(e.first);
-    }
-  }
-  std::sort(j_struct.begin(), j_struct.end());
-  std::vector<int> l_base;
-  for (int j : l_list) {
-    if (j < nb) l_base.push_back(j);
-  }
-  const std::vector<int> c_f = solver.closure(f_idx);
-  const std::vector<int> c_y = solver.closure(l_base);
-  const std::vector<int> c_j = solver.closure(j_struct);
-  std::vector<int> s3 = f_idx;
-  s3.insert(s3.end(), j_struct.begin(), j_struct.end());
-  std::sort(s3.begin(), s3.end());
-  s3.erase(std::unique(s3.begin(), s3.end()), s3.end());
-  const std::vector<int> c_3 = solver.closure(s3);
-  report.closure_f = static_cast<int>(c_f.size());
-  report.closure_y = static_cast<int>(c_y.size());
-  report.closure_ja2 = static_cast<int>(c_j.size());
-  report.closure_step3 = static_cast<int>(c_3.size());
-
-  // Preconditioner M = H S J (§3.5), m × m, LU-factored.
-  Eigen::PartialPivLU<Eigen::MatrixXd> m_lu;
-  bool use_m = false;
-  if (options_.preconditioner != SchurPreconditioner::kNone && m > 0 &&
-      options_.schur_solver == SchurSolver::kGmres) {
-    Eigen::MatrixXd mm = Eigen::MatrixXd::Zero(m, m);
-    auto s_entry = [&](int t, int r) -> double {  // S(t, r) for |t − r| ≤ 1
-      if (t >= nb || r >= nb) return t == r ? 1.0 : 0.0;
-      if (options_.preconditioner == SchurPreconditioner::kDiagonal) {
-        return t == r ? base_->s_diag(r) : 0.0;
-      }
-      if (t == r) return base_->spai_diag(r);
-      if (t == r - 1) return base_->spai_upper(t);
-      return base_->spai_lower(r);
-    };
-    for (int k = 0; k < m; ++k) {
-      auto visit = [&](int r, double v) {
-        for (int t = r - 1; t <= r + 1; ++t) {
-          if (t < 0 || t >= n || pos_in_l_[t] < 0) continue;
-          const double s = s_entry(t, r);
-          if (s != 0) mm(pos_in_l_[t], k) += s * v;
-        }
-      };
-      if (is_dir[k]) {
-        visit(l_list[k], 1.0);
-      } else {
-        for (const auto& e : *jcols[k]) visit(e.first, e.second);
-      }
-    }
-    m_lu.compute(mm);
-    const double rc = m_lu.rcond();
-    use_m = std::isfinite(rc) && rc > 1e-13;
-  }
-  report.seconds_setup = phase.seconds();
-
-  // Step 1: rhs = H R⁻¹ f̂ (eq. 18, 19).
-  phase.restart();
+// Step 1 (§3.2; eqs. 18, 19): rhs = H R⁻¹ f̂, the right-hand side of eq. 17. Forward
+// substitution on closure_L(f̂), backward only on closure_L(𝓛); on the new DOFs (identity block
+// of R) it is f̂ itself.
+Eigen::VectorXd AugmentedSystem::schur_rhs(const Augmentation& aug) {
+  const int m = aug.m();
   Eigen::VectorXd rhs(m);
   std::vector<double> y_base;
-  solver.solve_restricted(f_idx, f_val, c_f, c_y, l_base, y_base);
-  {
-    int kb = 0;
-    for (int i = 0; i < m; ++i) rhs(i) = l_list[i] < nb ? y_base[kb++] : fhat(l_list[i]);
-  }
-  report.seconds_step1 = phase.seconds();
+  base_->solver->solve_restricted(aug.f_idx, aug.f_val, aug.closure_f, aug.closure_y, aug.l_base,
+                                  y_base);
+  int kb = 0;
+  for (int i = 0; i < m; ++i) rhs(i) = aug.l[i] < n_base_ ? y_base[kb++] : aug.fhat(aug.l[i]);
+  return rhs;
+}
 
-  // Step 2: GMRES on (H R⁻¹ J) a₂ = rhs (eq. 17, 20).
-  phase.restart();
-  Eigen::VectorXd wbuf = Eigen::VectorXd::Zero(n);
-  std::vector<double> jv_val(j_struct.size());
-  auto apply_j = [&](const Eigen::VectorXd& v) {  // wbuf = J v (dense, caller clears)
-    for (int i = 0; i < m; ++i) {
-      const double vi = v(i);
-      if (vi == 0) continue;
-      if (is_dir[i]) {
-        wbuf(l_list[i]) += vi;
-      } else {
-        for (const auto& [row, kv] : *jcols[i]) wbuf(row) += kv * vi;
-      }
-    }
-  };
-  auto clear_j = [&]() {
-    for (int i = 0; i < m; ++i) {
-      if (is_dir[i]) {
-        wbuf(l_list[i]) = 0;
-      } else {
-        for (const auto& e : *jcols[i]) wbuf(e.first) = 0;
-      }
-    }
-  };
+// Step 2 (§3.2; eqs. 17, 20): a₂ from (H R⁻¹ J) a₂ = rhs by GMRES. One operator application
+// is J v (sparse), a forward substitution on closure_L(J) and a backward one on closure_L(𝓛).
+// Right preconditioner: with SchurSolver::kDirectCached the explicit capacitance matrix (it
+// keeps the residual of eq. 17 that of the operator step 3 uses; the capacitance form differs
+// from the operator by round-off amplified by κ(R)), else `hsj` when usable (§3.5).
+Eigen::VectorXd AugmentedSystem::solve_schur_system(Augmentation& aug, const Eigen::VectorXd& rhs,
+                                                    const SchurLu& hsj, AugmentedReport& report) {
+  const int m = aug.m();
+  const int nb = n_base_;
+  ClosureLdlSolver& solver = *base_->solver;
+  std::vector<double> jv_val(aug.j_struct.size());
   std::vector<double> yb;  // reused by every operator application (no per-iteration allocation)
   GmresOperator op = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) {
-    apply_j(v);
-    for (size_t k = 0; k < j_struct.size(); ++k) jv_val[k] = wbuf(j_struct[k]);
-    solver.solve_restricted(j_struct, jv_val, c_j, c_y, l_base, yb);
+    aug.add_j_times(v);
+    for (size_t k = 0; k < aug.j_struct.size(); ++k) jv_val[k] = aug.jv(aug.j_struct[k]);
+    solver.solve_restricted(aug.j_struct, jv_val, aug.closure_j, aug.closure_y, aug.l_base, yb);
     out.resize(m);
     int kb = 0;
-    for (int i = 0; i < m; ++i) out(i) = l_list[i] < nb ? yb[kb++] : wbuf(l_list[i]);
-    clear_j();
+    for (int i = 0; i < m; ++i) out(i) = aug.l[i] < nb ? yb[kb++] : aug.jv(aug.l[i]);
+    aug.clear_jv();
   };
   GmresOperator prec;
-  Eigen::PartialPivLU<Eigen::MatrixXd> schur_lu;
-  Eigen::VectorXd row_scale, col_scale;
+  SchurLu direct;
   if (m > 0 && options_.schur_solver == SchurSolver::kDirectCached) {
-    // The explicit H R⁻¹ J (LU-factored) as right preconditioner: GMRES with the exact operator
-    // then converges in one or two iterations and keeps the residual of eq. 17 consistent with
-    // the operator step 3 uses (the capacitance form differs from the operator by round-off
-    // amplified by κ(R)).
-    Eigen::MatrixXd s = capacitance_matrix(l_list, is_dir, jcols, l_base, c_y, report.schur_solves);
     // Rows and columns are in different units (displacement per force, per unit displacement)
-    // and span many decades on long meshes: equilibrate (max-norm row, then column scaling)
-    // before the LU, so that its condition estimate measures singularity, not scaling.
-    row_scale = s.cwiseAbs().rowwise().maxCoeff().cwiseMax(1e-300).cwiseInverse();
-    s = row_scale.asDiagonal() * s;
-    col_scale = s.cwiseAbs().colwise().maxCoeff().transpose().cwiseMax(1e-300).cwiseInverse();
-    s = s * col_scale.asDiagonal();
-    schur_lu.compute(s);
-    // A numerically singular H R⁻¹ J (e.g. a cut freed a component): plain GMRES, whose
-    // breakdown / stagnation / amplification checks report it.
-    const double rc = schur_lu.rcond();
-    if (std::isfinite(rc) && rc > 1e-13) {
-      prec = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) {
-        out = col_scale.cwiseProduct(schur_lu.solve(row_scale.cwiseProduct(v)));
-      };
+    // and span many decades on long meshes: equilibrated, so that the LU's condition estimate
+    // measures singularity, not scaling.
+    direct.factor(capacitance_matrix(aug, report.schur_solves), /*equilibrate=*/true);
+    if (direct.usable) {
+      prec = [&direct](const Eigen::VectorXd& v, Eigen::VectorXd& out) { direct.apply(v, out); };
     }
-  } else if (use_m) {
-    prec = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) { out = m_lu.solve(v); };
+  } else if (hsj.usable) {
+    prec = [&hsj](const Eigen::VectorXd& v, Eigen::VectorXd& out) { hsj.apply(v, out); };
   }
   Eigen::VectorXd a2 = Eigen::VectorXd::Zero(m);
   if (m > 0) {
@@ -746,31 +767,43 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
   } else {
     report.gmres.status = GmresStatus::kConverged;
   }
-  report.seconds_step2 = phase.seconds();
+  return a2;
+}
 
-  // Step 3: a₁ = R⁻¹(f̂ − J a₂) (eq. 16).
-  phase.restart();
-  apply_j(a2);
-  // f̂ − J a₂ is needed only on its structure s3 (base rows) and on the new DOFs (identity
-  // block of R: a₁ there is the right-hand side itself); a₁ on the base rows is written
-  // straight into the displacement.
+// Step 3 (§3.2; eq. 16): a₁ = R⁻¹(f̂ − J a₂), written into `displacement`. f̂ − J a₂ is needed
+// only on its structure (base rows: restricted forward substitution, then the full backward
+// one) and on the new DOFs, where R is the identity and a₁ is the right-hand side itself.
+void AugmentedSystem::back_substitute(Augmentation& aug, const Eigen::VectorXd& a2,
+                                      Eigen::VectorXd& displacement) {
+  aug.add_j_times(a2);
+  const std::vector<int>& s3 = aug.step3_struct;
   std::vector<double> b3_val(s3.size());
-  for (size_t k = 0; k < s3.size(); ++k) b3_val[k] = fhat(s3[k]) - wbuf(s3[k]);
-  for (int i = nb; i < n; ++i) displacement(i) = fhat(i) - wbuf(i);
-  clear_j();
-  solver.solve_sparse_rhs(s3, b3_val, c_3, displacement.data());
-  report.seconds_step3 = phase.seconds();
+  for (size_t k = 0; k < s3.size(); ++k) b3_val[k] = aug.fhat(s3[k]) - aug.jv(s3[k]);
+  for (int i = n_base_; i < n_; ++i) displacement(i) = aug.fhat(i) - aug.jv(i);
+  aug.clear_jv();
+  base_->solver->solve_sparse_rhs(s3, b3_val, aug.closure_step3, displacement.data());
+}
 
-  // Eqs. 8, 9: scatter a₂ into displacements and reactions.
-  for (int i = 0; i < m; ++i) {
-    const int j = l_list[i];
-    if (is_dir[i]) {
+// Eqs. 8, 9: a₂ into the displacements (𝓛 ∖ 𝓓) and the reactions (𝓓; the prescribed value
+// is the displacement there).
+void AugmentedSystem::scatter_schur_solution(const Augmentation& aug, const Eigen::VectorXd& a2,
+                                             Eigen::VectorXd& displacement,
+                                             Eigen::VectorXd& reaction) const {
+  for (int i = 0; i < aug.m(); ++i) {
+    const int j = aug.l[i];
+    if (aug.is_dirichlet[i]) {
       displacement(j) = dirichlet_.at(j);
       reaction(j) = -a2(i);
     } else {
       displacement(j) = a2(i);
     }
   }
+}
+
+// The report's status from GMRES, then the singularity guard (AugmentedOptions::
+// max_amplification) and the finiteness of the outputs; failed outputs are zeroed.
+void AugmentedSystem::conclude(const Augmentation& aug, Eigen::VectorXd& displacement,
+                               Eigen::VectorXd& reaction, AugmentedReport& report) const {
   switch (report.gmres.status) {
     case GmresStatus::kConverged: report.status = AugmentedStatus::kOk; break;
     case GmresStatus::kMaxIterations:
@@ -793,21 +826,19 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
       report.advice = "NaN/Inf during GMRES: check element matrices and forces";
       break;
   }
-  {
-    double abar2 = 0;
-    for (const auto& kv : dirichlet_) abar2 += kv.second * kv.second;
-    const double denom = fhat.norm() + diag_scale_ * std::sqrt(abar2);
-    report.amplification = denom > 0 ? diag_scale_ * displacement.norm() / denom : 0.0;
-    if (report.status == AugmentedStatus::kOk &&
-        !(report.amplification <= options_.max_amplification)) {
-      report.status = AugmentedStatus::kSingularModifiedSystem;
-      report.advice =
-          "the solution is amplified " + std::to_string(report.amplification) +
-          "x relative to the load: the modified stiffness is numerically singular (a cut may "
-          "have freed a component); constrain the free part or remove its elements";
-      displacement.setZero();
-      reaction.setZero();
-    }
+  double abar2 = 0;
+  for (const auto& kv : dirichlet_) abar2 += kv.second * kv.second;
+  const double denom = aug.fhat.norm() + diag_scale_ * std::sqrt(abar2);
+  report.amplification = denom > 0 ? diag_scale_ * displacement.norm() / denom : 0.0;
+  if (report.status == AugmentedStatus::kOk &&
+      !(report.amplification <= options_.max_amplification)) {
+    report.status = AugmentedStatus::kSingularModifiedSystem;
+    report.advice =
+        "the solution is amplified " + std::to_string(report.amplification) +
+        "x relative to the load: the modified stiffness is numerically singular (a cut may "
+        "have freed a component); constrain the free part or remove its elements";
+    displacement.setZero();
+    reaction.setZero();
   }
   if (!displacement.allFinite() || !reaction.allFinite()) {
     displacement.setZero();
@@ -817,6 +848,60 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
       report.advice = "non-finite solution: check element matrices and forces";
     }
   }
+}
+
+AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::VectorXd& reaction) {
+  Timer total;
+  AugmentedReport report;
+  if (job_.valid()) {  // §3.6: a finished background factor replaces R first
+    report.refactorization_swapped = poll_refactorization();
+    if (!job_.valid() && !report.refactorization_swapped) {
+      report.refactorization_status = last_refactor_status_;
+    }
+  }
+  displacement = Eigen::VectorXd::Zero(n_);
+  reaction = Eigen::VectorXd::Zero(n_);
+  report.n = n_;
+  if (!base_ || base_->status != FactorStatus::kOk) {
+    report.status = AugmentedStatus::kNoFactor;
+    report.advice = "initialize() with a positive definite K0 first";
+    if (base_) report.advice += " (last factorization: " + base_->message + ")";
+    return report;
+  }
+  if (!f_.allFinite()) {
+    report.status = AugmentedStatus::kNonFinite;
+    report.advice = "the force vector has NaN/Inf entries";
+    return report;
+  }
+  if (options_.prune_unchanged_columns) report.pruned_columns = prune_unchanged_columns();
+
+  // Setup: 𝓛, J, H, f̂ (§3.1), closures (§3.3), the preconditioner M = H S J (§3.5).
+  Timer phase;
+  report.nnz_l = base_->ldl->nnz_l();
+  Augmentation aug;
+  if (!augment(aug, report)) return report;
+  find_closures(aug, report);
+  SchurLu hsj;
+  if (options_.preconditioner != SchurPreconditioner::kNone && aug.m() > 0 &&
+      options_.schur_solver == SchurSolver::kGmres) {
+    hsj.factor(hsj_matrix(aug), /*equilibrate=*/false);
+  }
+  report.seconds_setup = phase.seconds();
+
+  phase.restart();
+  const Eigen::VectorXd rhs = schur_rhs(aug);
+  report.seconds_step1 = phase.seconds();
+
+  phase.restart();
+  const Eigen::VectorXd a2 = solve_schur_system(aug, rhs, hsj, report);
+  report.seconds_step2 = phase.seconds();
+
+  phase.restart();
+  back_substitute(aug, a2, displacement);
+  report.seconds_step3 = phase.seconds();
+
+  scatter_schur_solution(aug, a2, displacement, reaction);
+  conclude(aug, displacement, reaction, report);
   report.seconds_total = total.seconds();
   return report;
 }

@@ -148,6 +148,10 @@ FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
     message_ = "factorize: size differs from the analyzed matrix";
     return status_ = FactorStatus::kInvalidInput;
   }
+  if (!Eigen::Map<const Eigen::VectorXd>(a.valuePtr(), a.nonZeros()).allFinite()) {
+    message_ = "matrix has non-finite entries";
+    return status_ = FactorStatus::kInvalidInput;
+  }
   cholmod_sparse s = view_lower(a);
   cholmod_factorize(&s, impl_->factor, &impl_->common);
   status_ = status_from_common(impl_->common, message_);
@@ -156,6 +160,21 @@ FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
     status_ = FactorStatus::kNotPositiveDefinite;
     message_ = "matrix not positive definite";
   }
+  const cholmod_factor* l = impl_->factor;
+  if (status_ == FactorStatus::kOk && l->is_super == 0 && l->is_ll == 0) {
+    // A simplicial LDLᵀ factorization also succeeds on an indefinite matrix (CHOLMOD flags only
+    // zero pivots there): every pivot D_jj — the first entry of column j — must be positive.
+    const int* lp = static_cast<const int*>(l->p);
+    const double* lx = static_cast<const double*>(l->x);
+    for (int j = 0; j < n_; ++j) {
+      if (!(lx[lp[j]] > 0)) {
+        status_ = FactorStatus::kNotPositiveDefinite;
+        message_ = "matrix not positive definite";
+        minor_ = j;
+        break;
+      }
+    }
+  }
   rcond_ = status_ == FactorStatus::kOk ? cholmod_rcond(impl_->factor, &impl_->common) : 0.0;
   if (status_ == FactorStatus::kOk && options_.min_pivot_ratio > 0 &&
       !(rcond_ >= options_.min_pivot_ratio)) {
@@ -163,8 +182,10 @@ FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
     message_ = "matrix numerically singular (pivot ratio " + std::to_string(rcond_) + ")";
   }
   if (status_ == FactorStatus::kNotPositiveDefinite) {
-    message_ += " (pivot " + std::to_string(minor_) + " of " + std::to_string(n_) +
-                " failed: singular or indefinite — check constraints and inverted elements)";
+    const std::string where =
+        minor_ < n_ ? "pivot " + std::to_string(minor_) + " of " + std::to_string(n_) + " failed: "
+                    : std::string();
+    message_ += " (" + where + "singular or indefinite — check constraints and inverted elements)";
   }
   factorized_ = status_ == FactorStatus::kOk;
   return status_;

@@ -37,6 +37,10 @@ GmresReport gmres(const GmresOperator& a, const GmresOperator& precondition,
     report.residual_history.push_back(0);
     return report;
   }
+  if (!x.allFinite()) {  // a non-finite initial guess is reported, not iterated on
+    report.status = GmresStatus::kNonFinite;
+    return report;
+  }
   const double target = options.tolerance * b_norm;
   Eigen::VectorXd r(n), w(n), z(n);
   if (x.squaredNorm() > 0) {

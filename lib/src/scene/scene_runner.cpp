@@ -291,14 +291,13 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
   res.u = VecX::Zero(p.size());
   res.external_force_norm = p.external_force_norm();
 
-  solver::StoppingRule stop;
-  stop.rule = solver::ResidualRule::kExternalForce;  // ‖r‖ ≤ ε‖f_ext‖, thesis §3.3 / (6.8)
-  stop.epsilon = s.tolerance;
-  solver::Budget budget;
-  budget.max_iterations = s.max_iterations;
-  if (s.time_budget > 0) budget.max_seconds = s.time_budget;
-
-  auto record_row = [&](const solver::IterationInfo& info) {
+  // Stopping rule, budget and trace observer, the same for every relaxation method.
+  solver::RelaxationOptions common;
+  common.stop.rule = solver::ResidualRule::kExternalForce;  // ‖r‖ ≤ ε‖f_ext‖, §3.3 / (6.8)
+  common.stop.epsilon = s.tolerance;
+  common.budget.max_iterations = s.max_iterations;
+  if (s.time_budget > 0) common.budget.max_seconds = s.time_budget;
+  common.observer = [&](const solver::IterationInfo& info) {
     TraceRow row;
     row.iteration = info.iteration;
     row.residual_norm = info.residual_norm;
@@ -314,19 +313,15 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
   switch (s.method) {
     case SolverSpec::Method::kCG: {
       solver::LinearCgOptions o;
-      o.stop = stop;
-      o.budget = budget;
+      static_cast<solver::RelaxationOptions&>(o) = common;
       o.preconditioner = s.preconditioner;
-      o.observer = record_row;
       detail << "linear CG (matrix-free), preconditioner " << solver::to_string(s.preconditioner);
       res.report = solver::linear_cg(p, res.u, o);
       break;
     }
     case SolverSpec::Method::kNonlinearCG: {
       solver::NonlinearCgOptions o;
-      o.stop = stop;
-      o.budget = budget;
-      o.observer = record_row;
+      static_cast<solver::RelaxationOptions&>(o) = common;
       detail << "nonlinear CG, " << solver::to_string(o.beta) << ", "
              << solver::to_string(o.line_search) << " line search";
       res.report = solver::nonlinear_cg(p, res.u, o);
@@ -334,19 +329,15 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
     }
     case SolverSpec::Method::kNewton: {
       solver::TruncatedNewtonOptions o;
-      o.stop = stop;
-      o.budget = budget;
+      static_cast<solver::RelaxationOptions&>(o) = common;
       o.preconditioner = s.preconditioner;
-      o.observer = record_row;
       detail << "truncated Newton, inner CG preconditioner " << solver::to_string(s.preconditioner);
       res.report = solver::truncated_newton(p, res.u, o);
       break;
     }
     case SolverSpec::Method::kDynamicSS22: {
       solver::DynamicRelaxationOptions o;
-      o.stop = stop;
-      o.budget = budget;
-      o.observer = record_row;
+      static_cast<solver::RelaxationOptions&>(o) = common;
       double dt = s.time_step;
       std::string dt_origin = "given";
       if (dt <= 0) {

@@ -3,8 +3,10 @@
 
 #include <fftw3.h>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <memory>
 #include <mutex>
 
@@ -33,6 +35,17 @@ FrequencyEstimate dominant_frequency(const std::vector<double>& samples, double 
     mean += s;
   }
   mean /= n;
+  // A signal whose deviations from its mean are at the round-off level of that mean (at most
+  // n·eps·max|s| for the summed mean; 4× that here) does not oscillate resolvably: without this
+  // a constant such as 0.1 would report the peak of its rounding noise.
+  FrequencyEstimate est;
+  est.resolution = 1.0 / (n * dt);
+  double max_abs = 0.0, max_dev = 0.0;
+  for (double s : samples) {
+    max_abs = std::max(max_abs, std::abs(s));
+    max_dev = std::max(max_dev, std::abs(s - mean));
+  }
+  if (max_dev <= 4.0 * n * std::numeric_limits<double>::epsilon() * max_abs) return est;
   const int nc = n / 2 + 1;
   std::unique_ptr<double, FftwFree> in(static_cast<double*>(fftw_malloc(sizeof(double) * n)));
   std::unique_ptr<fftw_complex, FftwFree> out(
@@ -55,8 +68,6 @@ FrequencyEstimate dominant_frequency(const std::vector<double>& samples, double 
   std::vector<double> mag(nc);
   for (int k = 0; k < nc; ++k) mag[k] = std::hypot(out.get()[k][0], out.get()[k][1]);
 
-  FrequencyEstimate est;
-  est.resolution = 1.0 / (n * dt);
   // Skip the DC bin and its window leakage neighbour.
   int best = -1;
   double best_mag = 0.0;

@@ -63,18 +63,18 @@ enum class SchurSolver {
   /// that joins 𝓛 costs one closure-restricted solve R⁻¹e_{𝓛ᵢ}, changed column values only
   /// the m×m product G Ψ (Ψ holds the changes E = K − R on 𝓛 and e_k for Dirichlet columns).
   /// Its dense LU is the right preconditioner of GMRES on the exact operator, which then
-  /// converges in 1–3 iterations (the capacitance form amplifies round-off by κ(R) in the
-  /// directions of R's low modes, so it is not used as a direct solve).
+  /// converges in a few iterations (the capacitance form amplifies round-off by κ(R) in the
+  /// directions of R's low modes, so it is not used as a direct solve). Measured counts and
+  /// costs: docs/augmented.md.
   kDirectCached
 };
 
 /// Options of an AugmentedSystem.
 struct AugmentedOptions {
   /// Factorization of K⁰ (and of background refactorizations). METIS nested dissection by
-  /// default: on the paper's 25,600-node beam AMD gives closures of ~26,000 positions for a
-  /// single DOF, METIS ~650 (docs/augmented.md), at 1.6× the fill. Simplicial LDLᵀ by default:
-  /// the solves use the simplicial form anyway (supernodal padding adds 12% explicit zeros),
-  /// and it factored as fast as the supernodal kernel on the measured machine.
+  /// default: shallower elimination trees, hence smaller closures (§3.3–3.4), for more fill.
+  /// Simplicial LDLᵀ by default: the solves use the simplicial form anyway (the LDLᵀ copy of a
+  /// supernodal factor carries its padding as explicit zeros). Measurements: docs/augmented.md.
   CholmodOptions cholmod = {CholmodKind::kSimplicialLdl, CholmodOrdering::kMetis};
   GmresOptions gmres;  ///< GMRES for eq. 17
   SchurPreconditioner preconditioner = SchurPreconditioner::kDiagonal;
@@ -91,11 +91,10 @@ struct AugmentedOptions {
   /// by κ(K) for a nonsingular K, so this must exceed the condition number of legitimate
   /// systems (the paper's longest beam: κ ≈ 3.3e12).
   double max_amplification = 1e14;
-  /// Threads of step 3's full backward substitution (ClosureLdlSolver): 1 = serial. The pass
-  /// streams all of L and is memory-bound; a second core adds memory bandwidth (on the
-  /// measured 2-core machine 1.5× for a pure stream). The result is bit-identical for any
-  /// value. Leave at 1 when the core is needed elsewhere, e.g. by a background
-  /// refactorization (§3.6) or the rest of the simulator.
+  /// Threads of step 3's full backward substitution (ClosureLdlSolver): 1 = serial, ≥ 1. The
+  /// pass streams all of L and is memory-bound, so extra threads help as far as a core adds
+  /// memory bandwidth (docs/augmented.md). The result is bit-identical for any value. Leave at
+  /// 1 when the core is needed elsewhere, e.g. by a background refactorization (§3.6).
   int solve_threads = 1;
 };
 
@@ -225,19 +224,32 @@ class AugmentedSystem {
 
  private:
   using Column = std::vector<std::pair<int, double>>;  // sorted by row
-  struct Base;                                         // factor, matrix, preconditioner data of R
+  // Factor, matrix and preconditioner data of R.
+  struct Base;
+  // 𝓛, J, H and f̂ of one solve, with their closures.
+  struct Augmentation;
+  // Dense LU of an m×m approximation of H R⁻¹ J (GMRES's right preconditioner).
+  struct SchurLu;
   static std::unique_ptr<Base> make_base(SparseMatrix matrix, std::unique_ptr<CholmodFactor> factor,
                                          const AugmentedOptions& options);
   Column column_of(int j) const;
   const Column* changed_column(int j) const;
   void touch_column(int j);
   bool swap_in(std::unique_ptr<Base> base, const std::set<int>& changed_since);
-  Eigen::MatrixXd capacitance_matrix(const std::vector<int>& l_list,
-                                     const std::vector<char>& is_dir,
-                                     const std::vector<const Column*>& jcols,
-                                     const std::vector<int>& l_base, const std::vector<int>& c_y,
-                                     int& solves);
   int prune_unchanged_columns();
+  // The steps of solve(), in order (defined in augmented_system.cpp with their equations).
+  bool augment(Augmentation& aug, AugmentedReport& report);
+  void find_closures(Augmentation& aug, AugmentedReport& report);
+  Eigen::MatrixXd hsj_matrix(const Augmentation& aug) const;
+  Eigen::VectorXd schur_rhs(const Augmentation& aug);
+  Eigen::MatrixXd capacitance_matrix(const Augmentation& aug, int& solves);
+  Eigen::VectorXd solve_schur_system(Augmentation& aug, const Eigen::VectorXd& rhs,
+                                     const SchurLu& hsj, AugmentedReport& report);
+  void back_substitute(Augmentation& aug, const Eigen::VectorXd& a2, Eigen::VectorXd& displacement);
+  void scatter_schur_solution(const Augmentation& aug, const Eigen::VectorXd& a2,
+                              Eigen::VectorXd& displacement, Eigen::VectorXd& reaction) const;
+  void conclude(const Augmentation& aug, Eigen::VectorXd& displacement, Eigen::VectorXd& reaction,
+                AugmentedReport& report) const;
 
   AugmentedOptions options_;
   std::unique_ptr<Base> base_;

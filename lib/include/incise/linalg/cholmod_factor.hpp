@@ -100,7 +100,8 @@ class CholmodFactor {
   [[nodiscard]] FactorStatus analyze(const SparseMatrix& a, std::uint64_t pattern_version);
 
   /// Numerical factorization of `a` (same pattern as analyzed). kNotPositiveDefinite when a
-  /// pivot is not positive; minor() is then the failing column (in the permuted order).
+  /// pivot is not positive (minor() is then the failing column, in the permuted order) or the
+  /// pivot ratio is below min_pivot_ratio; kInvalidInput for a NaN/Inf entry.
   [[nodiscard]] FactorStatus factorize(const SparseMatrix& a);
 
   /// analyze(a, version) followed by factorize(a).

@@ -56,7 +56,8 @@ struct GmresReport {
 /// Solves A x = b by restarted GMRES with optional right preconditioner: `precondition(v, z)`
 /// computes z = M⁻¹ v (pass an empty function for none). `x` is the initial guess on entry
 /// (resized to zero if its size differs from b) and the iterate on exit. b = 0 returns x = 0.
-/// Numerical failure is reported in the status; throws ParameterError for bad options.
+/// Numerical failure, including a non-finite b or initial guess, is reported in the status
+/// (kNonFinite); throws ParameterError for bad options.
 [[nodiscard]] GmresReport gmres(const GmresOperator& a, const GmresOperator& precondition,
                                 const Eigen::VectorXd& b, Eigen::VectorXd& x,
                                 const GmresOptions& options = {});

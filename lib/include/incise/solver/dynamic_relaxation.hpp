@@ -12,14 +12,13 @@
 
 namespace incise::solver {
 
-/// Options of dynamic_relaxation().
-struct DynamicRelaxationOptions {
-  double time_step = 0.0;      ///< Δt (s), > 0
-  double damping = 0.0;        ///< η (1/s), ≥ 0; C = ηM
-  StoppingRule stop;           ///< (6.8)/(6.9) on the residual at the evaluation point ū
-  Budget budget;               ///< time steps / flops / seconds
-  double blowup_norm = 1e15;   ///< ‖u‖₂ above this is a blow-up (kUnstable), §4.4.1
-  IterationObserver observer;  ///< called after every step with ū and its residual
+/// Options of dynamic_relaxation(). From RelaxationOptions: `stop` is checked on the residual at
+/// the evaluation point ū, `budget` counts time steps, `observer` is called after every step
+/// with ū and its residual.
+struct DynamicRelaxationOptions : RelaxationOptions {
+  double time_step = 0.0;     ///< Δt (s), > 0
+  double damping = 0.0;       ///< η (1/s), ≥ 0; C = ηM
+  double blowup_norm = 1e15;  ///< ‖u‖₂ above this is a blow-up (kUnstable), §4.4.1
 };
 
 /// Runs SS22 from rest at u (updated in place). One step (2.56)–(2.60) with θ₁ = ½, θ₂ = 0:

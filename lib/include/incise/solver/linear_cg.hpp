@@ -38,10 +38,9 @@ struct CgCoefficients {
   std::vector<double> beta;   ///< β_k = (r_{k+1}, z_{k+1})/(r_k, z_k), one per completed step
 };
 
-/// Options of linear_cg().
-struct LinearCgOptions {
-  StoppingRule stop;  ///< (6.8) or (6.9)
-  Budget budget;      ///< iteration / flop / time budgets
+/// Options of linear_cg(). From RelaxationOptions: `budget` counts CG steps, `observer` is
+/// called after every CG step with the current u.
+struct LinearCgOptions : RelaxationOptions {
   Preconditioner preconditioner = Preconditioner::kNone;
   /// Confirm convergence on the true gradient (the recursive residual r_{k+1} = r_k − α K d
   /// drifts from f − K u in floating point): when the recursive residual meets the rule but the
@@ -49,7 +48,6 @@ struct LinearCgOptions {
   /// replacement that does not lower the true residual ends the run as kStagnated. The reported
   /// residual is always the true one. false: trust the recursive residual (no extra gradient).
   bool recompute_residual = true;
-  IterationObserver observer;  ///< called after every CG step with the current u
   /// When non-null, cleared and filled with α_k, β_k of every step (for condition estimates).
   CgCoefficients* coefficients = nullptr;
 };

@@ -39,10 +39,9 @@ const char* to_string(BetaRule b);
 const char* to_string(LineSearchKind l);
 
 /// Options of nonlinear_cg(). Defaults are the thesis' choice for §4.5 (secant, Polak-Ribière,
-/// ε_newton = 0.1).
-struct NonlinearCgOptions {
-  StoppingRule stop;                        ///< (6.8) or (6.9)
-  Budget budget;                            ///< outer iteration / flop / time budgets
+/// ε_newton = 0.1). From RelaxationOptions: `budget` counts outer iterations, `observer` is
+/// called after every outer iteration.
+struct NonlinearCgOptions : RelaxationOptions {
   BetaRule beta = BetaRule::kPolakRibiere;  ///< (2.48) or (2.49)
   LineSearchKind line_search = LineSearchKind::kSecant;
   double epsilon_newton = 0.1;  ///< stop the line search when |δ_j| < ε_newton |δ_0| (j > 0)
@@ -52,7 +51,6 @@ struct NonlinearCgOptions {
   double alpha_minus1 = -1e-3;
   long restart_every = 0;   ///< restart d = r every this many steps; 0: every n steps
   int max_backtracks = 30;  ///< halvings of a trial step that lands on Π = +∞ (inverted)
-  IterationObserver observer;
 };
 
 /// Minimizes Π from the given u (updated in place). Each outer iteration: choose d (restart to

@@ -77,6 +77,15 @@ struct IterationInfo {
 /// solver's budgets and report, so observers (e.g. EnergyErrorTrace) do not bias measurements.
 using IterationObserver = std::function<void(const IterationInfo&)>;
 
+/// Options every relaxation solver takes (linear CG, nonlinear CG, truncated Newton, dynamic
+/// relaxation): the base of their option structs, so a caller can set these generically, e.g.
+/// `static_cast<RelaxationOptions&>(options) = common;`.
+struct RelaxationOptions {
+  StoppingRule stop;           ///< (6.8) or (6.9)
+  Budget budget;               ///< iteration / flop / time budgets
+  IterationObserver observer;  ///< called after every iteration with the current iterate
+};
+
 /// Outcome of one solver run. [[nodiscard]]: numerical failure is reported here.
 struct [[nodiscard]] SolverReport {
   StopReason reason = StopReason::kMaxIterations;  ///< why the solver returned

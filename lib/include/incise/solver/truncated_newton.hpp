@@ -8,17 +8,16 @@
 
 namespace incise::solver {
 
-/// Options of truncated_newton().
-struct TruncatedNewtonOptions {
-  StoppingRule stop;   ///< outer rule (6.8)/(6.9); for reference solutions ε = 1e-8 with (6.8)
-  Budget budget;       ///< outer (Newton) iteration / flop / time budgets
+/// Options of truncated_newton(). From RelaxationOptions: `stop` is the outer rule (for
+/// reference solutions ε = 1e-8 with (6.8)), `budget` counts Newton steps, `observer` is called
+/// after every Newton step.
+struct TruncatedNewtonOptions : RelaxationOptions {
   long max_inner = 0;  ///< inner CG steps per Newton step; 0: n
   /// Inner tolerance ‖K p − r‖ ≤ η_k‖r‖ with η_k = min(forcing_max, √(‖r‖/‖r₀‖)) (a standard
   /// Eisenstat–Walker-type forcing term; the thesis only says "low tolerances can be used").
   double forcing_max = 0.5;
   Preconditioner preconditioner = Preconditioner::kJacobi;  ///< inner CG preconditioner
   int max_backtracks = 40;  ///< step halvings (inverted trial points or energy increase)
-  IterationObserver observer;
 };
 
 /// Minimizes Π from u (updated in place). Newton step p from K(u) p = r by projected CG; when

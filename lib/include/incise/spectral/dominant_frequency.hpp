@@ -17,7 +17,10 @@ struct FrequencyEstimate {
 /// Frequency (Hz) of the largest non-DC peak of the real signal `samples` taken every `dt`
 /// seconds. The mean is removed and a Hann window applied before the real-to-complex FFT
 /// (FFTW r2c); the peak is refined by parabolic interpolation of log|X| over its neighbours.
-/// Throws ParameterError when samples.size() < 8 or dt ≤ 0 or a sample is not finite.
+/// Bins 0 and 1 (the mean and its window leakage) are skipped, so frequencies below 2/(N·dt)
+/// are not resolved. A signal that does not oscillate (constant up to the round-off of its mean)
+/// gives frequency = amplitude = 0. Throws ParameterError when samples.size() < 8 or dt ≤ 0 or
+/// a sample is not finite.
 FrequencyEstimate dominant_frequency(const std::vector<double>& samples, double dt);
 
 }  // namespace incise::spectral

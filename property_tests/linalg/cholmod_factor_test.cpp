@@ -1,0 +1,282 @@
+/// \file cholmod_factor_test.cpp
+/// The CHOLMOD wrapper (linalg/cholmod_factor.hpp): analyze / factorize / solve against a dense
+/// solve for every kind and ordering, the exported LDLᵀ factor (P A Pᵀ = L D Lᵀ and the
+/// elimination tree), numeric refactorization with a kept symbolic analysis, and failures
+/// (not positive definite, numerically singular, non-finite, misuse) as statuses.
+
+#include "augmented_stand_in.hpp"
+#include "random_spd.hpp"
+
+#include <incise/linalg/cholmod_factor.hpp>
+#include <incise/mesh/generators.hpp>
+#include <incise_test/seed.hpp>
+
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <random>
+#include <string>
+#include <tuple>
+
+namespace incise::test {
+namespace {
+
+using linalg::CholmodFactor;
+using linalg::CholmodKind;
+using linalg::CholmodOptions;
+using linalg::CholmodOrdering;
+using linalg::FactorStatus;
+using linalg::SparseMatrix;
+
+/// Direct solves of these SPD matrices (κ ≲ 1e3 for random_sparse_spd with shift 0.1, ≲ 1e4 for
+/// the brick) are accurate to ~κ·n·eps ≲ 1e-10; 1e-9 leaves a margin.
+constexpr double kSolveTol = 1e-9;
+
+Eigen::VectorXd random_vector(Eigen::Index n, std::mt19937_64& rng) {
+  std::normal_distribution<double> g;
+  Eigen::VectorXd v(n);
+  for (Eigen::Index i = 0; i < n; ++i) v(i) = g(rng);
+  return v;
+}
+
+// Checks the exported factor against A: permutation, strictly-lower sorted columns, positive D,
+// the elimination-tree parents, and P A Pᵀ = L D Lᵀ.
+void expect_valid_ldl(const linalg::LdlFactorData& f, const Eigen::MatrixXd& a) {
+  const int n = f.n;
+  ASSERT_EQ(n, a.rows());
+  ASSERT_EQ(static_cast<int>(f.perm.size()), n);
+  ASSERT_EQ(static_cast<int>(f.col_ptr.size()), n + 1);
+  for (int i = 0; i < n; ++i) EXPECT_EQ(f.inverse_perm[f.perm[i]], i);
+  EXPECT_EQ(f.nnz_l(), static_cast<std::int64_t>(f.values.size()) + n);
+  for (int j = 0; j < n; ++j) {
+    EXPECT_GT(f.d[j], 0.0) << "pivot " << j;
+    const int begin = f.col_ptr[j], end = f.col_ptr[j + 1];
+    for (int k = begin; k < end; ++k) {
+      EXPECT_GT(f.row_idx[k], j);
+      if (k > begin) {
+        EXPECT_GT(f.row_idx[k], f.row_idx[k - 1]);
+      }
+    }
+    // Parent = first subdiagonal row of column j (Liu 1990; Yeung et al. Appendix Def. 2).
+    EXPECT_EQ(f.parent[j], begin < end ? f.row_idx[begin] : -1);
+  }
+  Eigen::MatrixXd pap(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) pap(i, j) = a(f.perm[i], f.perm[j]);
+  const Eigen::MatrixXd l = dense_l(f);
+  const Eigen::VectorXd d = Eigen::Map<const Eigen::VectorXd>(f.d.data(), n);
+  // Reconstruction error of a backward-stable factorization: O(n·eps·‖A‖) ≈ 1e-13·‖A‖ here.
+  EXPECT_LE((l * d.asDiagonal() * l.transpose() - pap).norm(), 1e-12 * a.norm());
+}
+
+using Variant = std::tuple<CholmodKind, CholmodOrdering>;
+
+std::string variant_name(const ::testing::TestParamInfo<Variant>& info) {
+  const char* kind[] = {"supernodal", "simplicial", "auto"};
+  const char* ordering[] = {"default", "amd", "natural", "metis"};
+  return std::string(kind[static_cast<int>(std::get<0>(info.param))]) + "_" +
+         ordering[static_cast<int>(std::get<1>(info.param))];
+}
+
+class CholmodVariants : public ::testing::TestWithParam<Variant> {};
+
+TEST_P(CholmodVariants, SolveMatchesDenseAndLdlReconstructs) {
+  CholmodOptions o;
+  o.kind = std::get<0>(GetParam());
+  o.ordering = std::get<1>(GetParam());
+  INCISE_SEEDED_RNG(rng, 11);
+  std::vector<SparseMatrix> matrices{CutModel::from_mesh(mesh::make_brick(2)).assemble()};
+  for (int k = 0; k < 3; ++k) matrices.push_back(random_sparse_spd(120 + 90 * k, 3, 0.1, rng));
+  for (const SparseMatrix& a : matrices) {
+    SCOPED_TRACE("n = " + std::to_string(a.rows()));
+    CholmodFactor f(o);
+    ASSERT_EQ(f.analyze(a, 7), FactorStatus::kOk) << f.message();
+    EXPECT_EQ(f.rows(), a.rows());
+    ASSERT_EQ(f.factorize(a), FactorStatus::kOk) << f.message();
+    EXPECT_EQ(f.info(), FactorStatus::kOk);
+    EXPECT_TRUE(f.message().empty());
+    EXPECT_EQ(f.minor(), a.rows());
+    if (o.kind != CholmodKind::kAuto) {
+      EXPECT_EQ(f.is_supernodal(), o.kind == CholmodKind::kSupernodal);
+    }
+    EXPECT_GT(f.rcond(), 0.0);
+    EXPECT_LE(f.rcond(), 1.0);
+    EXPECT_GE(f.nnz_l(), a.rows());
+    EXPECT_GT(f.factor_flops(), 0.0);
+    const Eigen::MatrixXd ad(a);
+    const Eigen::LDLT<Eigen::MatrixXd> dense(ad);
+    for (int rhs = 0; rhs < 3; ++rhs) {
+      const Eigen::VectorXd b = random_vector(a.rows(), rng);
+      Eigen::VectorXd x;
+      ASSERT_EQ(f.solve(b, x), FactorStatus::kOk);
+      const Eigen::VectorXd xd = dense.solve(b);
+      EXPECT_LE((x - xd).norm(), kSolveTol * xd.norm());
+    }
+    const bool supernodal = f.is_supernodal();
+    const auto ldl = f.extract_ldl();
+    ASSERT_NE(ldl, nullptr);
+    expect_valid_ldl(*ldl, ad);
+    if (o.ordering == CholmodOrdering::kNatural) {
+      for (int i = 0; i < ldl->n; ++i) EXPECT_EQ(ldl->perm[i], i);
+    }
+    // The export leaves the stored factor as it was (a supernodal one is converted on a copy).
+    EXPECT_EQ(f.is_supernodal(), supernodal);
+    const Eigen::VectorXd b = random_vector(a.rows(), rng);
+    Eigen::VectorXd x;
+    ASSERT_EQ(f.solve(b, x), FactorStatus::kOk);
+    EXPECT_LE((x - dense.solve(b)).norm(), kSolveTol * x.norm());
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    KindsAndOrderings, CholmodVariants,
+    ::testing::Combine(::testing::Values(CholmodKind::kSupernodal, CholmodKind::kSimplicialLdl,
+                                         CholmodKind::kAuto),
+                       ::testing::Values(CholmodOrdering::kDefault, CholmodOrdering::kAmd,
+                                         CholmodOrdering::kNatural, CholmodOrdering::kMetis)),
+    variant_name);
+
+TEST(CholmodFactor, SymbolicAnalysisCachedPerPatternVersion) {
+  const SparseMatrix a = CutModel::from_mesh(mesh::make_brick(2)).assemble();
+  CholmodFactor f;
+  ASSERT_EQ(f.compute(a, 1), FactorStatus::kOk);
+  SparseMatrix a2 = a * 2.0;
+  ASSERT_EQ(f.compute(a2, 1), FactorStatus::kOk);
+  EXPECT_EQ(f.analyses_performed(), 1);
+  ASSERT_EQ(f.compute(a2, 2), FactorStatus::kOk);
+  EXPECT_EQ(f.analyses_performed(), 2);
+}
+
+// Numeric refactorization: new values on the analyzed pattern reuse the analysis, and the
+// solves follow the new values — also after a failed factorization of the same pattern.
+TEST(CholmodFactor, NumericRefactorizationWithTheSamePattern) {
+  INCISE_SEEDED_RNG(rng, 13);
+  const SparseMatrix a = random_sparse_spd(200, 3, 0.1, rng);
+  for (CholmodKind kind : {CholmodKind::kSupernodal, CholmodKind::kSimplicialLdl}) {
+    SCOPED_TRACE(kind == CholmodKind::kSupernodal ? "supernodal" : "simplicial LDL'");
+    CholmodFactor f({kind, CholmodOrdering::kMetis});
+    ASSERT_EQ(f.compute(a, 1), FactorStatus::kOk);
+    for (int round = 0; round < 3; ++round) {
+      // Same pattern, other values: A + D with a random positive diagonal D (still SPD).
+      SparseMatrix a2 = a;
+      std::uniform_real_distribution<double> unit(0.0, 1.0);
+      for (int j = 0; j < a2.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(a2, j); it; ++it)
+          if (it.row() == j) it.valueRef() += 3.0 * unit(rng);
+      ASSERT_EQ(f.analyze(a2, 1), FactorStatus::kOk);  // same version: kept
+      ASSERT_EQ(f.factorize(a2), FactorStatus::kOk);
+      EXPECT_EQ(f.analyses_performed(), 1);
+      const Eigen::VectorXd b = random_vector(a.rows(), rng);
+      Eigen::VectorXd x;
+      ASSERT_EQ(f.solve(b, x), FactorStatus::kOk);
+      const Eigen::VectorXd xd = Eigen::MatrixXd(a2).ldlt().solve(b);
+      EXPECT_LE((x - xd).norm(), kSolveTol * xd.norm());
+    }
+    SparseMatrix bad = a;
+    bad.coeffRef(17, 17) = -1.0;  // an existing entry: same pattern
+    EXPECT_EQ(f.factorize(bad), FactorStatus::kNotPositiveDefinite);
+    Eigen::VectorXd x;
+    EXPECT_NE(f.solve(Eigen::VectorXd::Ones(a.rows()), x), FactorStatus::kOk);
+    ASSERT_EQ(f.factorize(a), FactorStatus::kOk);  // recovers on the kept analysis
+    const Eigen::VectorXd b = random_vector(a.rows(), rng);
+    ASSERT_EQ(f.solve(b, x), FactorStatus::kOk);
+    EXPECT_LE((a * x - b).norm(), kSolveTol * b.norm());
+    EXPECT_EQ(f.analyses_performed(), 1);
+  }
+}
+
+TEST(CholmodFactor, NotPositiveDefiniteIsAStatus) {
+  INCISE_SEEDED_RNG(rng, 5);
+  for (CholmodKind kind : {CholmodKind::kSupernodal, CholmodKind::kSimplicialLdl}) {
+    SCOPED_TRACE(kind == CholmodKind::kSupernodal ? "supernodal" : "simplicial LDL'");
+    // Indefinite: one negative diagonal entry.
+    SparseMatrix a = random_sparse_spd(150, 3, 0.1, rng);
+    a.coeffRef(5, 5) = -1.0;
+    CholmodFactor f({kind, CholmodOrdering::kAmd});
+    EXPECT_EQ(f.compute(a, 1), FactorStatus::kNotPositiveDefinite);
+    EXPECT_EQ(f.info(), FactorStatus::kNotPositiveDefinite);
+    EXPECT_FALSE(f.message().empty());
+    EXPECT_LT(f.minor(), a.rows());
+    Eigen::VectorXd x;
+    EXPECT_NE(f.solve(Eigen::VectorXd::Ones(a.rows()), x), FactorStatus::kOk);
+    EXPECT_EQ(f.extract_ldl(), nullptr);
+    // Exactly singular: a graph Laplacian (constant on each connected component in its null
+    // space). A pivot is 0 in exact arithmetic and a round-off-sized number of either sign in
+    // floating point: CHOLMOD flags it, or the pivot ratio falls below min_pivot_ratio = 1e-14.
+    SparseMatrix lap = random_sparse_spd(150, 3, 0.1, rng);
+    for (int j = 0; j < lap.outerSize(); ++j) {
+      double sum = 0;
+      for (SparseMatrix::InnerIterator it(lap, j); it; ++it)
+        if (it.row() != j) sum += it.value();
+      lap.coeffRef(j, j) = -sum;
+    }
+    ASSERT_LE((lap * Eigen::VectorXd::Ones(lap.rows())).norm(), 1e-12);
+    CholmodFactor g({kind, CholmodOrdering::kAmd});
+    EXPECT_EQ(g.compute(lap, 1), FactorStatus::kNotPositiveDefinite) << g.message();
+  }
+}
+
+TEST(CholmodFactor, MinPivotRatioFlagsNumericallySingularMatrices) {
+  // diag(1, 1e-15): positive definite, but its pivot ratio 1e-15 is below the default 1e-14.
+  SparseMatrix a(2, 2);
+  a.insert(0, 0) = 1.0;
+  a.insert(1, 1) = 1e-15;
+  a.makeCompressed();
+  CholmodFactor f({CholmodKind::kSimplicialLdl, CholmodOrdering::kNatural});
+  EXPECT_EQ(f.compute(a, 1), FactorStatus::kNotPositiveDefinite);
+  EXPECT_NE(f.message().find("pivot ratio"), std::string::npos) << f.message();
+  EXPECT_EQ(f.message().find("failed"), std::string::npos) << f.message();  // no pivot failed
+  EXPECT_EQ(f.minor(), 2);
+  CholmodOptions off{CholmodKind::kSimplicialLdl, CholmodOrdering::kNatural};
+  off.min_pivot_ratio = 0;  // disables the check
+  CholmodFactor g(off);
+  ASSERT_EQ(g.compute(a, 1), FactorStatus::kOk);
+  Eigen::VectorXd x;
+  ASSERT_EQ(g.solve(Eigen::Vector2d(1.0, 1e-15), x), FactorStatus::kOk);
+  EXPECT_NEAR(x(0), 1.0, 1e-15);  // diagonal: exact up to one rounding
+  EXPECT_NEAR(x(1), 1.0, 1e-15);
+}
+
+TEST(CholmodFactor, NonFiniteEntriesAreInvalidInput) {
+  INCISE_SEEDED_RNG(rng, 7);
+  SparseMatrix a = random_sparse_spd(60, 3, 0.1, rng);
+  CholmodFactor f;
+  ASSERT_EQ(f.compute(a, 1), FactorStatus::kOk);
+  a.coeffRef(10, 10) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(f.factorize(a), FactorStatus::kInvalidInput);
+  EXPECT_FALSE(f.message().empty());
+  Eigen::VectorXd x;
+  EXPECT_NE(f.solve(Eigen::VectorXd::Ones(a.rows()), x), FactorStatus::kOk);
+  a.coeffRef(10, 10) = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(f.factorize(a), FactorStatus::kInvalidInput);
+}
+
+TEST(CholmodFactor, MisuseIsAStatus) {
+  INCISE_SEEDED_RNG(rng, 9);
+  const SparseMatrix a = random_sparse_spd(50, 3, 0.1, rng);
+  Eigen::VectorXd x;
+  CholmodFactor g;
+  EXPECT_EQ(g.solve(Eigen::VectorXd::Ones(50), x), FactorStatus::kNotAnalyzed);
+  EXPECT_EQ(g.factorize(a), FactorStatus::kNotAnalyzed);
+  EXPECT_EQ(g.extract_ldl(), nullptr);
+  SparseMatrix rect(3, 4);
+  rect.makeCompressed();
+  EXPECT_EQ(g.analyze(rect, 1), FactorStatus::kInvalidInput);
+  SparseMatrix uncompressed = a;
+  uncompressed.uncompress();
+  EXPECT_EQ(g.analyze(uncompressed, 1), FactorStatus::kInvalidInput);
+  ASSERT_EQ(g.analyze(a, 1), FactorStatus::kOk);
+  EXPECT_EQ(g.solve(Eigen::VectorXd::Ones(50), x), FactorStatus::kNotAnalyzed);  // no factor
+  const SparseMatrix other = random_sparse_spd(51, 3, 0.1, rng);
+  EXPECT_EQ(g.factorize(other), FactorStatus::kInvalidInput);  // size differs from the analysis
+  ASSERT_EQ(g.factorize(a), FactorStatus::kOk);
+  EXPECT_EQ(g.solve(Eigen::VectorXd::Ones(49), x), FactorStatus::kInvalidInput);
+  // A moved-to factor keeps working.
+  CholmodFactor h = std::move(g);
+  const Eigen::VectorXd b = random_vector(50, rng);
+  ASSERT_EQ(h.solve(b, x), FactorStatus::kOk);
+  EXPECT_LE((a * x - b).norm(), kSolveTol * b.norm());
+}
+
+}  // namespace
+}  // namespace incise::test
