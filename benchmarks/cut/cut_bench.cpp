@@ -175,7 +175,7 @@ void BM_AugmentedInteractiveStep(benchmark::State& state) {
                                                    : incise::linalg::SchurSolver::kGmres;
   incise::interactive::AugmentedCutSession session(box, material, fixed, forces, opt);
   if (!session.initial_report().ok()) {
-    state.SkipWithError(session.initial_report().advice.c_str());
+    state.SkipWithError(session.initial_report().message.c_str());
     return;
   }
   Vec3 a(0.3 * side, 0.2 * side, side + 0.37 * kH);

@@ -131,7 +131,7 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   const double fnorm = res.external_force_norm;
   out << "\n== summary\n";
   out << "method:          " << res.method_detail << "\n";
-  out << "result:          " << solver::to_string(rep.reason) << "\n";
+  out << "result:          " << solver::to_string(rep.status) << "\n";
   if (res.cut_steps.empty()) {
     out << "iterations:      " << rep.iterations;
     if (rep.inner_iterations > 0) out << " (inner " << rep.inner_iterations << ")";
@@ -193,8 +193,8 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     out << "== wrote\n";
     for (const auto& w : written) out << "  " << w << "\n";
   }
-  if (!rep.converged()) {
-    err << "incise run: solver stopped without converging: " << solver::to_string(rep.reason)
+  if (!rep.ok()) {
+    err << "incise run: solver stopped without converging: " << solver::to_string(rep.status)
         << "\n";
     return 3;
   }

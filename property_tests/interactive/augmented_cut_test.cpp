@@ -251,7 +251,7 @@ class RandomBlade {
   if (r.ok() || (r.status == CutSolveStatus::kSolverFailed &&
                  r.solve.status == linalg::AugmentedStatus::kSingularModifiedSystem))
     return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << to_string(r.status) << ": " << r.advice;
+  return ::testing::AssertionFailure() << r.brief();
 }
 
 /// Random sweep sequences (RandomBlade); after every triangle: the augmented solution equals
@@ -266,7 +266,7 @@ void random_cuts(const Body& body, int sequences, std::mt19937_64& rng, const ch
     opt.cut.remove_degeneracies = u(rng) < 0.7;
     opt.update_deformed = u(rng) < 0.5;
     AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
-    ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().advice;
+    ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
     const int n0 = session.system().factored_dofs();
     {
       const Reference ref = reference_solution(session, body.forces);
@@ -357,7 +357,7 @@ TEST(AugmentedCut, Sec3_6BackgroundRefactorizationAtThresholdMatchesAFreshFactor
     opt.cut.seed = rng();
     opt.refactor_at_m = kThreshold;
     AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
-    ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().advice;
+    ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
     auto compare = [&](const char* when, int k) {
       const Reference ref = reference_solution(session, body.forces);
       ASSERT_TRUE(ref.ok) << when << ", sequence " << s << " move " << k;
@@ -387,7 +387,7 @@ TEST(AugmentedCut, Sec3_6BackgroundRefactorizationAtThresholdMatchesAFreshFactor
         ASSERT_TRUE(session.system().refactorization_pending());
         // (a) Poll: each solve() swaps the job in if it has finished.
         const AugmentedCutStepReport q = poll_until_swapped(session, polls);
-        ASSERT_TRUE(q.ok()) << q.advice;
+        ASSERT_TRUE(q.ok()) << q.message;
         ASSERT_FALSE(q.refactorization_started);  // m′ = 0 after the swap
         ASSERT_TRUE(q.refactorization_swapped)
             << "background factorization failed: "
@@ -424,7 +424,7 @@ TEST(AugmentedCut, BeamCutInTwoWithReportPolicyIsAStatus) {
   EXPECT_GT(r1.cut.faces_dissected + r2.cut.faces_dissected, 0);
   EXPECT_EQ(r2.status, CutSolveStatus::kFreeComponent) << to_string(r2.status);
   EXPECT_FALSE(r2.solved);
-  EXPECT_FALSE(r2.advice.empty());
+  EXPECT_FALSE(r2.message.empty());
   EXPECT_GE(r2.free_components, 1);
 }
 
@@ -438,8 +438,8 @@ TEST(AugmentedCut, BeamCutInTwoWithFixOnFaceMatchesTheReference) {
   const double z = 1.1;
   const AugmentedCutStepReport r1 = session.step(Vec3(-1, -1, z), Vec3(2, -1, z), Vec3(2, 2, z));
   const AugmentedCutStepReport r2 = session.step(Vec3(-1, -1, z), Vec3(2, 2, z), Vec3(-1, 2, z));
-  ASSERT_TRUE(r1.ok()) << r1.advice;
-  ASSERT_TRUE(r2.ok()) << r2.advice;
+  ASSERT_TRUE(r1.ok()) << r1.message;
+  ASSERT_TRUE(r2.ok()) << r2.message;
   EXPECT_GT(r1.cut.components_fixed + r2.cut.components_fixed, 0);
   EXPECT_GT(r1.constrained_fixed + r2.constrained_fixed, 0);
   EXPECT_GT(r1.dofs_added + r2.dofs_added, 0);
@@ -465,11 +465,11 @@ TEST(AugmentedCut, Sec3_6RefactorizationAfterAPieceIsFixedOnAFace) {
        {std::array<Vec3, 3>{Vec3(-1, -1, z), Vec3(2, -1, z), Vec3(2, 2, z)},
         {Vec3(-1, -1, z), Vec3(2, 2, z), Vec3(-1, 2, z)}}) {
     const AugmentedCutStepReport r = session.step(tri);
-    ASSERT_TRUE(r.ok()) << r.advice;
+    ASSERT_TRUE(r.ok()) << r.message;
     constrained += r.constrained_fixed;
     if (!r.refactorization_started) continue;  // the first triangle may only mark edges
     const AugmentedCutStepReport q = poll_until_swapped(session, polls);
-    ASSERT_TRUE(q.ok()) << q.advice;
+    ASSERT_TRUE(q.ok()) << q.message;
     ASSERT_TRUE(q.refactorization_swapped)
         << "background factorization failed, FactorStatus "
         << static_cast<int>(session.system().last_refactorization_status());

@@ -115,7 +115,7 @@ struct Sequence {
     aug.set_force(f);
     Eigen::VectorXd a, r;
     const linalg::AugmentedReport rep = aug.solve(a, r);
-    ASSERT_TRUE(rep.ok()) << what << ": " << linalg::to_string(rep.status) << " " << rep.advice
+    ASSERT_TRUE(rep.ok()) << what << ": " << linalg::to_string(rep.status) << " " << rep.message
                           << " (m=" << rep.m << ", gmres it=" << rep.gmres.iterations << ")";
     swaps += rep.refactorization_swapped ? 1 : 0;
     max_m = std::max(max_m, rep.m);
@@ -365,7 +365,7 @@ TEST(AugmentedEquivalence, SingleElementRemovalEq1) {
   aug.set_force(f);
   Eigen::VectorXd a, r;
   const linalg::AugmentedReport rep = aug.solve(a, r);
-  ASSERT_TRUE(rep.ok()) << rep.advice;
+  ASSERT_TRUE(rep.ok()) << rep.message;
   EXPECT_EQ(rep.m, aug.num_replaced());
   const ReferenceSolution ref = reference_solve(m.assemble(), f, {});
   ASSERT_TRUE(ref.ok);
@@ -413,7 +413,7 @@ TEST(AugmentedEquivalence, UndoneChangesArePrunedFromL) {
     Eigen::VectorXd a, r;
     const linalg::AugmentedReport rep = aug.solve(a, r);
     pruned = rep.pruned_columns;
-    ASSERT_TRUE(rep.ok()) << what << ": " << rep.advice;
+    ASSERT_TRUE(rep.ok()) << what << ": " << rep.message;
     if (expected_m >= 0) {
       EXPECT_EQ(rep.m, expected_m) << what;
     }
@@ -455,8 +455,8 @@ TEST(AugmentedFailure, DofWithoutStiffnessIsSingularStatus) {
   aug.set_force(f);
   Eigen::VectorXd a, r;
   const linalg::AugmentedReport rep = aug.solve(a, r);
-  EXPECT_EQ(rep.status, AugmentedStatus::kSingularModifiedSystem) << rep.advice;
-  EXPECT_FALSE(rep.advice.empty());
+  EXPECT_EQ(rep.status, AugmentedStatus::kSingularModifiedSystem) << rep.message;
+  EXPECT_FALSE(rep.message.empty());
   EXPECT_TRUE(a.allFinite());
   // The fresh factorization of the same system reports not-positive-definite as well.
   linalg::CholmodFactor fac;
@@ -486,7 +486,7 @@ TEST(AugmentedFailure, CutFreeingComponentIsReported) {
       << "gmres " << linalg::to_string(rep.gmres.status) << " res " << rep.gmres.relative_residual
       << " hcond " << rep.gmres.hessenberg_condition << " it " << rep.gmres.iterations << " m "
       << rep.m << " |a| " << a.norm();
-  EXPECT_FALSE(rep.advice.empty());
+  EXPECT_FALSE(rep.message.empty());
   EXPECT_TRUE(a.allFinite());
   linalg::CholmodFactor fac;
   EXPECT_EQ(fac.compute(m.assemble(), 1), linalg::FactorStatus::kNotPositiveDefinite)

@@ -71,7 +71,7 @@ void expect_equivalent(linalg::AugmentedSystem& aug, const CutModel& m, Eigen::V
   aug.set_force(f);
   Eigen::VectorXd a, r;
   const linalg::AugmentedReport rep = aug.solve(a, r);
-  ASSERT_TRUE(rep.ok()) << rep.advice;
+  ASSERT_TRUE(rep.ok()) << rep.message;
   const ReferenceSolution ref = reference_solve(m.assemble(), f, dir);
   ASSERT_TRUE(ref.ok);
   EXPECT_LE((a - ref.a).norm(), kRelTol * ref.a.norm());

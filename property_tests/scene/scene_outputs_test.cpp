@@ -87,7 +87,7 @@ TEST(SceneOutputs, RunSceneAndWriteOutputsWriteTheFilesTheSceneNames) {
   scene::BuiltScene built = scene::build_scene(scene::parse_scene(j.dump(), "scene.json", ""));
   scene::SceneRunResult res;
   const std::vector<std::string> written = run_and_write(built, summary, res);
-  ASSERT_TRUE(res.report.converged());
+  ASSERT_TRUE(res.report.ok());
   ASSERT_GE(res.trace.size(), 6u);  // at least one frame after the initial state
 
   long frames = 0;
@@ -142,7 +142,7 @@ TEST(SceneOutputs, InteractiveCutRunWritesOneRowAndOneFramePerSolve) {
   scene::BuiltScene built = scene::build_scene(spec);
   scene::SceneRunResult res;
   const std::vector<std::string> written = run_and_write(built, "", res);
-  ASSERT_TRUE(res.report.converged());
+  ASSERT_TRUE(res.report.ok());
   const std::size_t solves = res.cut_steps.size();
   ASSERT_GE(solves, 2u);
   EXPECT_EQ(written, (std::vector<std::string>{

@@ -29,7 +29,7 @@ VecX newton_reference(SpringChain& p) {
   o.stop.rule = ResidualRule::kExternalForce;
   o.stop.epsilon = 1e-12;
   const SolverReport rep = truncated_newton(p, u, o);
-  EXPECT_TRUE(rep.converged()) << to_string(rep.reason);
+  EXPECT_TRUE(rep.ok()) << to_string(rep.status);
   return u;
 }
 
@@ -41,7 +41,7 @@ TEST(TruncatedNewton, ReachesReferenceTolerance_Sec4_2) {
   o.stop.rule = ResidualRule::kExternalForce;
   o.stop.epsilon = 1e-8;  // §4.2 reference tolerance
   const SolverReport rep = truncated_newton(p, u, o);
-  ASSERT_TRUE(rep.converged()) << to_string(rep.reason);
+  ASSERT_TRUE(rep.ok()) << to_string(rep.status);
   EXPECT_LE(rep.residual_norm, 1e-8 * p.external_force_norm());
   EXPECT_LT(rep.iterations, 30);  // superlinear: a handful of Newton steps
   EXPECT_EQ(u[0], 0.0);
@@ -55,7 +55,7 @@ TEST(TruncatedNewton, QuadraticInOneStepWithTightInnerSolve) {
   o.stop.rule = ResidualRule::kExternalForce;
   o.stop.epsilon = 1e-10;
   const SolverReport rep = truncated_newton(p, u, o);
-  ASSERT_TRUE(rep.converged());
+  ASSERT_TRUE(rep.ok());
   // Inexact inner solves (forcing η ≤ 0.5) converge superlinearly: ≤ 8 steps from 1 to 1e-10.
   EXPECT_LE(rep.iterations, 8);
   EXPECT_LE((u - p.direct_solution()).norm(), 1e-8 * u.norm());
@@ -81,7 +81,7 @@ TEST_P(NonlinearCgEquivalence, MatchesNewtonAtMinimizer_Sec2_4_2_Sec4_4_2) {
   o.alpha_minus1 = -1e-4;
   o.budget.max_iterations = 20000;
   const SolverReport rep = nonlinear_cg(p, u, o);
-  ASSERT_TRUE(rep.converged()) << to_string(rep.reason) << " after " << rep.iterations;
+  ASSERT_TRUE(rep.ok()) << to_string(rep.status) << " after " << rep.iterations;
   // ‖u − û‖ ≤ ‖r‖/λ_min(K) with λ_min ≥ k/L·(1+µ/s²)/n² ~ 1 N/m here and ‖r‖ ≤ 1e-9‖f‖ ≈
   // 1e-7 N, so 1e-6 m leaves a factor 10.
   constexpr double kMinimizerTol = 1e-6;
@@ -112,7 +112,7 @@ TEST(NonlinearCg, QuadraticLikeLinearCg) {
   o.stop.rule = ResidualRule::kExternalForce;
   o.stop.epsilon = 1e-10;
   const SolverReport rep = nonlinear_cg(p, u, o);
-  ASSERT_TRUE(rep.converged());
+  ASSERT_TRUE(rep.ok());
   EXPECT_LE(rep.iterations, 40);
   EXPECT_LE((u - p.direct_solution()).norm(), 1e-8 * u.norm());
 }
@@ -147,7 +147,7 @@ TEST(NonlinearCg, InfiniteEnergyRegionNeverEnteredNoNaN) {
   EXPECT_TRUE(u.allFinite());
   double e = 0.0;
   EXPECT_EQ(p.energy(u, e), EvalStatus::kOk);
-  EXPECT_TRUE(rep.converged()) << to_string(rep.reason);
+  EXPECT_TRUE(rep.ok()) << to_string(rep.status);
 }
 
 TEST(NonlinearCg, StartInsideInvertedRegionReportsInverted) {
@@ -157,10 +157,10 @@ TEST(NonlinearCg, StartInsideInvertedRegionReportsInverted) {
   u[3] = -1.0;  // spring 3 has s < 0
   NonlinearCgOptions o;
   const SolverReport rep = nonlinear_cg(p, u, o);
-  EXPECT_EQ(rep.reason, StopReason::kInverted);
+  EXPECT_EQ(rep.status, StopReason::kInverted);
   TruncatedNewtonOptions to;
   const SolverReport rep2 = truncated_newton(p, u, to);
-  EXPECT_EQ(rep2.reason, StopReason::kInverted);
+  EXPECT_EQ(rep2.status, StopReason::kInverted);
 }
 
 TEST(NonlinearCg, IndefiniteProblemReportsStatus) {
@@ -174,14 +174,14 @@ TEST(NonlinearCg, IndefiniteProblemReportsStatus) {
     NonlinearCgOptions o;
     o.line_search = ls;
     const SolverReport rep = nonlinear_cg(p, u, o);
-    EXPECT_EQ(rep.reason, StopReason::kIndefinite) << to_string(ls);
+    EXPECT_EQ(rep.status, StopReason::kIndefinite) << to_string(ls);
     EXPECT_TRUE(u.allFinite());
   }
   VecX u = VecX::Zero(15);
   TruncatedNewtonOptions to;
   to.preconditioner = Preconditioner::kNone;
   const SolverReport rep = truncated_newton(p, u, to);
-  EXPECT_EQ(rep.reason, StopReason::kIndefinite);
+  EXPECT_EQ(rep.status, StopReason::kIndefinite);
   EXPECT_TRUE(u.allFinite());
 }
 
@@ -193,19 +193,19 @@ TEST(NonlinearCg, BudgetsHonoured) {
   o.budget.max_iterations = 5;
   VecX u = VecX::Zero(p.size());
   SolverReport rep = nonlinear_cg(p, u, o);
-  EXPECT_EQ(rep.reason, StopReason::kMaxIterations);
+  EXPECT_EQ(rep.status, StopReason::kMaxIterations);
   EXPECT_EQ(rep.iterations, 5);
   o.budget.max_iterations = 1000000;
   o.budget.max_flops = 5e4;
   u.setZero();
   rep = nonlinear_cg(p, u, o);
-  EXPECT_EQ(rep.reason, StopReason::kFlopBudget);
+  EXPECT_EQ(rep.status, StopReason::kFlopBudget);
   TruncatedNewtonOptions to;
   to.stop.epsilon = 1e-14;
   to.budget.max_iterations = 1;
   u.setZero();
   rep = truncated_newton(p, u, to);
-  EXPECT_EQ(rep.reason, StopReason::kMaxIterations);
+  EXPECT_EQ(rep.status, StopReason::kMaxIterations);
   EXPECT_EQ(rep.iterations, 1);
 }
 

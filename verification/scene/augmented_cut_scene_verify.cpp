@@ -51,8 +51,7 @@ TEST(AugmentedCutScene, EveryStepUpdatesWithoutRefactorization) {
       });
   ASSERT_EQ(res.cut_steps.size(), 11u);  // initial solve + one per sweep triangle
   EXPECT_EQ(observed, 11u);
-  EXPECT_TRUE(res.report.converged())
-      << solver::to_string(res.report.reason) << ": " << res.method_detail;
+  EXPECT_TRUE(res.report.ok()) << solver::to_string(res.report.status) << ": " << res.method_detail;
   EXPECT_LE(res.report.residual_norm, b.spec.solver.tolerance * res.external_force_norm);
   const std::int64_t nnz_l = res.cut_steps[0].nnz_l;
   EXPECT_GT(nnz_l, 0);
@@ -84,9 +83,8 @@ TEST(AugmentedCutScene, EveryStepUpdatesWithoutRefactorization) {
 // The final displacement of a run equals a fresh CHOLMOD solve of the final cut mesh.
 void check_final_displacement(scene::BuiltScene& b) {
   const scene::SceneRunResult res = scene::run_scene(b);
-  ASSERT_TRUE(res.report.converged())
-      << solver::to_string(res.report.reason) << ": " << res.method_detail
-      << " last step: " << res.cut_steps.back().status;
+  ASSERT_TRUE(res.report.ok()) << solver::to_string(res.report.status) << ": " << res.method_detail
+                               << " last step: " << res.cut_steps.back().status;
   EXPECT_NE(res.method_detail.find(
                 "preconditioner: " +
                 std::string(b.spec.solver.schur_solver == linalg::SchurSolver::kDirectCached
@@ -128,8 +126,8 @@ TEST(AugmentedCutScene, FinalDisplacementEqualsADirectSolveOfTheCutMesh) {
   b.spec.solver.schur_solver = linalg::SchurSolver::kGmres;
   b.spec.solver.schur_preconditioner = linalg::SchurPreconditioner::kNone;
   const scene::SceneRunResult res = scene::run_scene(b);
-  EXPECT_FALSE(res.report.converged());
-  EXPECT_EQ(res.report.reason, solver::StopReason::kMaxIterations);
+  EXPECT_FALSE(res.report.ok());
+  EXPECT_EQ(res.report.status, solver::StopReason::kMaxIterations);
   EXPECT_NE(res.cut_steps.back().status.find("GMRES not converged"), std::string::npos)
       << res.cut_steps.back().status;
 }
@@ -149,14 +147,14 @@ TEST(AugmentedCutScene, ReferenceConfigurationRunEqualsCutFirstThenCg) {
   cg_spec.solver.tolerance = 1e-11;
   scene::BuiltScene cg_scene = scene::build_scene(cg_spec);
   const scene::SceneRunResult cg = scene::run_scene(cg_scene);
-  ASSERT_TRUE(cg.report.converged()) << solver::to_string(cg.report.reason);
+  ASSERT_TRUE(cg.report.ok()) << solver::to_string(cg.report.status);
 
   scene::SceneSpec aug_spec = spec;
   aug_spec.solver.method = scene::SolverSpec::Method::kAugmented;
   aug_spec.solver.cut_configuration = scene::SolverSpec::CutConfiguration::kReference;
   scene::BuiltScene aug_scene = scene::build_scene(aug_spec);
   const scene::SceneRunResult aug = scene::run_scene(aug_scene);
-  ASSERT_TRUE(aug.report.converged()) << aug.method_detail;
+  ASSERT_TRUE(aug.report.ok()) << aug.method_detail;
   EXPECT_EQ(aug.cut_steps.size(), 1 + cg_scene.sweep_triangles.size());
 
   ASSERT_EQ(aug_scene.mesh.num_points(), cg_scene.mesh.num_points());
@@ -186,13 +184,13 @@ TEST(AugmentedCutScene, SeparatingCutEndsWithAStatusNotAnException) {
   ASSERT_EQ(res.cut_steps.size(), 5u);  // initial + 4 sweep triangles, none skipped
   bool any_failed = false;
   for (const auto& row : res.cut_steps) any_failed = any_failed || row.status != "ok";
-  if (res.report.converged()) {
+  if (res.report.ok()) {
     EXPECT_FALSE(any_failed);
     EXPECT_LE(res.report.residual_norm, spec.solver.tolerance * res.external_force_norm);
   } else {
     // Every step solved but the recomputed residual is off: the cut and the augmented system
     // disagree — a bug, not a numerical limit.
-    EXPECT_TRUE(any_failed) << solver::to_string(res.report.reason);
+    EXPECT_TRUE(any_failed) << solver::to_string(res.report.status);
     EXPECT_NE(res.method_detail.find("first failure"), std::string::npos) << res.method_detail;
   }
   EXPECT_TRUE(res.u.allFinite());

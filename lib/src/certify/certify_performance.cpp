@@ -119,11 +119,11 @@ Measurement measure_table_4_5(const CertifyContext& ctx) {
                                                                     : 20;
     // Counted flops per iteration: deterministic, compared with the thesis.
     const solver::SolverReport first = run_table_4_5_method(*p, row, iterations);
-    if (first.iterations <= 0 || (first.iterations < iterations && !first.converged())) {
+    if (first.iterations <= 0 || (first.iterations < iterations && !first.ok())) {
       ok = false;
       r.detail += std::string(row.material) + " " + row.method + ": stopped after " +
                   std::to_string(first.iterations) + " iterations (" +
-                  solver::to_string(first.reason) + "). ";
+                  solver::to_string(first.status) + "). ";
     }
     const double mflop_iter =
         static_cast<double>(first.flops) / 1e6 / std::max<long>(1, first.iterations);

@@ -100,10 +100,10 @@ Measurement measure_cantilever(const CertifyContext& ctx) {
   for (const fixtures::Table3_1Row& row : thesis) {
     scene::BuiltScene b = scene::build_scene(cantilever_spec(row.n, fixtures::kCantilever.epsilon));
     const scene::SceneRunResult res = scene::run_scene(b);
-    if (!res.report.converged()) {
+    if (!res.report.ok()) {
       ok = false;
       r.detail += "CG did not converge on n = " + std::to_string(row.n) + " (" +
-                  solver::to_string(res.report.reason) + "). ";
+                  solver::to_string(res.report.status) + "). ";
     }
     const double y = -res.probes[0].value[1];
     const double err = 100 * (1 - y / y_exact);
@@ -155,11 +155,11 @@ Measurement measure_cg_vs_cholmod(const CertifyContext& ctx) {
   scene::BuiltScene b2 = scene::build_scene(s);
   const scene::SceneRunResult ch = scene::run_scene(b2);
   r.value = (cg.u - ch.u).norm() / ch.u.norm();
-  r.conditions_ok = cg.report.converged() && ch.report.converged();
+  r.conditions_ok = cg.report.ok() && ch.report.ok();
   r.detail = "Cantilever " + std::to_string(b1.mesh.num_points()) +
-             " nodes: CG to ||r|| < 1e-9 ||f|| (" + solver::to_string(cg.report.reason) + ", " +
+             " nodes: CG to ||r|| < 1e-9 ||f|| (" + solver::to_string(cg.report.status) + ", " +
              std::to_string(cg.report.iterations) + " iterations) vs CHOLMOD factor + solve (" +
-             solver::to_string(ch.report.reason) + ").";
+             solver::to_string(ch.report.status) + ").";
   return r;
 }
 
@@ -180,12 +180,12 @@ Measurement measure_solver_trade(const CertifyContext& ctx) {
       {"method", "parameters", "result", "iterations", "MFLOP", "||u - u_ref||/||u_ref||"},
       {}};
   auto row = [&](const std::string& name, const scene::SceneRunResult& res, double diff) {
-    t.rows.push_back({name, res.method_detail, solver::to_string(res.report.reason),
+    t.rows.push_back({name, res.method_detail, solver::to_string(res.report.status),
                       std::to_string(res.report.iterations),
                       fmt(static_cast<double>(res.report.flops) / 1e6), fmt(diff)});
   };
   row("reference: truncated Newton to 1e-8", ref, 0.0);
-  bool ok = ref.report.converged();
+  bool ok = ref.report.ok();
   double worst = 0;
   std::vector<Series> curves;
   auto trace_series = [](const std::string& label, const scene::SceneRunResult& res) {
@@ -205,7 +205,7 @@ Measurement measure_solver_trade(const CertifyContext& ctx) {
     scene::BuiltScene b = scene::build_scene(spec);
     const scene::SceneRunResult res = scene::run_scene(b);
     const double diff = (res.u - ref.u).norm() / ref.u.norm();
-    ok = ok && res.report.converged();
+    ok = ok && res.report.ok();
     worst = std::max(worst, diff);
     row(to_string(method), res, diff);
     curves.push_back(trace_series(to_string(method), res));
@@ -267,7 +267,7 @@ Measurement measure_augmented_cut(const CertifyContext& ctx) {
   }
   r.value = same_mesh && cg.u.size() == aug.u.size() ? (aug.u - cg.u).norm() / cg.u.norm()
                                                      : std::numeric_limits<double>::quiet_NaN();
-  r.conditions_ok = aug.report.converged() && cg.report.converged() && same_mesh && steps_ok;
+  r.conditions_ok = aug.report.ok() && cg.report.ok() && same_mesh && steps_ok;
   if (!same_mesh) r.detail += "The two paths produced different cut meshes. ";
   if (!steps_ok) r.detail += "A step failed or the factor changed (refactorization). ";
   r.detail +=
@@ -278,7 +278,7 @@ Measurement measure_augmented_cut(const CertifyContext& ctx) {
       "solution (replaced columns, GMRES on the Schur system, no refactorization: the "
       "factor of the uncut K is used throughout). Compared with cutting first and "
       "solving by CG to 1e-11 ||f|| (" +
-      solver::to_string(cg.report.reason) + ", " + std::to_string(cg.report.iterations) +
+      solver::to_string(cg.report.status) + ", " + std::to_string(cg.report.iterations) +
       " iterations). Final residual of the augmented solution, recomputed matrix-free "
       "on the cut mesh: " +
       fmt(aug.report.residual_norm / aug.external_force_norm) + " ||f_ext||.";

@@ -14,6 +14,14 @@
 
 namespace incise::cut {
 
+const char* to_string(CutStatus status) {
+  switch (status) {
+    case CutStatus::kOk: return "ok";
+    case CutStatus::kDegenerateSweep: return "degenerate_sweep";
+  }
+  return "unknown";
+}
+
 namespace {
 
 /// Sweep triangles with area below this fraction of the squared longest side are degenerate.

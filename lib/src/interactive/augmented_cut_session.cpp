@@ -87,7 +87,7 @@ AugmentedCutSession::AugmentedCutSession(const mesh::MeshData& mesh,
   const linalg::FactorStatus fs = system_->initialize(k0);
   if (fs != linalg::FactorStatus::kOk) {
     initial_.status = CutSolveStatus::kSolverFailed;
-    initial_.advice =
+    initial_.message =
         "the initial stiffness matrix is not positive definite: fix enough nodes (at least "
         "three non-collinear ones per connected component)";
     initial_.solve.status = linalg::AugmentedStatus::kNoFactor;
@@ -217,7 +217,7 @@ AugmentedCutStepReport AugmentedCutSession::step(const Vec3& a, const Vec3& b, c
     // Nothing changed: the last solution stands.
     r.m_before_solve = r.m_after_solve = system_->num_replaced();
     r.status = last_.status;
-    r.advice = last_.advice;
+    r.message = last_.message;
     r.free_components = last_.free_components;
     r.inverted_elements = last_.inverted_elements;
   }
@@ -251,12 +251,12 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
   r.m_before_solve = r.m_after_solve = system_->num_replaced();
   if (free_components_ > 0) {
     r.status = CutSolveStatus::kFreeComponent;
-    r.advice =
+    r.message =
         "a component has no fixed node, so the stiffness matrix is singular: use "
         "cut::FreeComponentPolicy::kFixOnFace or fix a node of it";
   } else if (inverted_ > 0) {
     r.status = CutSolveStatus::kInvertedElement;
-    r.advice =
+    r.message =
         "an element has non-positive reference volume and no stiffness: keep "
         "cut::CutOptions::refuse_inverting_snaps on";
   } else {
@@ -283,7 +283,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
       r.refactorization_started = system_->start_refactorization();
     if (!r.solve.ok()) {
       r.status = CutSolveStatus::kSolverFailed;
-      r.advice = std::string(linalg::to_string(r.solve.status)) + ": " + r.solve.advice;
+      r.message = r.solve.brief();
     } else {
       r.status = CutSolveStatus::kOk;
       for (size_t v = 0; v < node_dof_.size(); ++v) {
@@ -294,7 +294,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
     }
   }
   last_.status = r.status;
-  last_.advice = r.advice;
+  last_.message = r.message;
   last_.free_components = r.free_components;
   last_.inverted_elements = r.inverted_elements;
   last_.solved = r.status == CutSolveStatus::kOk;

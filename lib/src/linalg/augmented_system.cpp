@@ -509,7 +509,7 @@ bool AugmentedSystem::augment(Augmentation& aug, AugmentedReport& report) {
       for (const auto& e : *aug.j_cols[i]) {
         if (!std::isfinite(e.second)) {
           report.status = AugmentedStatus::kNonFinite;
-          report.advice = "column " + std::to_string(j) + " of K has NaN/Inf entries";
+          report.message = "column " + std::to_string(j) + " of K has NaN/Inf entries";
           return false;
         }
         any = any || std::abs(e.second) > 1e-13 * diag_scale_;
@@ -517,9 +517,9 @@ bool AugmentedSystem::augment(Augmentation& aug, AugmentedReport& report) {
     }
     if (!any) {
       report.status = AugmentedStatus::kSingularModifiedSystem;
-      report.advice = "DOF " + std::to_string(j) +
-                      " has no stiffness (empty column of K): attach it to elements, constrain "
-                      "it with impose_dirichlet(), or stop using it";
+      report.message = "DOF " + std::to_string(j) +
+                       " has no stiffness (empty column of K): attach it to elements, constrain "
+                       "it with impose_dirichlet(), or stop using it";
       return false;
     }
   }
@@ -808,14 +808,14 @@ void AugmentedSystem::conclude(const Augmentation& aug, Eigen::VectorXd& displac
     case GmresStatus::kConverged: report.status = AugmentedStatus::kOk; break;
     case GmresStatus::kMaxIterations:
       report.status = AugmentedStatus::kGmresNotConverged;
-      report.advice =
+      report.message =
           "GMRES reached its iteration cap on eq. 17: raise gmres.max_iterations or the restart "
           "length, use a preconditioner, or refactor (start_refactorization) to reduce m";
       break;
     case GmresStatus::kStagnated:
     case GmresStatus::kBreakdown:
       report.status = AugmentedStatus::kSingularModifiedSystem;
-      report.advice =
+      report.message =
           "the modified stiffness appears singular (GMRES " +
           std::string(to_string(report.gmres.status)) +
           "): a cut may have freed a component or a node lost its support; constrain the free "
@@ -823,7 +823,7 @@ void AugmentedSystem::conclude(const Augmentation& aug, Eigen::VectorXd& displac
       break;
     case GmresStatus::kNonFinite:
       report.status = AugmentedStatus::kNonFinite;
-      report.advice = "NaN/Inf during GMRES: check element matrices and forces";
+      report.message = "NaN/Inf during GMRES: check element matrices and forces";
       break;
   }
   double abar2 = 0;
@@ -833,7 +833,7 @@ void AugmentedSystem::conclude(const Augmentation& aug, Eigen::VectorXd& displac
   if (report.status == AugmentedStatus::kOk &&
       !(report.amplification <= options_.max_amplification)) {
     report.status = AugmentedStatus::kSingularModifiedSystem;
-    report.advice =
+    report.message =
         "the solution is amplified " + std::to_string(report.amplification) +
         "x relative to the load: the modified stiffness is numerically singular (a cut may "
         "have freed a component); constrain the free part or remove its elements";
@@ -845,7 +845,7 @@ void AugmentedSystem::conclude(const Augmentation& aug, Eigen::VectorXd& displac
     reaction.setZero();
     if (report.status == AugmentedStatus::kOk) {
       report.status = AugmentedStatus::kNonFinite;
-      report.advice = "non-finite solution: check element matrices and forces";
+      report.message = "non-finite solution: check element matrices and forces";
     }
   }
 }
@@ -864,13 +864,13 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
   report.n = n_;
   if (!base_ || base_->status != FactorStatus::kOk) {
     report.status = AugmentedStatus::kNoFactor;
-    report.advice = "initialize() with a positive definite K0 first";
-    if (base_) report.advice += " (last factorization: " + base_->message + ")";
+    report.message = "initialize() with a positive definite K0 first";
+    if (base_) report.message += " (last factorization: " + base_->message + ")";
     return report;
   }
   if (!f_.allFinite()) {
     report.status = AugmentedStatus::kNonFinite;
-    report.advice = "the force vector has NaN/Inf entries";
+    report.message = "the force vector has NaN/Inf entries";
     return report;
   }
   if (options_.prune_unchanged_columns) report.pruned_columns = prune_unchanged_columns();

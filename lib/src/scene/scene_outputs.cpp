@@ -127,8 +127,8 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
   j["name"] = spec.name;
   j["method"] = to_string(spec.solver.method);
   j["method_detail"] = result.method_detail;
-  j["result"] = solver::to_string(rep.reason);
-  j["converged"] = rep.converged();
+  j["result"] = solver::to_string(rep.status);
+  j["converged"] = rep.ok();
   j["iterations"] = rep.iterations;
   j["inner_iterations"] = rep.inner_iterations;
   j["residual_norm"] = rep.residual_norm;

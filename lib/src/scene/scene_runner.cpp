@@ -33,7 +33,7 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
   const std::uint64_t flops0 = p.flops();
   const VecX zero = VecX::Zero(p.size());
   if (p.assemble_tangent(zero, fem::FixedDofTreatment::kIdentity) != EvalStatus::kOk) {
-    rep.reason = solver::StopReason::kInverted;
+    rep.status = solver::StopReason::kInverted;
     return rep;
   }
   const auto& k = p.tangent_matrix();
@@ -48,7 +48,7 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
       static_cast<std::int64_t>(factor.factor_flops()));
   rep.flops = p.flops() - flops0 + static_cast<std::uint64_t>(factor.factor_flops());
   if (st != linalg::FactorStatus::kOk) {
-    rep.reason = st == linalg::FactorStatus::kNotPositiveDefinite ? solver::StopReason::kIndefinite
+    rep.status = st == linalg::FactorStatus::kNotPositiveDefinite ? solver::StopReason::kIndefinite
                                                                   : solver::StopReason::kNonFinite;
     rep.seconds = t.seconds();
     return rep;
@@ -57,7 +57,7 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
   p.project(rhs);
   VecX x;
   if (factor.solve(rhs, x) != linalg::FactorStatus::kOk || !x.allFinite()) {
-    rep.reason = solver::StopReason::kNonFinite;
+    rep.status = solver::StopReason::kNonFinite;
     rep.seconds = t.seconds();
     return rep;
   }
@@ -73,7 +73,7 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
   rep.threshold = scene.spec.solver.tolerance * p.external_force_norm();
   rep.residual_history = {p.external_force_norm(), rep.residual_norm};
   rep.energy_history = {0.0, energy};
-  rep.reason = es != EvalStatus::kOk                ? solver::StopReason::kNonFinite
+  rep.status = es != EvalStatus::kOk                ? solver::StopReason::kNonFinite
                : rep.residual_norm <= rep.threshold ? solver::StopReason::kConverged
                                                     : solver::StopReason::kStagnated;
   rep.flops = p.flops() - flops0 + static_cast<std::uint64_t>(factor.factor_flops());
@@ -147,8 +147,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
     CutStepRow row;
     row.step = step;
     row.tool = tool;
-    row.status = r.ok() ? "ok" : interactive::to_string(r.status);
-    if (!r.ok() && !r.advice.empty()) row.status += ": " + r.advice;
+    row.status = r.brief();
     row.degenerate_sweep = r.cut.status == cut::CutStatus::kDegenerateSweep;
     row.faces_dissected = r.cut.faces_dissected;
     row.nodes_snapped = r.cut.nodes_snapped;
@@ -233,7 +232,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   rep.threshold = spec.solver.tolerance * res.external_force_norm;
   rep.residual_history = {res.external_force_norm, rep.residual_norm};
   rep.energy_history = {0.0, energy};
-  rep.reason = failed                               ? failure
+  rep.status = failed                               ? failure
                : es != EvalStatus::kOk              ? solver::StopReason::kNonFinite
                : rep.residual_norm <= rep.threshold ? solver::StopReason::kConverged
                                                     : solver::StopReason::kStagnated;
@@ -345,7 +344,7 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
         const solver::EigenEstimate e = solver::largest_eigenvalue(p, res.u);
         scene.record("largest eigenvalue of M^-1 K by power iteration (" +
                          std::to_string(e.iterations) + " iterations, " +
-                         solver::to_string(e.reason) + ")",
+                         solver::to_string(e.status) + ")",
                      t.seconds(), 3 * static_cast<std::size_t>(p.size()) * sizeof(double),
                      static_cast<std::int64_t>(e.flops));
         dt = kTimeStepSafety * solver::critical_time_step(e.value);
@@ -370,7 +369,7 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
         scene.record("smallest eigenvalue of M^-1 K by inverse iteration (" +
                          std::to_string(e.iterations) + " iterations, " +
                          std::to_string(e.inner_iterations) + " inner CG steps, " +
-                         solver::to_string(e.reason) + ")",
+                         solver::to_string(e.status) + ")",
                      t.seconds(), 5 * static_cast<std::size_t>(p.size()) * sizeof(double),
                      static_cast<std::int64_t>(e.flops));
         eta = solver::critical_damping(e.value);

@@ -67,7 +67,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   }
   // Hand back the last evaluated admissible point: its residual is the one reported.
   u = last_good;
-  rep.reason = reason;
+  rep.status = reason;
   rep.iterations = k;
   rep.residual_norm = have_residual ? rnorm : std::numeric_limits<double>::quiet_NaN();
   rep.threshold = threshold;
@@ -103,8 +103,8 @@ StableTimeStep find_stable_time_step(Problem& problem, const VecX& u, double ini
     VecX w = u;
     const SolverReport rep = dynamic_relaxation(problem, w, o);
     out.flops += rep.flops;
-    if (rep.reason == StopReason::kFlopBudget || rep.reason == StopReason::kMaxIterations ||
-        rep.reason == StopReason::kConverged) {
+    if (rep.status == StopReason::kFlopBudget || rep.status == StopReason::kMaxIterations ||
+        rep.status == StopReason::kConverged) {
       out.time_step = dt;
       out.reductions = i;
       out.found = true;
@@ -124,8 +124,13 @@ DampingSweep sweep_damping(Problem& problem, const VecX& u, const std::vector<do
     o.damping = eta;
     VecX w = u;
     const SolverReport rep = dynamic_relaxation(problem, w, o);
-    sweep.trials.push_back(DampingTrial{eta, rep.reason, rep.iterations, rep.flops});
-    if (rep.converged() && (sweep.best_iterations == 0 || rep.iterations < sweep.best_iterations)) {
+    DampingTrial trial;
+    trial.status = rep.status;
+    trial.damping = eta;
+    trial.iterations = rep.iterations;
+    trial.flops = rep.flops;
+    sweep.trials.push_back(trial);
+    if (rep.ok() && (sweep.best_iterations == 0 || rep.iterations < sweep.best_iterations)) {
       sweep.best_damping = eta;
       sweep.best_iterations = rep.iterations;
     }
@@ -139,14 +144,14 @@ SpectralDamping damping_from_spectrum(Problem& problem, const VecX& u, double ti
   SpectralDamping out;
   VecX g;
   if (problem.gradient(u, g) != EvalStatus::kOk || !g.allFinite()) {
-    out.reason = StopReason::kNonFinite;
+    out.status = StopReason::kNonFinite;
     return out;
   }
   VecX dir = -g;
   problem.project(dir);
   const double dn = dir.norm();
   if (!(dn > 0.0)) {
-    out.reason = StopReason::kConverged;  // already in equilibrium: nothing oscillates
+    out.status = StopReason::kConverged;  // already in equilibrium: nothing oscillates
     return out;
   }
   dir /= dn;
@@ -161,10 +166,10 @@ SpectralDamping damping_from_spectrum(Problem& problem, const VecX& u, double ti
   o.observer = [&](const IterationInfo& info) { samples.push_back((*info.u - u).dot(dir)); };
   VecX w = u;
   const SolverReport rep = dynamic_relaxation(problem, w, o);
-  out.reason = rep.reason;
+  out.status = rep.status;
   out.steps = rep.iterations;
   out.flops = rep.flops;
-  if (rep.reason != StopReason::kMaxIterations || samples.size() < 16) return out;
+  if (rep.status != StopReason::kMaxIterations || samples.size() < 16) return out;
   const spectral::FrequencyEstimate f = spectral::dominant_frequency(samples, time_step);
   out.frequency = f.frequency;
   out.resolution = f.resolution;

@@ -40,18 +40,18 @@ EigenEstimate largest_eigenvalue(Problem& problem, const VecX& u, const EigenOpt
   for (long k = 0; k < options.max_iterations; ++k) {
     const EvalStatus st = problem.hessian_product(u, x, kx);
     if (st != EvalStatus::kOk || !kx.allFinite()) {
-      est.reason = failure_reason(st);
+      est.status = failure_reason(st);
       break;
     }
     problem.project(kx);
     const double rho = x.dot(kx);  // x is M-normalized
     est.iterations = k + 1;
     if (!std::isfinite(rho)) {
-      est.reason = StopReason::kNonFinite;
+      est.status = StopReason::kNonFinite;
       break;
     }
     if (rho <= 0.0) {
-      est.reason = StopReason::kIndefinite;
+      est.status = StopReason::kIndefinite;
       break;
     }
     est.value = rho;
@@ -60,12 +60,12 @@ EigenEstimate largest_eigenvalue(Problem& problem, const VecX& u, const EigenOpt
     const double mnorm = std::sqrt(x.dot(m.cwiseProduct(x)));
     meter.add(8 * nn);
     if (!(mnorm > 0.0) || !std::isfinite(mnorm)) {
-      est.reason = StopReason::kNonFinite;
+      est.status = StopReason::kNonFinite;
       break;
     }
     x /= mnorm;
     if (k > 0 && est.relative_change <= options.tolerance) {
-      est.reason = StopReason::kConverged;
+      est.status = StopReason::kConverged;
       break;
     }
     rho_prev = rho;
@@ -93,19 +93,19 @@ EigenEstimate smallest_eigenvalue(Problem& problem, const VecX& u, const EigenOp
         projected_cg(apply, problem, inv_diag, b, y, options.inner_tolerance * b.norm(),
                      10 * u.size() + 10, meter);
     est.inner_iterations += inner.iterations;
-    if (inner.reason != StopReason::kConverged && inner.reason != StopReason::kMaxIterations) {
-      est.reason = inner.reason;
+    if (inner.status != StopReason::kConverged && inner.status != StopReason::kMaxIterations) {
+      est.status = inner.status;
       break;
     }
     const double mnorm = std::sqrt(y.dot(m.cwiseProduct(y)));
     if (!(mnorm > 0.0) || !std::isfinite(mnorm)) {
-      est.reason = StopReason::kNonFinite;
+      est.status = StopReason::kNonFinite;
       break;
     }
     x = y / mnorm;
     const EvalStatus st = problem.hessian_product(u, x, kx);
     if (st != EvalStatus::kOk || !kx.allFinite()) {
-      est.reason = failure_reason(st);
+      est.status = failure_reason(st);
       break;
     }
     problem.project(kx);
@@ -113,17 +113,17 @@ EigenEstimate smallest_eigenvalue(Problem& problem, const VecX& u, const EigenOp
     meter.add(10 * nn);
     est.iterations = k + 1;
     if (!std::isfinite(rho)) {
-      est.reason = StopReason::kNonFinite;
+      est.status = StopReason::kNonFinite;
       break;
     }
     if (rho <= 0.0) {
-      est.reason = StopReason::kIndefinite;
+      est.status = StopReason::kIndefinite;
       break;
     }
     est.value = rho;
     est.relative_change = std::abs(rho - rho_prev) / rho;
     if (k > 0 && est.relative_change <= options.tolerance) {
-      est.reason = StopReason::kConverged;
+      est.status = StopReason::kConverged;
       break;
     }
     rho_prev = rho;

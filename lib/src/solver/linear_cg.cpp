@@ -43,7 +43,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
   double energy = 0.0;
   EvalStatus st = problem.gradient(u, g, &energy);
   if (st != EvalStatus::kOk || !g.allFinite()) {
-    rep.reason = failure_reason(st);
+    rep.status = failure_reason(st);
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
     return rep;
@@ -169,7 +169,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
       if (reason == StopReason::kConverged && rnorm > threshold) reason = StopReason::kStagnated;
     }
   }
-  rep.reason = reason;
+  rep.status = reason;
   rep.iterations = k;
   rep.residual_norm = rnorm;
   rep.threshold = threshold;
@@ -198,26 +198,26 @@ InnerCgResult projected_cg(const LinearOperator& apply, const Problem& problem,
   while (true) {
     res.residual_norm = rnorm;
     if (rnorm <= tolerance) {
-      res.reason = StopReason::kConverged;
+      res.status = StopReason::kConverged;
       break;
     }
     if (k >= max_iterations) {
-      res.reason = StopReason::kMaxIterations;
+      res.status = StopReason::kMaxIterations;
       break;
     }
     const EvalStatus st = apply(d, q);
     if (st != EvalStatus::kOk || !q.allFinite()) {
-      res.reason = failure_reason(st);
+      res.status = failure_reason(st);
       break;
     }
     problem.project(q);
     const double curvature = d.dot(q);
     if (!std::isfinite(curvature)) {
-      res.reason = StopReason::kNonFinite;
+      res.status = StopReason::kNonFinite;
       break;
     }
     if (curvature <= 0.0) {
-      res.reason = StopReason::kIndefinite;
+      res.status = StopReason::kIndefinite;
       res.negative_curvature = true;
       break;
     }
@@ -233,7 +233,7 @@ InnerCgResult projected_cg(const LinearOperator& apply, const Problem& problem,
     meter.add(16 * nn);
     ++k;
     if (!std::isfinite(rnorm)) {
-      res.reason = StopReason::kNonFinite;
+      res.status = StopReason::kNonFinite;
       break;
     }
   }

@@ -16,7 +16,7 @@ const char* to_string(LineSearchKind l) {
 namespace {
 
 struct LineSearchResult {
-  StopReason reason = StopReason::kConverged;  // kConverged: an admissible α was found
+  StopReason status = StopReason::kConverged;  // kConverged: an admissible α was found
   double alpha = 0.0;
   int evaluations = 0;
 };
@@ -58,7 +58,7 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
       meter.add(4 * nn);
       if (st != EvalStatus::kOk || !s.allFinite()) {
         if (j == 0) {
-          res.reason = failure_reason(st);
+          res.status = failure_reason(st);
           return res;
         }
         break;
@@ -69,7 +69,7 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
     }
     if (!std::isfinite(c) || c <= 0.0) {
       if (j == 0) {
-        res.reason = std::isfinite(c) ? StopReason::kIndefinite : StopReason::kNonFinite;
+        res.status = std::isfinite(c) ? StopReason::kIndefinite : StopReason::kNonFinite;
         return res;
       }
       break;  // keep α_j: the secant lost curvature information
@@ -96,7 +96,7 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
     }
     if (!admissible) {
       if (j == 0) {
-        res.reason = StopReason::kInverted;
+        res.status = StopReason::kInverted;
         return res;
       }
       break;
@@ -110,7 +110,7 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
     meter.add(2 * nn);
   }
   res.alpha = alpha;
-  if (alpha == 0.0) res.reason = StopReason::kStagnated;
+  if (alpha == 0.0) res.status = StopReason::kStagnated;
   return res;
 }
 
@@ -132,7 +132,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   double energy = 0.0;
   EvalStatus st = problem.gradient(u, g, &energy);
   if (st != EvalStatus::kOk || !g.allFinite()) {
-    rep.reason = failure_reason(st);
+    rep.status = failure_reason(st);
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
     return rep;
@@ -167,8 +167,8 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
     const LineSearchResult ls =
         line_search(problem, u, d, g, energy, gamma0, options, meter, g_new, e_new);
     rep.inner_iterations += ls.evaluations;
-    if (ls.reason != StopReason::kConverged) {
-      reason = ls.reason;
+    if (ls.status != StopReason::kConverged) {
+      reason = ls.status;
       break;
     }
     u += ls.alpha * d;
@@ -199,7 +199,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
       break;
     }
   }
-  rep.reason = reason;
+  rep.status = reason;
   rep.iterations = k;
   rep.residual_norm = rnorm;
   rep.threshold = threshold;

@@ -21,7 +21,7 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
   double energy = 0.0;
   EvalStatus st = problem.gradient(u, g, &energy);
   if (st != EvalStatus::kOk || !g.allFinite()) {
-    rep.reason = failure_reason(st);
+    rep.status = failure_reason(st);
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
     return rep;
@@ -57,8 +57,8 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
         [&](const VecX& in, VecX& out) { return problem.hessian_product(u_fixed, in, out); },
         problem, inv_diag, r, p, inner_tol, max_inner, meter);
     rep.inner_iterations += inner.iterations;
-    if (inner.reason == StopReason::kNonFinite || inner.reason == StopReason::kInverted) {
-      reason = inner.reason;
+    if (inner.status == StopReason::kNonFinite || inner.status == StopReason::kInverted) {
+      reason = inner.status;
       break;
     }
     if (p.squaredNorm() == 0.0) {
@@ -119,7 +119,7 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
     rep.energy_history.push_back(energy);
     meter.observe(options.observer, IterationInfo{k, &u, rnorm, energy, 0, 0.0});
   }
-  rep.reason = reason;
+  rep.status = reason;
   rep.iterations = k;
   rep.residual_norm = rnorm;
   rep.threshold = threshold;

@@ -72,7 +72,7 @@ inline Solve solve(const cut::CutMesh& cm, const std::vector<fem::PointLoad>& lo
   Solve s;
   s.attempted = true;
   s.iterations = r.iterations;
-  s.converged = r.converged();
+  s.converged = r.ok();
   s.u = u;
   return s;
 }

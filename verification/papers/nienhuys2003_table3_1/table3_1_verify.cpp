@@ -45,7 +45,7 @@ TEST(CantileverTable3_1, ConvergesToTimoshenkoFromBelow) {
   for (int i = 0; i < count; ++i) {
     const int nx = kMeshes[i];
     const CantileverResult r = fixtures::solve_cantilever(nx, nx / 4, nx / 4);
-    ASSERT_EQ(r.reason, solver::StopReason::kConverged) << solver::to_string(r.reason);
+    ASSERT_EQ(r.status, solver::StopReason::kConverged) << solver::to_string(r.status);
     // Same meshes as the thesis ((nx+1)(ny+1)(nz+1) nodes; the thesis prints 8181 for 48×12×12).
     ASSERT_EQ(r.nodes, (nx + 1) * (nx / 4 + 1) * (nx / 4 + 1));
     res.push_back(r);

@@ -482,7 +482,7 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
         row.cpu_pcg = detail::cpu_seconds() - cpu1;
         row.t_pcg = tr.seconds();
         row.pcg_iterations = cg.iterations;
-        row.pcg_converged = cg.converged();
+        row.pcg_converged = cg.ok();
       }
     }
     rows.push_back(row);

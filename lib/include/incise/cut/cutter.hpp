@@ -4,6 +4,7 @@
 /// triangle at a time, face selection (§3.2.1), node snapping (§3.2.2), dissection by node
 /// substitution (§7.3) and degeneracy removal (§3.2.3), followed by a component check.
 
+#include <incise/core/outcome.hpp>
 #include <incise/cut/cut_mesh.hpp>
 
 #include <cstdint>
@@ -46,15 +47,18 @@ enum class CutStatus {
   kDegenerateSweep  ///< the sweep triangle has (near) zero area; nothing was done
 };
 
+/// Name of a CutStatus ("ok", "degenerate_sweep").
+const char* to_string(CutStatus status);
+
 /// Report of one step (one sweep triangle), for the caller and for warm-starting solvers.
-struct [[nodiscard]] CutStepReport {
-  CutStatus status = CutStatus::kOk;  ///< kDegenerateSweep: nothing was done
-  Index elements_tested = 0;          ///< elements visited by the outward search
-  Index edges_intersected = 0;        ///< new sweep/edge intersections recorded
-  Index faces_selected = 0;           ///< faces chosen by §3.2.1 this step
-  Index faces_dissected = 0;  ///< faces that ended on the boundary this step (new or pending)
-  Index faces_pending = 0;    ///< selected faces still joined (Fig. 7.7), retried in later steps
-  Index halved_choices = 0;   ///< tetrahedra with four marked nodes (seeded choice)
+/// status kDegenerateSweep: nothing was done.
+struct [[nodiscard]] CutStepReport : Outcome<CutStatus, CutStatus::kOk, CutStatus::kOk> {
+  Index elements_tested = 0;    ///< elements visited by the outward search
+  Index edges_intersected = 0;  ///< new sweep/edge intersections recorded
+  Index faces_selected = 0;     ///< faces chosen by §3.2.1 this step
+  Index faces_dissected = 0;    ///< faces that ended on the boundary this step (new or pending)
+  Index faces_pending = 0;      ///< selected faces still joined (Fig. 7.7), retried in later steps
+  Index halved_choices = 0;     ///< tetrahedra with four marked nodes (seeded choice)
   Index incomplete_elements = 0;  ///< remembered incomplete tetrahedra after the step
   Index nodes_snapped = 0;        ///< nodes moved onto the sweep (§3.2.2)
   Index snaps_refused = 0;        ///< snaps refused because an element would invert

@@ -17,6 +17,7 @@
 /// Failure is a status (CutSolveStatus), never an exception: a free component (policy kReport),
 /// an element inverted in the reference configuration, or the augmented solve's own status.
 
+#include <incise/core/outcome.hpp>
 #include <incise/core/types.hpp>
 #include <incise/cut/cut_mesh.hpp>
 #include <incise/cut/cutter.hpp>
@@ -81,9 +82,9 @@ enum class CutSolveStatus {
 const char* to_string(CutSolveStatus status);
 
 /// Report of one interactive step (one sweep triangle, then the solver update).
-struct [[nodiscard]] AugmentedCutStepReport {
-  CutSolveStatus status = CutSolveStatus::kOk;
-  std::string advice;      ///< what the caller can do when status != kOk
+/// message: what the caller can do when status != kOk.
+struct [[nodiscard]] AugmentedCutStepReport
+    : Outcome<CutSolveStatus, CutSolveStatus::kOk, CutSolveStatus::kOk> {
   cut::CutStepReport cut;  ///< the cutter's report (what changed in the mesh)
   // Translation into column replacements (this step).
   Index elements_subtracted = 0;  ///< element stiffnesses removed (old version of a slot)
@@ -111,8 +112,6 @@ struct [[nodiscard]] AugmentedCutStepReport {
   double seconds_solve = 0;       ///< wall time of AugmentedSystem::solve() (+ deformed update)
   double cpu_seconds_cut = 0;     ///< CPU time of cut::Cutter::step
   double cpu_seconds_update = 0;  ///< CPU time of the column replacements and the solve
-  /// True when status == kOk.
-  bool ok() const { return status == CutSolveStatus::kOk; }
 };
 
 /// A cut mesh, its cutter and the augmented linear-elastic static solver, kept consistent
@@ -175,7 +174,7 @@ class AugmentedCutSession {
  private:
   struct LastSolve {  // outcome of the last solve_into (reused when a step changes nothing)
     CutSolveStatus status = CutSolveStatus::kOk;
-    std::string advice;
+    std::string message;
     Index free_components = 0, inverted_elements = 0;
     bool solved = false;  // a valid solution for the current system and forces
   };

@@ -20,6 +20,7 @@
 /// in the order of add_dofs() calls.
 
 #include <incise/core/name_table.hpp>
+#include <incise/core/outcome.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
 #include <incise/linalg/gmres.hpp>
 
@@ -112,9 +113,9 @@ enum class AugmentedStatus {
 const char* to_string(AugmentedStatus status);
 
 /// Report of one augmented solve (one "update step" of the paper).
-struct [[nodiscard]] AugmentedReport {
-  AugmentedStatus status = AugmentedStatus::kNoFactor;
-  std::string advice;      ///< what the caller can do when status != kOk
+/// message: what the caller can do when status != kOk.
+struct [[nodiscard]] AugmentedReport
+    : Outcome<AugmentedStatus, AugmentedStatus::kOk, AugmentedStatus::kNoFactor> {
   int n = 0;               ///< current number of DOFs
   int m = 0;               ///< replaced columns |𝓛| (changed columns + Dirichlet DOFs)
   int dirichlet = 0;       ///< |𝓓|
@@ -136,9 +137,6 @@ struct [[nodiscard]] AugmentedReport {
   double amplification = 0;              ///< see AugmentedOptions::max_amplification
   bool refactorization_swapped = false;  ///< a background factor replaced the old one here
   FactorStatus refactorization_status = FactorStatus::kOk;  ///< of a finished background job
-
-  /// True when status == kOk.
-  bool ok() const { return status == AugmentedStatus::kOk; }
 };
 
 /// Result of remove_fixed_dofs().

@@ -4,6 +4,7 @@
 /// complement system (H R⁻¹ J) a₂ = H R⁻¹ f̂ of Yeung et al. 2016, eq. 17. Right
 /// preconditioning keeps the monitored residual equal to the true residual of eq. 17.
 
+#include <incise/core/outcome.hpp>
 #include <incise/core/types.hpp>
 
 #include <functional>
@@ -39,8 +40,7 @@ enum class GmresStatus {
 const char* to_string(GmresStatus status);
 
 /// Report of a gmres() run.
-struct GmresReport {
-  GmresStatus status = GmresStatus::kMaxIterations;
+struct GmresReport : Outcome<GmresStatus, GmresStatus::kConverged, GmresStatus::kMaxIterations> {
   int iterations = 0;            ///< Arnoldi steps (= operator applications in Arnoldi)
   int restarts = 0;              ///< completed restart cycles
   double relative_residual = 0;  ///< ‖b − A x‖₂ / ‖b‖₂ at exit (Givens estimate)
@@ -48,9 +48,6 @@ struct GmresReport {
   /// max|rᵢᵢ| / min|rᵢᵢ| of the triangularised Hessenberg matrix of the last cycle: a cheap
   /// lower estimate of the condition number of A·M⁻¹ on the Krylov space.
   double hessenberg_condition = 1;
-
-  /// True when status is kConverged.
-  bool ok() const { return status == GmresStatus::kConverged; }
 };
 
 /// Solves A x = b by restarted GMRES with optional right preconditioner: `precondition(v, z)`

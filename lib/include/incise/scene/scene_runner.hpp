@@ -96,7 +96,7 @@ using RunObserver = std::function<void(const solver::IterationInfo&)>;
 using CutStepObserver = std::function<void(const CutStepRow&, std::size_t total_steps,
                                            const interactive::AugmentedCutSession& session)>;
 
-/// Runs the scene's solver from u = 0. Numerical failure is reported in result.report.reason,
+/// Runs the scene's solver from u = 0. Numerical failure is reported in result.report.status,
 /// never thrown. Throws UsageError only for a scene whose problem was not built.
 /// An interactive cutting run replaces scene.mesh, scene.fixed_nodes and scene.problem by the
 /// final cut mesh, its held nodes (fixed from the start, fixed by the cutter, unused) and an

@@ -5,6 +5,7 @@
 /// damping C = ηM, run until the static residual rule is met; plus the ways of choosing its two
 /// parameters Δt and η.
 
+#include <incise/core/outcome.hpp>
 #include <incise/solver/eigen_estimates.hpp>
 #include <incise/solver/report.hpp>
 
@@ -57,12 +58,11 @@ struct [[nodiscard]] StableTimeStep {
 StableTimeStep find_stable_time_step(Problem& problem, const VecX& u, double initial,
                                      const StableTimeStepOptions& options = {});
 
-/// One point of a damping sweep.
-struct DampingTrial {
-  double damping = 0.0;                            ///< η (1/s)
-  StopReason reason = StopReason::kMaxIterations;  ///< outcome of the run
-  long iterations = 0;                             ///< time steps taken
-  std::uint64_t flops = 0;                         ///< flops taken
+/// One point of a damping sweep; status: the outcome of its run.
+struct DampingTrial : Outcome<StopReason, StopReason::kConverged, StopReason::kMaxIterations> {
+  double damping = 0.0;     ///< η (1/s)
+  long iterations = 0;      ///< time steps taken
+  std::uint64_t flops = 0;  ///< flops taken
 };
 
 /// Outcome of sweep_damping().
@@ -77,14 +77,14 @@ struct [[nodiscard]] DampingSweep {
 DampingSweep sweep_damping(Problem& problem, const VecX& u, const std::vector<double>& etas,
                            const DynamicRelaxationOptions& options);
 
-/// Outcome of damping_from_spectrum().
-struct [[nodiscard]] SpectralDamping {
+/// Outcome of damping_from_spectrum(); status: the outcome of the undamped run.
+struct [[nodiscard]] SpectralDamping
+    : Outcome<StopReason, StopReason::kConverged, StopReason::kMaxIterations> {
   double damping = 0.0;     ///< η = 2ω = 4πf (1/s); 0 when no oscillation was found
   double frequency = 0.0;   ///< dominant frequency f (Hz) of the undamped trajectory
   double resolution = 0.0;  ///< FFT bin width (Hz)
   long steps = 0;           ///< time steps simulated
-  StopReason reason = StopReason::kMaxIterations;  ///< outcome of the undamped run
-  std::uint64_t flops = 0;                         ///< flops spent
+  std::uint64_t flops = 0;  ///< flops spent
 };
 
 /// η from the dominant frequency of an undamped trajectory (spectrum by FFTW, module spectral):

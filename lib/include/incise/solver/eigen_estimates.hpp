@@ -4,20 +4,21 @@
 /// free DOFs, which set the dynamic relaxation parameters of thesis §4.1: the critical time step
 /// Δt = 2/√λ_n and the critical damping η = 2√λ₁.
 
+#include <incise/core/outcome.hpp>
 #include <incise/solver/linear_cg.hpp>
 #include <incise/solver/report.hpp>
 
 namespace incise::solver {
 
-/// An eigenvalue estimate of M⁻¹K (1/s²).
-struct [[nodiscard]] EigenEstimate {
+/// An eigenvalue estimate of M⁻¹K (1/s²); status kConverged when the relative change met the
+/// tolerance.
+struct [[nodiscard]] EigenEstimate
+    : Outcome<StopReason, StopReason::kConverged, StopReason::kMaxIterations> {
   double value = 0.0;         ///< Rayleigh quotient (w, K w)/(w, M w) of the final iterate (1/s²)
   long iterations = 0;        ///< outer (power / inverse) iterations
   long inner_iterations = 0;  ///< inner CG steps (inverse iteration)
-  double relative_change = 0.0;                    ///< |ρ_k − ρ_{k−1}|/ρ_k at exit
-  StopReason reason = StopReason::kMaxIterations;  ///< kConverged when the change met the tol.
-  std::uint64_t flops = 0;                         ///< counted flops
-  bool converged() const { return reason == StopReason::kConverged; }
+  double relative_change = 0.0;  ///< |ρ_k − ρ_{k−1}|/ρ_k at exit
+  std::uint64_t flops = 0;       ///< counted flops
 };
 
 /// Options for the eigenvalue iterations.

@@ -5,6 +5,7 @@
 /// (the E Eᵀ = diag K preconditioner of §2.4.1 / §4.6).
 
 #include <incise/core/name_table.hpp>
+#include <incise/core/outcome.hpp>
 #include <incise/solver/report.hpp>
 
 #include <functional>
@@ -65,12 +66,11 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
 /// Linear operator out = A·in used by projected_cg(); returns the evaluation status.
 using LinearOperator = std::function<EvalStatus(const VecX& in, VecX& out)>;
 
-/// Outcome of projected_cg().
-struct InnerCgResult {
-  StopReason reason = StopReason::kMaxIterations;  ///< converged / indefinite / max_iterations...
-  long iterations = 0;                             ///< CG steps taken
-  double residual_norm = 0.0;                      ///< final ‖P(b − A x)‖₂ (recursive)
-  bool negative_curvature = false;                 ///< stopped at dᵀA d ≤ 0
+/// Outcome of projected_cg(); status: converged / indefinite / max_iterations ...
+struct InnerCgResult : Outcome<StopReason, StopReason::kConverged, StopReason::kMaxIterations> {
+  long iterations = 0;              ///< CG steps taken
+  double residual_norm = 0.0;       ///< final ‖P(b − A x)‖₂ (recursive)
+  bool negative_curvature = false;  ///< stopped at dᵀA d ≤ 0
 };
 
 /// CG on P A P x = P b started from x = 0 (x is overwritten), for inner solves (truncated

@@ -5,6 +5,7 @@
 /// StopReason, never an exception or a NaN result (DESIGN §1 "Solvers and reports").
 
 #include <incise/core/error.hpp>
+#include <incise/core/outcome.hpp>
 #include <incise/core/problem.hpp>
 #include <incise/core/timer.hpp>
 #include <incise/core/types.hpp>
@@ -87,8 +88,9 @@ struct RelaxationOptions {
 };
 
 /// Outcome of one solver run. [[nodiscard]]: numerical failure is reported here.
-struct [[nodiscard]] SolverReport {
-  StopReason reason = StopReason::kMaxIterations;  ///< why the solver returned
+/// status: why the solver returned (kConverged: the stopping rule was met); ok() == converged.
+struct [[nodiscard]] SolverReport
+    : Outcome<StopReason, StopReason::kConverged, StopReason::kMaxIterations> {
   long iterations = 0;        ///< outer iterations (CG steps, NCG steps, Newton steps,
                               ///< time steps) completed
   long inner_iterations = 0;  ///< inner CG steps (truncated Newton) or line-search
@@ -100,9 +102,6 @@ struct [[nodiscard]] SolverReport {
   double energy = std::numeric_limits<double>::quiet_NaN();  ///< final Π (J) when known
   std::vector<double> residual_history;  ///< ‖r‖₂ after each iteration (index 0: start)
   std::vector<double> energy_history;    ///< Π after each iteration (index 0: start)
-
-  /// True when reason == kConverged.
-  bool converged() const { return reason == StopReason::kConverged; }
 };
 
 /// Cost meter shared by the solvers: counts Problem::flops() deltas plus explicitly added
