@@ -6,8 +6,12 @@
 #include <incise/core/error.hpp>
 
 #include <array>
+#include <cerrno>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -18,6 +22,19 @@ inline std::string option_value(const std::vector<std::string>& args, std::size_
                                 const std::string& name) {
   if (i + 1 >= args.size()) throw UsageError(name + " expects a value");
   return args[++i];
+}
+
+/// `value` parsed as a finite, normal (not subnormal) number > 0, the whole string consumed;
+/// UsageError naming the option and the value otherwise ("abc", "1e999", "1e-320", "2x").
+inline double positive_number(const std::string& value, const std::string& name) {
+  const char* begin = value.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(begin, &end);
+  if (value.empty() || end != begin + value.size() || errno == ERANGE || !std::isfinite(v) ||
+      !(v >= std::numeric_limits<double>::min()))
+    throw UsageError(name + " expects a finite number > 0, got '" + value + "'");
+  return v;
 }
 
 /// Atomic file writes (core/atomic_file.hpp), for the subcommands.

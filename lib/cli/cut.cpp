@@ -3,20 +3,19 @@
 // write it. The cut surfaces are boundary faces of the written mesh (nodes are duplicated
 // along them), so they show in ParaView as surfaces.
 //
-// SWEEPS: one sweep triangle per line, nine numbers "ax ay az bx by bz cx cy cz" (metres,
-// after --scale), processed in order; a line "end" finishes an incision (the next triangles
-// start a new one); '#' starts a comment. Exit 0 when the result is valid; 1 unreadable input;
-// 2 usage; 3 invalid result.
+// SWEEPS: a sweep file (io/sweep_file.hpp), coordinates in the mesh file's units (× --scale),
+// processed in order; a line "end" finishes an incision (the next triangles start a new one). Exit
+// 0 when the result is valid; 1 unreadable input; 2 usage; 3 invalid result.
 
 #include <incise/core/error.hpp>
 #include <incise/cut/cutter.hpp>
 #include <incise/io/read_mesh.hpp>
+#include <incise/io/sweep_file.hpp>
 #include <incise/io/write_mesh.hpp>
 
-#include <fstream>
 #include <ostream>
-#include <sstream>
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 
 namespace incise::cli {
@@ -45,7 +44,12 @@ int run_cut(const Args& args, std::ostream& out, std::ostream& err) {
     if (a == "--out" && i + 1 < args.size()) {
       out_path = args[++i];
     } else if (a == "--scale" && i + 1 < args.size()) {
-      scale = std::stod(args[++i]);
+      try {
+        scale = positive_number(args[++i], "--scale");
+      } catch (const UsageError& e) {
+        err << "incise cut: " << e.what() << "\n";
+        return 2;
+      }
     } else if (a == "--no-snap") {
       options.snap_nodes = false;
     } else if (a == "--no-removal") {
@@ -82,38 +86,16 @@ int run_cut(const Args& args, std::ostream& out, std::ostream& err) {
     }
     cut::CutMesh mesh(loaded.mesh);
     cut::Cutter cutter(mesh, options);
-    std::ifstream in(sweep_path);
-    if (!in) {
-      err << sweep_path << ": cannot open\n";
-      return 1;
-    }
+    const std::vector<io::SweepEvent> sweep = io::read_sweep_file(sweep_path, scale);
     cut::CutTotals totals;
     Index triangles = 0, degenerate = 0, ended = 0;
-    std::string line;
-    long line_no = 0;
-    while (std::getline(in, line)) {
-      ++line_no;
-      const size_t hash = line.find('#');
-      if (hash != std::string::npos) line.resize(hash);
-      std::istringstream ls(line);
-      std::string first;
-      if (!(ls >> first)) continue;
-      if (first == "end") {
+    for (const io::SweepEvent& ev : sweep) {
+      if (ev.end_incision) {
         cutter.end_incision();
         ++ended;
         continue;
       }
-      std::istringstream all(line);
-      double v[9];
-      for (double& x : v) {
-        if (!(all >> x)) {
-          err << sweep_path << ":" << line_no << ": expected nine numbers or 'end'\n";
-          return 1;
-        }
-      }
-      const cut::CutStepReport r =
-          cutter.step(scale * Vec3(v[0], v[1], v[2]), scale * Vec3(v[3], v[4], v[5]),
-                      scale * Vec3(v[6], v[7], v[8]));
+      const cut::CutStepReport r = cutter.step(ev.triangle[0], ev.triangle[1], ev.triangle[2]);
       ++triangles;
       if (r.status == cut::CutStatus::kDegenerateSweep) ++degenerate;
       totals.add(r);

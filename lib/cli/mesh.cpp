@@ -8,6 +8,7 @@
 #include <incise/io/write_mesh.hpp>
 #include <incise/mesh/connectivity.hpp>
 #include <incise/mesh/quality.hpp>
+#include <incise/mesh/tet_faces.hpp>
 #include <incise/mesh/validate.hpp>
 
 #include <algorithm>
@@ -18,6 +19,7 @@
 #include <set>
 #include <sstream>
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 
 namespace incise::cli {
@@ -75,12 +77,9 @@ int check(const Args& args, std::ostream& out, std::ostream& err) {
       options.split_pinched_vertices = false;
     } else if (a == "--scale" && i + 1 < args.size()) {
       try {
-        options.scale = std::stod(args[++i]);
-      } catch (const std::exception&) {
-        options.scale = 0;
-      }
-      if (!(options.scale > 0) || !std::isfinite(options.scale)) {
-        err << "incise mesh check: --scale needs a positive number\n";
+        options.scale = positive_number(args[++i], "--scale");
+      } catch (const UsageError& e) {
+        err << "incise mesh check: " << e.what() << "\n";
         return kExitUsage;
       }
     } else if (a == "-h" || a == "--help") {
@@ -155,15 +154,7 @@ int check(const Args& args, std::ostream& out, std::ostream& err) {
 
   if (!vtu.empty()) {
     const mesh::CellQuality cq = mesh::cell_quality(m, {}, planar);
-    std::vector<io::DataArray> cell_data = {{"size", 1, cq.size},
-                                            {"aspect_ratio", 1, cq.aspect_ratio},
-                                            {"shewchuk_quality", 1, cq.shewchuk},
-                                            {"min_angle_deg", 1, cq.min_angle},
-                                            {"max_angle_deg", 1, cq.max_angle},
-                                            {"shape_class", 1, {}}};
-    for (auto* a : {&cell_data[3], &cell_data[4]})
-      for (double& v : a->values) v *= 180.0 / 3.14159265358979323846;
-    for (auto s : cq.shape) cell_data[5].values.push_back(static_cast<double>(s));
+    const std::vector<io::DataArray> cell_data = io::quality_cell_data(cq);
     io::write_vtu(vtu, m, {}, cell_data);
     out << "wrote:       " << vtu << "\n";
   }
@@ -183,23 +174,10 @@ int check(const Args& args, std::ostream& out, std::ostream& err) {
       << conn.num_boundary_faces() << " boundary faces";
   out << "\n";
   if (volume && m.facets.cols() > 0) {
-    // Which of the file's facets lie on the boundary of the tetrahedra, which inside
-    // (e.g. interfaces between labelled subdomains), and whether they cover the boundary.
-    std::set<std::array<Index, 3>> boundary, listed;
-    for (const auto f : conn.boundary()) {
-      const mesh::Simplex& s = conn.simplex(f);
-      boundary.insert({s.vertex(0), s.vertex(1), s.vertex(2)});
-    }
-    for (Eigen::Index f = 0; f < m.facets.cols(); ++f) {
-      std::array<Index, 3> key{m.facets(0, f), m.facets(1, f), m.facets(2, f)};
-      std::sort(key.begin(), key.end());
-      listed.insert(key);
-    }
-    std::size_t on_boundary = 0;
-    for (const auto& key : listed) on_boundary += boundary.count(key);
-    out << "file facets: " << listed.size() << " distinct, " << on_boundary << " on the boundary, "
-        << listed.size() - on_boundary << " interior (e.g. subdomain interfaces); "
-        << boundary.size() - on_boundary << " boundary faces not listed\n";
+    const mesh::FacetCoverage c = mesh::facet_coverage(m.cells, m.facets);
+    out << "file facets: " << c.distinct << " distinct, " << c.on_boundary << " on the boundary, "
+        << c.interior << " interior (e.g. subdomain interfaces); " << c.boundary_not_listed
+        << " boundary faces not listed\n";
   }
   if (!v.ok()) {
     out << "validation:  " << v.violations.size() << " violations\n" << v.summary(20);

@@ -20,7 +20,9 @@ namespace incise {
 namespace {
 
 enum class Light { kGreen, kRed };
-const char* to_string(Light l) { return l == Light::kGreen ? "green" : "red"; }
+const char* to_string(Light l) {
+  return l == Light::kGreen ? "green" : "red";
+}
 using LightOutcome = Outcome<Light, Light::kGreen, Light::kRed>;
 
 TEST(Outcome, StartsAtItsInitialStatusAndOkMeansTheOkValue) {
@@ -40,8 +42,12 @@ TEST(Outcome, BriefIsTheStatusNameAndTheMessageWhenThereIsOne) {
 
 // True when R derives from some Outcome<S, ok, initial> (deduced from the base).
 template <class S, S kOk, S kInitial>
-std::true_type derives_from_outcome(const Outcome<S, kOk, kInitial>*);
-std::false_type derives_from_outcome(...);
+std::true_type derives_from_outcome(const Outcome<S, kOk, kInitial>*) {
+  return {};
+}
+std::false_type derives_from_outcome(...) {
+  return {};
+}
 template <class R>
 constexpr bool is_outcome() {
   return decltype(derives_from_outcome(static_cast<const R*>(nullptr)))::value;

@@ -106,6 +106,30 @@ TEST(BoundaryFaces, InteriorAndNonManifoldFacesAreNotBoundary) {
   }
 }
 
+TEST(FacetCoverage, CountsListedBoundaryInteriorAndUnlistedFaces) {
+  // Two tets sharing face {1, 2, 3}: 6 boundary faces, one interior face.
+  CellMatrix tets(4, 2);
+  tets << 0, 4, 1, 1, 2, 3, 3, 2;
+  const CellMatrix boundary = boundary_faces(tets);
+  ASSERT_EQ(boundary.cols(), 6);
+  // Listed: two boundary faces (one twice, reversed), the interior face; four boundary faces
+  // are not listed.
+  CellMatrix listed(3, 4);
+  listed.col(0) = boundary.col(0);
+  listed.col(1) = boundary.col(0).reverse();
+  listed.col(2) = boundary.col(3);
+  listed.col(3) << 3, 1, 2;
+  const FacetCoverage c = facet_coverage(tets, listed);
+  EXPECT_EQ(c.distinct, 3u);
+  EXPECT_EQ(c.on_boundary, 2u);
+  EXPECT_EQ(c.interior, 1u);
+  EXPECT_EQ(c.boundary_not_listed, 4u);
+  const FacetCoverage all = facet_coverage(tets, boundary);
+  EXPECT_EQ(all.on_boundary, 6u);
+  EXPECT_EQ(all.boundary_not_listed, 0u);
+  EXPECT_THROW((void)facet_coverage(tets, CellMatrix(4, 1)), UsageError);
+}
+
 TEST(BoundaryFaces, RejectsNonTetrahedralInput) {
   MeshData tri;
   tri.dimension = 2;

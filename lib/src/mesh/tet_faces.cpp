@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <iterator>
 #include <vector>
 
 namespace incise::mesh {
@@ -39,6 +40,33 @@ CellMatrix boundary_faces(const CellMatrix& tets) {
 CellMatrix boundary_faces(const MeshData& mesh) {
   INCISE_CHECK(mesh.dimension == 3, "boundary_faces needs a tetrahedral mesh");
   return boundary_faces(mesh.cells);
+}
+
+FacetCoverage facet_coverage(const CellMatrix& tets, const CellMatrix& facets) {
+  INCISE_CHECK(facets.rows() == 3, "facet_coverage: facets must have 3 vertex indices each");
+  auto sorted_keys = [](const CellMatrix& tri) {
+    std::vector<std::array<Index, 3>> keys;
+    keys.reserve(static_cast<std::size_t>(tri.cols()));
+    for (Eigen::Index f = 0; f < tri.cols(); ++f) {
+      std::array<Index, 3> key{tri(0, f), tri(1, f), tri(2, f)};
+      std::sort(key.begin(), key.end());
+      keys.push_back(key);
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    return keys;
+  };
+  const std::vector<std::array<Index, 3>> boundary = sorted_keys(boundary_faces(tets));
+  const std::vector<std::array<Index, 3>> listed = sorted_keys(facets);
+  std::vector<std::array<Index, 3>> common;
+  std::set_intersection(listed.begin(), listed.end(), boundary.begin(), boundary.end(),
+                        std::back_inserter(common));
+  FacetCoverage c;
+  c.distinct = listed.size();
+  c.on_boundary = common.size();
+  c.interior = listed.size() - common.size();
+  c.boundary_not_listed = boundary.size() - common.size();
+  return c;
 }
 
 }  // namespace incise::mesh

@@ -3,8 +3,8 @@
 /// The one shape of a numerical outcome report (docs/design.md §1.5): a status enum, a message
 /// saying what happened and what the caller can do, `ok()` and `brief()`. Every report of the
 /// library (solver, GMRES, factorization, augmented system, cut step, interactive step,
-/// validation) derives from `Outcome<Status, kOk, kInitial>` with its own status enum, so callers test
-/// and print every outcome the same way.
+/// validation) derives from `Outcome<Status, kOk, kInitial>` with its own status enum, so callers
+/// test and print every outcome the same way.
 
 #include <string>
 
@@ -16,7 +16,7 @@ namespace incise {
 template <class Status, Status kOkValue, Status kInitial>
 struct Outcome {
   Status status = kInitial;  ///< what happened; kOkValue on success
-  std::string message;  ///< empty on success; otherwise what failed and what the caller can do
+  std::string message;       ///< empty on success; otherwise what failed and what the caller can do
 
   /// True when status == kOkValue.
   bool ok() const { return status == kOkValue; }

@@ -6,6 +6,7 @@
 /// Throws incise::Error when the file cannot be written and UsageError on inconsistent input.
 
 #include <incise/mesh/mesh_data.hpp>
+#include <incise/mesh/quality.hpp>
 
 #include <string>
 #include <vector>
@@ -42,5 +43,11 @@ void write_tetgen(const std::string& base, const mesh::MeshData& m);
 
 /// OFF writer for triangle meshes (dimension 2).
 void write_off(const std::string& path, const mesh::MeshData& m);
+
+/// The per-cell quality arrays `incise mesh check --vtu` writes (mesh::cell_quality): "size"
+/// (signed volume m³ or area m²), "aspect_ratio" (§3.2.3), "shewchuk_quality", "min_angle_deg"
+/// and "max_angle_deg" (dihedral angles in 3D, angles in 2D; degrees), "shape_class"
+/// (mesh::ShapeClass as a number, mesh::to_string for names).
+std::vector<DataArray> quality_cell_data(const mesh::CellQuality& q);
 
 }  // namespace incise::io

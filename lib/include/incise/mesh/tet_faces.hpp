@@ -23,4 +23,17 @@ CellMatrix boundary_faces(const CellMatrix& tets);
 /// boundary_faces(mesh.cells); throws UsageError unless `mesh` is tetrahedral (dimension 3).
 CellMatrix boundary_faces(const MeshData& mesh);
 
+/// How the triangles a mesh file lists (`facets`, 3 × k vertex indices in any order and
+/// orientation; duplicates counted once) relate to the boundary of the tetrahedra `tets`.
+struct FacetCoverage {
+  std::size_t distinct = 0;     ///< distinct listed triangles
+  std::size_t on_boundary = 0;  ///< listed triangles that are boundary faces
+  std::size_t interior = 0;     ///< listed but not on the boundary (e.g. subdomain interfaces)
+  std::size_t boundary_not_listed = 0;  ///< boundary faces (boundary_faces(tets)) not listed
+};
+
+/// FacetCoverage of `facets` against boundary_faces(tets). Throws UsageError unless `tets` has 4
+/// rows and `facets` 3.
+FacetCoverage facet_coverage(const CellMatrix& tets, const CellMatrix& facets);
+
 }  // namespace incise::mesh
