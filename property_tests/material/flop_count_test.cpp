@@ -95,9 +95,11 @@ TEST(CountedScalar, MaterialKernelsGiveSameValuesAsDouble) {
   incise::material::MaterialState<Counted> sc;
   using incise::material::NeoHookean;
   using incise::material::strain_from_c;
-  const auto s_d = NeoHookean::stress(l, strain_from_c<NeoHookean>(c), sd);
-  const auto s_c = NeoHookean::stress(
-      l, strain_from_c<NeoHookean>(Eigen::Matrix<Counted, 3, 3>(c.cast<Counted>())), sc);
+  Eigen::Matrix3d s_d;
+  Eigen::Matrix<Counted, 3, 3> s_c;
+  NeoHookean::stress(l, strain_from_c<NeoHookean>(c), sd, s_d);
+  NeoHookean::stress(l, strain_from_c<NeoHookean>(Eigen::Matrix<Counted, 3, 3>(c.cast<Counted>())),
+                     sc, s_c);
   for (int i = 0; i < 9; ++i) EXPECT_EQ(s_c(i).value(), s_d(i));
 }
 

@@ -45,7 +45,9 @@ Mat3 Material::stress(const Mat3& c) const {
   return visit_model(index_, [&](auto m) {
     using M = decltype(m);
     MaterialState<double> st;
-    return Mat3(M::stress(lame_, strain_from_c<M>(c), st));
+    Mat3 s;
+    M::stress(lame_, strain_from_c<M>(c), st, s);
+    return s;
   });
 }
 
@@ -53,7 +55,8 @@ Mat3 Material::stress_derivative(const Mat3& c, const Mat3& h) const {
   return visit_model(index_, [&](auto m) {
     using M = decltype(m);
     MaterialState<double> st;
-    (void)M::stress(lame_, strain_from_c<M>(c), st);
+    Mat3 s;
+    M::stress(lame_, strain_from_c<M>(c), st, s);
     return Mat3(M::stress_derivative(lame_, st, h));
   });
 }
@@ -62,7 +65,8 @@ TangentModuli<double> Material::moduli(const Mat3& c) const {
   return visit_model(index_, [&](auto m) {
     using M = decltype(m);
     MaterialState<double> st;
-    (void)M::stress(lame_, strain_from_c<M>(c), st);
+    Mat3 s;
+    M::stress(lame_, strain_from_c<M>(c), st, s);
     return M::moduli(lame_, st);
   });
 }
@@ -73,7 +77,8 @@ PointEvaluation Material::evaluate(const Mat3& f) const {
   return visit_model(index_, [&](auto m) {
     using M = decltype(m);
     PointEvaluation out;
-    const Strain<double> s = strain_from_gradient<M>(g, f);
+    Strain<double> s;
+    strain_from_gradient<M>(g, f, s);
     if constexpr (!M::kDefinedWhenInverted) {
       if (!(s.jm1 > -1.0)) {
         out.inverted = true;
@@ -85,7 +90,7 @@ PointEvaluation Material::evaluate(const Mat3& f) const {
     }
     MaterialState<double> st;
     out.energy = M::energy(lame_, s);
-    out.second_piola = M::stress(lame_, s, st);
+    M::stress(lame_, s, st, out.second_piola);
     out.first_piola = M::kLinearGeometry ? out.second_piola : Mat3(f * out.second_piola);
     return out;
   });

@@ -85,21 +85,19 @@ struct TetKernel {
   static INCISE_KERNEL_INLINE bool strain(const Mat3T<T>& z_inv, const Mat34T<T>& x, Mat3T<T>& f,
                                           material::Strain<T>& e) {
     const Mat3T<T> g = material::detail::mul(differences(x), z_inv);
-    if constexpr (Model::kLinearGeometry) {
-      e.e = material::linear_strain(g);
-    } else {
+    if constexpr (!Model::kLinearGeometry) {
       f = g;
       f(0, 0) += T(1);
       f(1, 1) += T(1);
       f(2, 2) += T(1);
-      if constexpr (Model::kUsesJ) {
+      if constexpr (Model::kUsesJ && !Model::kDefinedWhenInverted) {
         e.jm1 = material::det_minus_one(g, f);
-        if constexpr (!Model::kDefinedWhenInverted) {
-          if (!(e.jm1 > T(-1))) return false;
-        }
+        if (!(e.jm1 > T(-1))) return false;
+        material::green_strain(g, f, e.e);
+        return true;
       }
-      e.e = material::green_strain(g, f);
     }
+    material::strain_from_gradient<Model>(g, f, e);
     return true;
   }
 
@@ -108,7 +106,7 @@ struct TetKernel {
   static INCISE_KERNEL_INLINE bool kinematics(const material::Lame& p, const Mat3T<T>& z_inv,
                                               const Mat34T<T>& x, State& st) {
     if (!strain(z_inv, x, st.f, st.strain)) return false;
-    st.s = Model::stress(p, st.strain, st.m);
+    Model::stress(p, st.strain, st.m, st.s);
     return true;
   }
 

@@ -20,8 +20,10 @@
 ///   Strain::jm1), `kHasIsotropicTerms`, `kHasInverseTerms` (which tangent coefficients can be
 ///   non-zero, see TangentModuli);
 /// - `energy(lame, strain)` → W in J/m³ (+∞ when J ≤ 0 for log models);
-/// - `stress(lame, strain, state)` → S in Pa, filling `state` with quantities the derivative
-///   reuses ("the calculations can be combined", §4.3);
+/// - `stress(lame, strain, state, S)` writes S in Pa, filling `state` with quantities the
+///   derivative reuses ("the calculations can be combined", §4.3); S is an out-parameter so
+///   that the element kernels' S is written in place (a returned 3×3 assigned to a member is
+///   copied through memory: 2× slower Lanes4 kernels, measured);
 /// - `stress_derivative(lame, state, H)` → ∂S/∂C : H (Pa), H symmetric;
 /// - `moduli(lame, state)` → the coefficients of the common form of ∂S/∂C (TangentModuli).
 ///
@@ -159,14 +161,14 @@ INCISE_KERNEL_INLINE Mat3T<T> mul_tn(const Mat3T<T>& a, const Mat3T<T>& b) {
   return r;
 }
 
-/// A·B for commuting symmetric A, B (then A·B is symmetric), upper triangle only (30 flops).
+/// r = A·B for commuting symmetric A, B (then A·B is symmetric), upper triangle only
+/// (30 flops).
 template <class T>
-INCISE_KERNEL_INLINE Mat3T<T> symmetric_commuting_product(const Mat3T<T>& a, const Mat3T<T>& b) {
-  Mat3T<T> r;
+INCISE_KERNEL_INLINE void symmetric_commuting_product(const Mat3T<T>& a, const Mat3T<T>& b,
+                                                      Mat3T<T>& r) {
   for (int i = 0; i < 3; ++i)
     for (int j = i; j < 3; ++j) r(i, j) = a(i, 0) * b(0, j) + a(i, 1) * b(1, j) + a(i, 2) * b(2, j);
   symmetrize_from_upper(r);
-  return r;
 }
 
 /// A : B for symmetric A, B (12 flops).
@@ -275,10 +277,11 @@ inline Lanes4 expm1_remainder(const Lanes4& x) {
 
 }  // namespace detail
 
-/// Linearized strain ε = ½(G + Gᵀ) (thesis (2.22); 6 flops).
+/// Linearized strain ε = ½(G + Gᵀ) (thesis (2.22); 6 flops), written into `e` (element-wise
+/// into the destination: a 3×3 returned by value and then assigned is copied through memory,
+/// which costs as much as the arithmetic for Lanes4).
 template <class T>
-INCISE_KERNEL_INLINE Mat3T<T> linear_strain(const Mat3T<T>& g) {
-  Mat3T<T> e;
+INCISE_KERNEL_INLINE void linear_strain(const Mat3T<T>& g, Mat3T<T>& e) {
   e(0, 0) = g(0, 0);
   e(1, 1) = g(1, 1);
   e(2, 2) = g(2, 2);
@@ -286,19 +289,17 @@ INCISE_KERNEL_INLINE Mat3T<T> linear_strain(const Mat3T<T>& g) {
   e(0, 2) = T(0.5) * (g(0, 2) + g(2, 0));
   e(1, 2) = T(0.5) * (g(1, 2) + g(2, 1));
   detail::symmetrize_from_upper(e);
-  return e;
 }
 
 /// Green strain E = ½(FᵀF − I) = ½(G + GᵀF) (GᵀF = Gᵀ + GᵀG) from G and F = I + G, upper
-/// triangle (42 flops). No term of size 1 enters: E keeps relative accuracy as G → 0.
+/// triangle (42 flops), written into `e`. No term of size 1 enters: E keeps relative accuracy
+/// as G → 0.
 template <class T>
-INCISE_KERNEL_INLINE Mat3T<T> green_strain(const Mat3T<T>& g, const Mat3T<T>& f) {
-  Mat3T<T> e;
+INCISE_KERNEL_INLINE void green_strain(const Mat3T<T>& g, const Mat3T<T>& f, Mat3T<T>& e) {
   for (int i = 0; i < 3; ++i)
     for (int j = i; j < 3; ++j)
       e(i, j) = T(0.5) * (g(i, j) + (g(0, i) * f(0, j) + g(1, i) * f(1, j) + g(2, i) * f(2, j)));
   detail::symmetrize_from_upper(e);
-  return e;
 }
 
 /// det(I + G) − 1 from G and F = I + G, by cofactors of F along its first row with the 1s taken
@@ -313,37 +314,43 @@ INCISE_KERNEL_INLINE T det_minus_one(const Mat3T<T>& g, const Mat3T<T>& f) {
 }
 
 /// The strain of `Model` from the displacement gradient G and F = I + G (F unused for linear
-/// geometry): what the element kernels evaluate. For kUsesJ models also J − 1; the caller
-/// checks jm1 > −1 (det F > 0) before evaluating a log model.
+/// geometry), written into `s`: what the element kernels evaluate. For kUsesJ models also
+/// J − 1; the caller checks jm1 > −1 (det F > 0) before evaluating a log model.
 template <class Model, class T>
-INCISE_KERNEL_INLINE Strain<T> strain_from_gradient(const Mat3T<T>& g, const Mat3T<T>& f) {
-  Strain<T> s;
+INCISE_KERNEL_INLINE void strain_from_gradient(const Mat3T<T>& g, const Mat3T<T>& f, Strain<T>& s) {
   if constexpr (Model::kLinearGeometry) {
-    s.e = linear_strain(g);
+    linear_strain(g, s.e);
   } else {
     if constexpr (Model::kUsesJ) s.jm1 = det_minus_one(g, f);
-    s.e = green_strain(g, f);
+    green_strain(g, f, s.e);
   }
-  return s;
 }
 
 /// The strain of `Model` from a right Cauchy-Green tensor C (for the linear-geometry model the
-/// linearized I + G + Gᵀ): E = ½(C − I) and, for kUsesJ models, J − 1 = (ι3 − 1)/(1 + √ι3)
-/// with ι3 − 1 = det(I + (C − I)) − 1 (−1 when ι3 ≤ 0). As accurate as C is; the element
-/// kernels do not go through C.
+/// linearized I + G + Gᵀ), written into `s`: E = ½(C − I) and, for kUsesJ models,
+/// J − 1 = (ι3 − 1)/(1 + √ι3) with ι3 − 1 = det(I + (C − I)) − 1 (−1 when ι3 ≤ 0). As accurate
+/// as C is; the element kernels do not go through C.
 template <class Model, class T>
-INCISE_KERNEL_INLINE Strain<T> strain_from_c(const Mat3T<T>& c) {
+INCISE_KERNEL_INLINE void strain_from_c(const Mat3T<T>& c, Strain<T>& s) {
   using std::sqrt;
-  Strain<T> s;
-  Mat3T<T> d = c;
-  d(0, 0) -= T(1);
-  d(1, 1) -= T(1);
-  d(2, 2) -= T(1);
-  s.e = T(0.5) * d;
+  for (int i = 0; i < 3; ++i)
+    for (int j = i; j < 3; ++j) s.e(i, j) = T(0.5) * (i == j ? c(i, i) - T(1) : c(i, j));
+  detail::symmetrize_from_upper(s.e);
   if constexpr (Model::kUsesJ) {
+    Mat3T<T> d = c;
+    d(0, 0) -= T(1);
+    d(1, 1) -= T(1);
+    d(2, 2) -= T(1);
     const T i3m1 = det_minus_one(d, c);
     s.jm1 = i3m1 > T(-1) ? T(i3m1 / (T(1) + sqrt(T(1) + i3m1))) : T(-1);
   }
+}
+
+/// strain_from_c returning the strain (for callers off the hot path).
+template <class Model, class T>
+Strain<T> strain_from_c(const Mat3T<T>& c) {
+  Strain<T> s;
+  strain_from_c<Model>(c, s);
   return s;
 }
 
@@ -366,17 +373,16 @@ struct QuadraticEnergy {
   }
 
   template <class T>
-  static INCISE_KERNEL_INLINE Mat3T<T> stress(const Lame& p, const Strain<T>& s,
-                                              MaterialState<T>&) {
+  static INCISE_KERNEL_INLINE void stress(const Lame& p, const Strain<T>& s, MaterialState<T>&,
+                                          Mat3T<T>& r) {
     const T diag = T(p.lambda) * s.e.trace();
-    Mat3T<T> r;
-    for (int i = 0; i < 3; ++i)
-      for (int j = i; j < 3; ++j) r(i, j) = T(2.0 * p.mu) * s.e(i, j);
-    r(0, 0) += diag;
-    r(1, 1) += diag;
-    r(2, 2) += diag;
+    r(0, 0) = T(2.0 * p.mu) * s.e(0, 0) + diag;
+    r(1, 1) = T(2.0 * p.mu) * s.e(1, 1) + diag;
+    r(2, 2) = T(2.0 * p.mu) * s.e(2, 2) + diag;
+    r(0, 1) = T(2.0 * p.mu) * s.e(0, 1);
+    r(0, 2) = T(2.0 * p.mu) * s.e(0, 2);
+    r(1, 2) = T(2.0 * p.mu) * s.e(1, 2);
     detail::symmetrize_from_upper(r);
-    return r;
   }
 
   template <class T>
@@ -450,8 +456,8 @@ struct NeoHookean {
   }
 
   template <class T>
-  static INCISE_KERNEL_INLINE Mat3T<T> stress(const Lame& p, const Strain<T>& s,
-                                              MaterialState<T>& st) {
+  static INCISE_KERNEL_INLINE void stress(const Lame& p, const Strain<T>& s, MaterialState<T>& st,
+                                          Mat3T<T>& r) {
     st.jm1 = s.jm1;
     st.j = T(1) + s.jm1;
     st.i3 = detail::symmetric_inverse(detail::right_cauchy_green(s.e), st.c_inv);
@@ -463,7 +469,7 @@ struct NeoHookean {
     m(1, 1) += k;
     m(2, 2) += k;
     detail::symmetrize_from_upper(m);
-    return detail::symmetric_commuting_product(st.c_inv, m);
+    detail::symmetric_commuting_product(st.c_inv, m, r);
   }
 
   template <class T>
@@ -522,8 +528,8 @@ struct VerondaWestmann {
   }
 
   template <class T>
-  static INCISE_KERNEL_INLINE Mat3T<T> stress(const Lame& p, const Strain<T>& s,
-                                              MaterialState<T>& st) {
+  static INCISE_KERNEL_INLINE void stress(const Lame& p, const Strain<T>& s, MaterialState<T>& st,
+                                          Mat3T<T>& r) {
     using std::expm1;
     (void)detail::symmetric_inverse(detail::right_cauchy_green(s.e), st.c_inv);
     st.i3m1 = s.jm1 * (T(2) + s.jm1);
@@ -532,14 +538,12 @@ struct VerondaWestmann {
     st.em1 = p.gamma > 0.0 ? T(expm1(T(2.0 * p.gamma) * tre)) : T(0);
     const T diag = T(2.0 * p.mu) * (st.em1 - tre);
     const T k = T(0.5 * p.lambda) * st.i3m1;
-    Mat3T<T> r;
     for (int i = 0; i < 3; ++i)
       for (int j = i; j < 3; ++j) r(i, j) = T(2.0 * p.mu) * s.e(i, j) + k * st.c_inv(i, j);
     r(0, 0) += diag;
     r(1, 1) += diag;
     r(2, 2) += diag;
     detail::symmetrize_from_upper(r);
-    return r;
   }
 
   template <class T>
