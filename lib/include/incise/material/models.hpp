@@ -434,7 +434,8 @@ struct StVenantKirchhoff : QuadraticEnergy {
 /// Evaluated without cancellation, with I2, I3 the invariants of E and j1 = J − 1:
 /// ι3 = (1 + j1)² = 1 + 2 tr E + 4 I2 + 8 I3 gives tr E − j1 = j1²/2 − 2 I2 − 4 I3, so
 /// W = μ(j1²/2 − 2 I2 − 4 I3 + (j1 − ln(1 + j1))) + λ/2 j1² (every term O(‖E‖²));
-/// S = C⁻¹·(2μE + λ J j1 I), since μ(I − C⁻¹) = 2μ C⁻¹E (C⁻¹ and E commute).
+/// S = (μ − λ J j1)(I − C⁻¹) + λ J j1 I with I − C⁻¹ = (2/ι3)(E + (2 I2 + 4 I3) I − 2 adj E)
+/// (no O(1) term) and C⁻¹ = I − (I − C⁻¹).
 struct NeoHookean {
   static constexpr const char* kName = "neohookean";
   static constexpr bool kLinearGeometry = false;
@@ -458,18 +459,44 @@ struct NeoHookean {
   template <class T>
   static INCISE_KERNEL_INLINE void stress(const Lame& p, const Strain<T>& s, MaterialState<T>& st,
                                           Mat3T<T>& r) {
+    // With D = C − I = 2E: ι3 (I − C⁻¹) = ι3 I − adj C = D + (I2(D) + I3(D)) I − adj D, every
+    // term O(‖E‖) or smaller. In E: h = ½ ι3 (I − C⁻¹) = E + (2 I2 + 4 I3) I − 2 adj E.
+    const Mat3T<T>& e = s.e;
+    const T a00 = e(1, 1) * e(2, 2) - e(1, 2) * e(1, 2);
+    const T a11 = e(0, 0) * e(2, 2) - e(0, 2) * e(0, 2);
+    const T a22 = e(0, 0) * e(1, 1) - e(0, 1) * e(0, 1);
+    const T a01 = e(0, 2) * e(1, 2) - e(0, 1) * e(2, 2);
+    const T a02 = e(0, 1) * e(1, 2) - e(0, 2) * e(1, 1);
+    const T a12 = e(0, 1) * e(0, 2) - e(0, 0) * e(1, 2);
+    const T i2 = (a00 + a11) + a22;
+    const T i3 = e(0, 0) * a00 + e(0, 1) * a01 + e(0, 2) * a02;
+    const T sd = T(2) * i2 + T(4) * i3;
+    Mat3T<T> h;
+    h(0, 0) = (e(0, 0) + sd) - T(2) * a00;
+    h(1, 1) = (e(1, 1) + sd) - T(2) * a11;
+    h(2, 2) = (e(2, 2) + sd) - T(2) * a22;
+    h(0, 1) = e(0, 1) - T(2) * a01;
+    h(0, 2) = e(0, 2) - T(2) * a02;
+    h(1, 2) = e(1, 2) - T(2) * a12;
     st.jm1 = s.jm1;
     st.j = T(1) + s.jm1;
-    st.i3 = detail::symmetric_inverse(detail::right_cauchy_green(s.e), st.c_inv);
-    const T k = T(p.lambda) * st.j * st.jm1;
-    Mat3T<T> m;
+    st.i3 = st.j * st.j;
+    const T r2 = T(2) / st.i3;  // I − C⁻¹ = r2·h
     for (int i = 0; i < 3; ++i)
-      for (int j = i; j < 3; ++j) m(i, j) = T(2.0 * p.mu) * s.e(i, j);
-    m(0, 0) += k;
-    m(1, 1) += k;
-    m(2, 2) += k;
-    detail::symmetrize_from_upper(m);
-    detail::symmetric_commuting_product(st.c_inv, m, r);
+      for (int j = i; j < 3; ++j) st.c_inv(i, j) = -r2 * h(i, j);
+    st.c_inv(0, 0) += T(1);
+    st.c_inv(1, 1) += T(1);
+    st.c_inv(2, 2) += T(1);
+    detail::symmetrize_from_upper(st.c_inv);
+    // S = μ(I − C⁻¹) + k C⁻¹ = (μ − k)(I − C⁻¹) + k I, k = λ J (J − 1).
+    const T k = T(p.lambda) * st.j * st.jm1;
+    const T a = (T(p.mu) - k) * r2;
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) r(i, j) = a * h(i, j);
+    r(0, 0) += k;
+    r(1, 1) += k;
+    r(2, 2) += k;
+    detail::symmetrize_from_upper(r);
   }
 
   template <class T>
