@@ -84,20 +84,16 @@ struct TetKernel {
   /// det F ≤ 0 and the model is undefined there (then the strain is incomplete).
   static INCISE_KERNEL_INLINE bool strain(const Mat3T<T>& z_inv, const Mat34T<T>& x, Mat3T<T>& f,
                                           material::Strain<T>& e) {
+    static_assert(Model::kDefinedWhenInverted || Model::kUsesJ, "the inversion check needs J − 1");
     const Mat3T<T> g = material::detail::mul(differences(x), z_inv);
     if constexpr (!Model::kLinearGeometry) {
       f = g;
       f(0, 0) += T(1);
       f(1, 1) += T(1);
       f(2, 2) += T(1);
-      if constexpr (Model::kUsesJ && !Model::kDefinedWhenInverted) {
-        e.jm1 = material::det_minus_one(g, f);
-        if (!(e.jm1 > T(-1))) return false;
-        material::green_strain(g, f, e.e);
-        return true;
-      }
     }
     material::strain_from_gradient<Model>(g, f, e);
+    if constexpr (!Model::kDefinedWhenInverted) return e.jm1 > T(-1);
     return true;
   }
 

@@ -22,8 +22,7 @@
 /// - `energy(lame, strain)` → W in J/m³ (+∞ when J ≤ 0 for log models);
 /// - `stress(lame, strain, state, S)` writes S in Pa, filling `state` with quantities the
 ///   derivative reuses ("the calculations can be combined", §4.3); S is an out-parameter so
-///   that the element kernels' S is written in place (a returned 3×3 assigned to a member is
-///   copied through memory: 2× slower Lanes4 kernels, measured);
+///   that the element kernels write it in place (docs/fem_performance.md, "Issue 14");
 /// - `stress_derivative(lame, state, H)` → ∂S/∂C : H (Pa), H symmetric;
 /// - `moduli(lame, state)` → the coefficients of the common form of ∂S/∂C (TangentModuli).
 ///
@@ -224,7 +223,7 @@ constexpr double kExpm1SeriesLimit = 0.5;
 /// difference loses ≈ 2ε/|x| relative as x → 0, so for |x| < ¼ it is summed from
 /// ln(1 + x) = 2 atanh(s), s = x/(2 + x):  x − ln(1 + x) = s·x − 2s³ Σ_{k≥0} s^{2k}/(2k + 3)
 /// (|s| ≤ 1/7, nine terms reach 1e-17 relative; 24 flops). Otherwise x − log1p(x) (51 flops;
-/// ≤ 16ε/|x|·… ≈ 16 ulps at the switch). The flops executed depend on the branch.
+/// ≈ 4ε/|x| relative, 16 ulps at the switch). The flops executed depend on the branch.
 template <class T>
 INCISE_KERNEL_INLINE T x_minus_log1p(const T& x) {
   using std::abs;
@@ -277,9 +276,8 @@ inline Lanes4 expm1_remainder(const Lanes4& x) {
 
 }  // namespace detail
 
-/// Linearized strain ε = ½(G + Gᵀ) (thesis (2.22); 6 flops), written into `e` (element-wise
-/// into the destination: a 3×3 returned by value and then assigned is copied through memory,
-/// which costs as much as the arithmetic for Lanes4).
+/// Linearized strain ε = ½(G + Gᵀ) (thesis (2.22); 6 flops), written into `e` (in place, like
+/// the other strain helpers: see `stress` in the file comment).
 template <class T>
 INCISE_KERNEL_INLINE void linear_strain(const Mat3T<T>& g, Mat3T<T>& e) {
   e(0, 0) = g(0, 0);
