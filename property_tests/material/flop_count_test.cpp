@@ -43,6 +43,11 @@ TEST(CountedScalar, ChargesPerOperation) {
     (void)sqrt(a);
     EXPECT_EQ(s.flops(), incise::kLogFlops + incise::kSqrtFlops);
   }
+  {
+    FlopScope s;
+    (void)log1p(a);
+    EXPECT_EQ(s.flops(), incise::kLogFlops);
+  }
   EXPECT_EQ(incise::kExpFlops, 50u);  // thesis §4.2: "approximately 50 flops"
 }
 
@@ -88,9 +93,13 @@ TEST(CountedScalar, MaterialKernelsGiveSameValuesAsDouble) {
   c << 1.2, 0.1, 0.05, 0.1, 0.9, -0.02, 0.05, -0.02, 1.1;
   incise::material::MaterialState<double> sd;
   incise::material::MaterialState<Counted> sc;
-  const auto s_d = incise::material::NeoHookean::stress(l, c, sd);
-  const auto s_c =
-      incise::material::NeoHookean::stress(l, Eigen::Matrix<Counted, 3, 3>(c.cast<Counted>()), sc);
+  using incise::material::NeoHookean;
+  using incise::material::strain_from_c;
+  Eigen::Matrix3d s_d;
+  Eigen::Matrix<Counted, 3, 3> s_c;
+  NeoHookean::stress(l, strain_from_c<NeoHookean>(c), sd, s_d);
+  NeoHookean::stress(l, strain_from_c<NeoHookean>(Eigen::Matrix<Counted, 3, 3>(c.cast<Counted>())),
+                     sc, s_c);
   for (int i = 0; i < 9; ++i) EXPECT_EQ(s_c(i).value(), s_d(i));
 }
 

@@ -82,14 +82,11 @@ TEST(CantileverExtremes, IterationCountsScaleInvariantInE) {
     std::printf("E = %.0e: %-10s %ld iterations, E*deflection = %.8e, true |r|/threshold %.2f\n", e,
                 solver::to_string(r.status), r.iterations, e * r.avg_deflection,
                 r.residual_norm / r.threshold);
-    // At E = 1e9 the strains are ~1e-8 and the fem gradient (which forms F = I + G and then
-    // C − I) loses about 8 digits, so the true residual can exceed ε‖f‖ = 1e-8‖f‖ by a small
-    // factor although the recursive one met it: CG then reports `stagnated` (honestly). Allow
-    // that, but never more than 10× the threshold.
-    ASSERT_TRUE(r.status == solver::StopReason::kConverged ||
-                r.status == solver::StopReason::kStagnated)
-        << "E = " << e;
-    EXPECT_LE(r.residual_norm, 10.0 * r.threshold);
+    // The kernels compute strain from G without forming I + G (tet_kernels.hpp), so the true
+    // gradient is as accurate at E = 1e9 (strains ~1e-8) as at 1e2: the true residual meets
+    // the 1e-8‖f‖ threshold at every E (before, E = 1e9 ended `stagnated` at 1.7× it).
+    EXPECT_EQ(r.status, solver::StopReason::kConverged) << "E = " << e;
+    EXPECT_LE(r.residual_norm, r.threshold) << "E = " << e;
     if (it0 < 0) {
       it0 = r.iterations;
       ey0 = e * r.avg_deflection;

@@ -1,6 +1,6 @@
 /// The trade users make (issue 4, verification item 5): tolerance ε ∈ {1e-1 … 1e-8} × mesh ×
 /// solver on the Table 3.1 cantilever (linear model: CG, Jacobi-PCG, SS22 with computed Δt and
-/// η = 2√λ₁): error against a reference solution (ε = 1e-10, see below) and the cost of reaching
+/// η = 2√λ₁): error against a reference solution (ε = 1e-11, see below) and the cost of reaching
 /// each ε (iterations, counted flops, seconds). One traced run per (mesh, solver) gives every ε
 /// row: the row for ε is the first iterate with ‖r‖ ≤ ε‖f_ex‖. Written as CSV next to the binary.
 /// Default: mesh 16×4×4; `slow` (INCISE_TRADEOFF_ALL=1) adds 24×6×6 and 32×8×8.
@@ -63,9 +63,11 @@ TEST(Tradeoff, ToleranceVsErrorAndCost) {
     {
       solver::LinearCgOptions o;
       o.stop.rule = solver::ResidualRule::kExternalForce;
-      // §4.2 asks 1e-12 for the linear model; the FEM gradient's round-off floor here is
-      // ≈ 2e-11‖f‖ (it forms F = I + G, then C − I), so the reference stops at 1e-10.
-      o.stop.epsilon = 1e-10;
+      // §4.2 asks 1e-12 for the linear model, but a displacement rounded to double already has
+      // ‖r‖ ≈ 1.3e-12‖f‖ on the 16×4×4 mesh (CantileverSceneConvergence in
+      // cantilever_scene_convergence_verify.cpp), more on finer ones: the reference stops at
+      // 1e-11, the tightest decade above that floor.
+      o.stop.epsilon = 1e-11;
       o.preconditioner = solver::Preconditioner::kJacobi;
       // The recursive CG residual drifts from the true one; a truncated Newton polish on the
       // true gradient certifies the reference.

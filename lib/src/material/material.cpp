@@ -35,13 +35,19 @@ bool Material::defined_when_inverted() const {
 }
 
 double Material::energy_density(const Mat3& c) const {
-  return visit_model(index_, [&](auto m) { return decltype(m)::energy(lame_, c); });
+  return visit_model(index_, [&](auto m) {
+    using M = decltype(m);
+    return M::energy(lame_, strain_from_c<M>(c));
+  });
 }
 
 Mat3 Material::stress(const Mat3& c) const {
   return visit_model(index_, [&](auto m) {
+    using M = decltype(m);
     MaterialState<double> st;
-    return Mat3(decltype(m)::stress(lame_, c, st));
+    Mat3 s;
+    M::stress(lame_, strain_from_c<M>(c), st, s);
+    return s;
   });
 }
 
@@ -49,7 +55,8 @@ Mat3 Material::stress_derivative(const Mat3& c, const Mat3& h) const {
   return visit_model(index_, [&](auto m) {
     using M = decltype(m);
     MaterialState<double> st;
-    (void)M::stress(lame_, c, st);
+    Mat3 s;
+    M::stress(lame_, strain_from_c<M>(c), st, s);
     return Mat3(M::stress_derivative(lame_, st, h));
   });
 }
@@ -58,33 +65,35 @@ TangentModuli<double> Material::moduli(const Mat3& c) const {
   return visit_model(index_, [&](auto m) {
     using M = decltype(m);
     MaterialState<double> st;
-    (void)M::stress(lame_, c, st);
+    Mat3 s;
+    M::stress(lame_, strain_from_c<M>(c), st, s);
     return M::moduli(lame_, st);
   });
 }
 
 PointEvaluation Material::evaluate(const Mat3& f) const {
-  PointEvaluation out;
-  if (linear_geometry()) {
-    const Mat3 g = f - Mat3::Identity();
-    const Mat3 c = Mat3::Identity() + g + g.transpose();
-    out.energy = energy_density(c);
-    out.second_piola = stress(c);
-    out.first_piola = out.second_piola;
+  // G = F − I is exact for diagonal entries in [½, 2] (Sterbenz); the strain is computed from G.
+  const Mat3 g = f - Mat3::Identity();
+  return visit_model(index_, [&](auto m) {
+    using M = decltype(m);
+    PointEvaluation out;
+    Strain<double> s;
+    strain_from_gradient<M>(g, f, s);
+    if constexpr (!M::kDefinedWhenInverted) {
+      if (!(s.jm1 > -1.0)) {
+        out.inverted = true;
+        out.energy = std::numeric_limits<double>::infinity();
+        out.first_piola.setZero();
+        out.second_piola.setZero();
+        return out;
+      }
+    }
+    MaterialState<double> st;
+    out.energy = M::energy(lame_, s);
+    M::stress(lame_, s, st, out.second_piola);
+    out.first_piola = M::kLinearGeometry ? out.second_piola : Mat3(f * out.second_piola);
     return out;
-  }
-  if (!defined_when_inverted() && !(f.determinant() > 0.0)) {
-    out.inverted = true;
-    out.energy = std::numeric_limits<double>::infinity();
-    out.first_piola.setZero();
-    out.second_piola.setZero();
-    return out;
-  }
-  const Mat3 c = f.transpose() * f;
-  out.energy = energy_density(c);
-  out.second_piola = stress(c);
-  out.first_piola = f * out.second_piola;
-  return out;
+  });
 }
 
 }  // namespace incise::material

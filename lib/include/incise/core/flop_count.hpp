@@ -8,8 +8,8 @@
 /// Charges (per executed operation, accumulated in a thread-local counter):
 /// - binary + − × ÷ (also += −= ×= ÷=): 1 flop each;
 /// - exp, expm1: 50 flops (the thesis measured "approximately 50 flops", §4.2);
-/// - log: 50 flops (a libm transcendental of the same cost class as exp; the thesis gives no
-///   figure, so we charge the same);
+/// - log, log1p: 50 flops (libm transcendentals of the same cost class as exp; the thesis gives
+///   no figure, so we charge the same);
 /// - sqrt: 1 flop (a single hardware instruction, like ÷);
 /// - unary minus, abs, comparisons, copies and conversions: 0 flops (sign-bit operations and
 ///   branches are not arithmetic).
@@ -35,7 +35,7 @@ inline std::uint64_t& flop_counter() {
 
 /// Flops charged for one exp (thesis §4.2 measurement).
 constexpr std::uint64_t kExpFlops = 50;
-/// Flops charged for one log (same cost class as exp; see file comment).
+/// Flops charged for one log or log1p (same cost class as exp; see file comment).
 constexpr std::uint64_t kLogFlops = 50;
 /// Flops charged for one sqrt (one hardware instruction).
 constexpr std::uint64_t kSqrtFlops = 1;
@@ -71,6 +71,7 @@ class Counted {
   friend Counted exp(Counted a) { return count(std::exp(a.v_), kExpFlops); }
   friend Counted expm1(Counted a) { return count(std::expm1(a.v_), kExpFlops); }
   friend Counted log(Counted a) { return count(std::log(a.v_), kLogFlops); }
+  friend Counted log1p(Counted a) { return count(std::log1p(a.v_), kLogFlops); }
   friend Counted sqrt(Counted a) { return count(std::sqrt(a.v_), kSqrtFlops); }
   friend Counted abs(Counted a) { return Counted(std::abs(a.v_)); }
   friend Counted abs2(Counted a) { return a * a; }

@@ -9,6 +9,10 @@
 /// G = U·Z⁻¹, F = I + G, C = FᵀF, T = F·S. With the volume v(τ) the elastic nodal forces are the
 /// columns of −v(τ)·T·Z⁻ᵀ for nodes 1..3 and f4 = −f1 − f2 − f3 ((2.38), (3.4), (4.3)).
 ///
+/// The material is evaluated at the strain computed from G, never from C or I + G + Gᵀ
+/// (material::strain_from_gradient: E = ½(G + GᵀF), ε = ½(G + Gᵀ), J − 1 = det(I + G) − 1
+/// expanded), so energy, forces and tangent keep their relative accuracy as G → 0.
+///
 /// The kernels return the *internal* force q = −f_el = ∂(v W)/∂x (the gradient of the element
 /// energy), so that the global gradient of Π is Σ q − f_ext; q_a = v·P·g_a with g_a the a-th row
 /// of Z⁻¹ (as a column) and g4 = −g1 − g2 − g3. Element DOF order: node-major, 3a + i.
@@ -62,9 +66,9 @@ template <class Model, class T>
 struct TetKernel {
   /// Kinematic and stress quantities shared by force, product and tangent.
   struct State {
-    Mat3T<T> f;  ///< F = I + G (linear geometry: G, only the gradient is used)
-    Mat3T<T> c;  ///< C = FᵀF (linear geometry: I + G + Gᵀ)
-    Mat3T<T> s;  ///< S(C)
+    Mat3T<T> f;                  ///< F = I + G (nonlinear geometry; unused for linear geometry)
+    material::Strain<T> strain;  ///< E (linear geometry: ε), J − 1 for kUsesJ models
+    Mat3T<T> s;                  ///< S
     material::MaterialState<T> m;
   };
 
@@ -76,31 +80,29 @@ struct TetKernel {
     return u;
   }
 
-  /// F (or G), C and S from nodal displacements. Returns false when det F ≤ 0 and the model is
-  /// undefined there (then C and S are not computed).
+  /// G, F (nonlinear geometry) and the strain from nodal displacements. Returns false when
+  /// det F ≤ 0 and the model is undefined there (then the strain is incomplete).
+  static INCISE_KERNEL_INLINE bool strain(const Mat3T<T>& z_inv, const Mat34T<T>& x, Mat3T<T>& f,
+                                          material::Strain<T>& e) {
+    static_assert(Model::kDefinedWhenInverted || Model::kUsesJ, "the inversion check needs J − 1");
+    const Mat3T<T> g = material::detail::mul(differences(x), z_inv);
+    if constexpr (!Model::kLinearGeometry) {
+      f = g;
+      f(0, 0) += T(1);
+      f(1, 1) += T(1);
+      f(2, 2) += T(1);
+    }
+    material::strain_from_gradient<Model>(g, f, e);
+    if constexpr (!Model::kDefinedWhenInverted) return e.jm1 > T(-1);
+    return true;
+  }
+
+  /// F (nonlinear geometry), the strain and S from nodal displacements. Returns false when
+  /// det F ≤ 0 and the model is undefined there (then S is not computed).
   static INCISE_KERNEL_INLINE bool kinematics(const material::Lame& p, const Mat3T<T>& z_inv,
                                               const Mat34T<T>& x, State& st) {
-    const Mat3T<T> g = material::detail::mul(differences(x), z_inv);
-    if constexpr (Model::kLinearGeometry) {
-      st.f = g;
-      for (int i = 0; i < 3; ++i) {
-        st.c(i, i) = T(1) + g(i, i) + g(i, i);
-        for (int j = i + 1; j < 3; ++j) st.c(i, j) = st.c(j, i) = g(i, j) + g(j, i);
-      }
-    } else {
-      st.f = g;
-      st.f(0, 0) += T(1);
-      st.f(1, 1) += T(1);
-      st.f(2, 2) += T(1);
-      if constexpr (!Model::kDefinedWhenInverted) {
-        if (!(st.f.determinant() > T(0))) return false;
-      }
-      for (int i = 0; i < 3; ++i)
-        for (int j = i; j < 3; ++j)
-          st.c(i, j) = st.f(0, i) * st.f(0, j) + st.f(1, i) * st.f(1, j) + st.f(2, i) * st.f(2, j);
-      material::detail::symmetrize_from_upper(st.c);
-    }
-    st.s = Model::stress(p, st.c, st.m);
+    if (!strain(z_inv, x, st.f, st.strain)) return false;
+    Model::stress(p, st.strain, st.m, st.s);
     return true;
   }
 
@@ -112,33 +114,16 @@ struct TetKernel {
     for (int i = 0; i < 3; ++i) q(i, 3) = -(pb(i, 0) + pb(i, 1) + pb(i, 2));
   }
 
-  /// Element energy v(τ)·W(C). Returns false (and +∞) when inverted.
+  /// Element energy v(τ)·W. Returns false (and +∞) when inverted.
   static INCISE_KERNEL_INLINE bool energy(const material::Lame& p, const Mat3T<T>& z_inv,
                                           const T& volume, const Mat34T<T>& x, T& w) {
-    const Mat3T<T> g = material::detail::mul(differences(x), z_inv);
-    Mat3T<T> c;
-    if constexpr (Model::kLinearGeometry) {
-      for (int i = 0; i < 3; ++i) {
-        c(i, i) = T(1) + g(i, i) + g(i, i);
-        for (int j = i + 1; j < 3; ++j) c(i, j) = c(j, i) = g(i, j) + g(j, i);
-      }
-    } else {
-      Mat3T<T> f = g;
-      f(0, 0) += T(1);
-      f(1, 1) += T(1);
-      f(2, 2) += T(1);
-      if constexpr (!Model::kDefinedWhenInverted) {
-        if (!(f.determinant() > T(0))) {
-          w = material::detail::infinity<T>();
-          return false;
-        }
-      }
-      for (int i = 0; i < 3; ++i)
-        for (int j = i; j < 3; ++j)
-          c(i, j) = f(0, i) * f(0, j) + f(1, i) * f(1, j) + f(2, i) * f(2, j);
-      material::detail::symmetrize_from_upper(c);
+    Mat3T<T> f;
+    material::Strain<T> e;
+    if (!strain(z_inv, x, f, e)) {
+      w = material::detail::infinity<T>();
+      return false;
     }
-    w = volume * Model::energy(p, c);
+    w = volume * Model::energy(p, e);
     return true;
   }
 

@@ -3,7 +3,9 @@
 /// Runtime material object and the registry of models by name ("linear", "stvk",
 /// "neohookean", "veronda-westmann"; see models.hpp for the energies). The interface is the
 /// thesis' (§4.3): W(C), S(C) = 2∂W/∂C and ∂S/∂C : H, plus a deformation-gradient level
-/// evaluation that handles det F ≤ 0 explicitly.
+/// evaluation that handles det F ≤ 0 explicitly. The C-level functions are as accurate as C
+/// (E = ½(C − I) loses what C lost); evaluate(F) computes the strain from G = F − I like the
+/// element kernels.
 ///
 /// The material knows no mesh: it is tested on bare deformations.
 

@@ -1,17 +1,28 @@
 #pragma once
 /// \file models.hpp
 /// The four hyperelastic models of thesis §4.3 as kernels templated on the scalar type (double
-/// for computation, incise::Counted for flop counting), in the thesis' own terms:
-/// W(C), S(C) = 2 ∂W/∂C and the stress derivative ∂S/∂C : H for a symmetric direction H.
+/// to compute, incise::Counted to count flops, incise::Lanes4 for four elements at once), in the
+/// thesis' terms: W, S = 2 ∂W/∂C and the stress derivative ∂S/∂C : H for a symmetric direction
+/// H — evaluated from the strain, not from C.
+///
+/// Small-strain accuracy: W, S and ∂S/∂C take a `Strain` (Green strain E = ½(C − I), or the
+/// linearized ε, plus J − 1 = det F − 1 for models that need it) computed from the displacement
+/// gradient G without forming I + G and subtracting I again (strain_from_gradient). Every
+/// formula below is written in E, J − 1, C⁻¹ and expm1 / log1p remainders so that no O(1)
+/// quantity is subtracted: W keeps its relative accuracy as ‖G‖ → 0 (it is O(‖G‖²)) and S its
+/// (O(‖G‖)). The C-based entry points of material.hpp convert C first (strain_from_c), which
+/// is as accurate as C itself.
 ///
 /// Every model is a stateless struct with
-/// - `kName` (registry name), `kLinearGeometry` (true: the argument C is the linearized
-///   I + G + Gᵀ and T = S, eq. (2.22)), `kDefinedWhenInverted` (false: the energy has a log
-///   term and det F ≤ 0 is reported as inverted with W = +∞), `kHasIsotropicTerms`,
-///   `kHasInverseTerms` (which tangent coefficients can be non-zero, see TangentModuli);
-/// - `energy(lame, C)` → W in J/m³ (+∞ when ι3 = det C ≤ 0 for log models);
-/// - `stress(lame, C, state)` → S in Pa, filling `state` with quantities the derivative reuses
-///   ("the calculations can be combined", §4.3);
+/// - `kName` (registry name), `kLinearGeometry` (true: the strain is the linearized
+///   ε = ½(G + Gᵀ) and T = S, eq. (2.22)), `kDefinedWhenInverted` (false: the energy has a log
+///   term and det F ≤ 0 is reported as inverted with W = +∞), `kUsesJ` (needs
+///   Strain::jm1), `kHasIsotropicTerms`, `kHasInverseTerms` (which tangent coefficients can be
+///   non-zero, see TangentModuli);
+/// - `energy(lame, strain)` → W in J/m³ (+∞ when J ≤ 0 for log models);
+/// - `stress(lame, strain, state, S)` writes S in Pa, filling `state` with quantities the
+///   derivative reuses ("the calculations can be combined", §4.3); S is an out-parameter so
+///   that the element kernels write it in place (docs/fem_performance.md, "Issue 14");
 /// - `stress_derivative(lame, state, H)` → ∂S/∂C : H (Pa), H symmetric;
 /// - `moduli(lame, state)` → the coefficients of the common form of ∂S/∂C (TangentModuli).
 ///
@@ -21,6 +32,7 @@
 /// Registering a model = appending it to `ModelList` at the end of this file; every property
 /// test, verification table and benchmark iterates over `ModelList` / the registry.
 
+#include <incise/core/simd_scalar.hpp>
 #include <incise/material/parameters.hpp>
 
 #include <Eigen/Core>
@@ -54,14 +66,25 @@ namespace incise::material {
 template <class T>
 using Mat3T = Eigen::Matrix<T, 3, 3>;
 
+/// The strain a model is evaluated at (thesis (2.21), (2.22)).
+template <class T>
+struct Strain {
+  /// E = ½(C − I) = ½(G + Gᵀ + GᵀG) (Green-Lagrange), or ε = ½(G + Gᵀ) for the linear-geometry
+  /// model; symmetric, dimensionless.
+  Mat3T<T> e;
+  /// J − 1 = det F − 1 (models with kUsesJ; −1 when det F ≤ 0 is known; 0 otherwise).
+  T jm1 = T(0);
+};
+
 /// Quantities computed by `stress` and reused by `stress_derivative` / `moduli`.
 template <class T>
 struct MaterialState {
   Mat3T<T> c_inv;  ///< C⁻¹ (filled by models with inverse terms)
-  T i1 = T(0);     ///< ι1 = tr C
-  T i3 = T(0);     ///< ι3 = det C (models with inverse terms)
-  T j = T(0);      ///< √ι3 (neo-Hookean)
-  T e = T(0);      ///< exp(γ(ι1 − 3)) (Veronda-Westmann)
+  T i3 = T(0);     ///< ι3 = det C = J² (models with inverse terms)
+  T i3m1 = T(0);   ///< ι3 − 1 = (J − 1)(J + 1) (Veronda-Westmann)
+  T j = T(0);      ///< J = √ι3 (neo-Hookean)
+  T jm1 = T(0);    ///< J − 1 (neo-Hookean)
+  T em1 = T(0);    ///< e^{γ(ι1 − 3)} − 1 (Veronda-Westmann)
 };
 
 /// Coefficients of ∂S/∂C : H = c1 tr(H) I + c2 H + c3 (C⁻¹:H) C⁻¹ + c4 C⁻¹·H·C⁻¹ (Pa).
@@ -110,6 +133,14 @@ INCISE_KERNEL_INLINE T symmetric_det(const Mat3T<T>& c) {
          c(0, 2) * (c(0, 1) * c(1, 2) - c(1, 1) * c(0, 2));
 }
 
+/// Second principal invariant ½((tr E)² − tr E²) of a symmetric 3×3 matrix: the sum of its
+/// principal 2×2 minors (11 flops).
+template <class T>
+INCISE_KERNEL_INLINE T symmetric_second_invariant(const Mat3T<T>& e) {
+  return (e(0, 0) * e(1, 1) - e(0, 1) * e(0, 1)) + (e(0, 0) * e(2, 2) - e(0, 2) * e(0, 2)) +
+         (e(1, 1) * e(2, 2) - e(1, 2) * e(1, 2));
+}
+
 /// A·B for 3×3 matrices, written out (45 flops: the same operations as Eigen's product, in a
 /// form compilers inline for every scalar type, including incise::Lanes4).
 template <class T>
@@ -127,6 +158,16 @@ INCISE_KERNEL_INLINE Mat3T<T> mul_tn(const Mat3T<T>& a, const Mat3T<T>& b) {
   for (int j = 0; j < 3; ++j)
     for (int i = 0; i < 3; ++i) r(i, j) = a(0, i) * b(0, j) + a(1, i) * b(1, j) + a(2, i) * b(2, j);
   return r;
+}
+
+/// r = A·B for commuting symmetric A, B (then A·B is symmetric), upper triangle only
+/// (30 flops).
+template <class T>
+INCISE_KERNEL_INLINE void symmetric_commuting_product(const Mat3T<T>& a, const Mat3T<T>& b,
+                                                      Mat3T<T>& r) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = i; j < 3; ++j) r(i, j) = a(i, 0) * b(0, j) + a(i, 1) * b(1, j) + a(i, 2) * b(2, j);
+  symmetrize_from_upper(r);
 }
 
 /// A : B for symmetric A, B (12 flops).
@@ -148,11 +189,24 @@ INCISE_KERNEL_INLINE Mat3T<T> symmetric_sandwich(const Mat3T<T>& a, const Mat3T<
   return r;
 }
 
-/// tr(C²) for symmetric C (14 flops).
+/// tr(E²) = E : E for symmetric E (14 flops).
 template <class T>
 INCISE_KERNEL_INLINE T symmetric_trace_square(const Mat3T<T>& c) {
   return c(0, 0) * c(0, 0) + c(1, 1) * c(1, 1) + c(2, 2) * c(2, 2) +
          T(2) * (c(0, 1) * c(0, 1) + c(0, 2) * c(0, 2) + c(1, 2) * c(1, 2));
+}
+
+/// C = I + 2E for symmetric E (9 flops).
+template <class T>
+INCISE_KERNEL_INLINE Mat3T<T> right_cauchy_green(const Mat3T<T>& e) {
+  Mat3T<T> c;
+  for (int i = 0; i < 3; ++i)
+    for (int j = i; j < 3; ++j) c(i, j) = T(2) * e(i, j);
+  c(0, 0) += T(1);
+  c(1, 1) += T(1);
+  c(2, 2) += T(1);
+  symmetrize_from_upper(c);
+  return c;
 }
 
 template <class T>
@@ -160,42 +214,173 @@ INCISE_KERNEL_INLINE T infinity() {
   return T(std::numeric_limits<double>::infinity());
 }
 
+/// |x| below which x − ln(1 + x) is summed as a series (see x_minus_log1p).
+constexpr double kLog1pSeriesLimit = 0.25;
+/// |x| below which (eˣ − 1 − x)/x² is summed as a series (see expm1_remainder).
+constexpr double kExpm1SeriesLimit = 0.5;
+
+/// x − ln(1 + x) for x > −1 (+∞ at x = −1), to a few ulps relative for every x: the direct
+/// difference loses ≈ 2ε/|x| relative as x → 0, so for |x| < ¼ it is summed from
+/// ln(1 + x) = 2 atanh(s), s = x/(2 + x):  x − ln(1 + x) = s·x − 2s³ Σ_{k≥0} s^{2k}/(2k + 3)
+/// (|s| ≤ 1/7, nine terms reach 1e-17 relative; 24 flops). Otherwise x − log1p(x) (51 flops;
+/// ≈ 4ε/|x| relative, 16 ulps at the switch). The flops executed depend on the branch.
+template <class T>
+INCISE_KERNEL_INLINE T x_minus_log1p(const T& x) {
+  using std::abs;
+  using std::log1p;
+  if (abs(x) < T(kLog1pSeriesLimit)) {
+    const T s = x / (T(2) + x);
+    const T z = s * s;
+    T sum = T(1.0 / 19.0);
+    for (int k = 7; k >= 0; --k) sum = T(1.0 / (2 * k + 3)) + z * sum;
+    return s * x - T(2) * (s * z) * sum;
+  }
+  return x - log1p(x);
+}
+
+/// (eˣ − 1 − x)/x² (→ ½ at x = 0), to a few ulps relative for every x: for |x| < ½ the series
+/// Σ_{k≥0} xᵏ/(k + 2)! (14 terms reach 1e-17 relative; 26 flops), otherwise
+/// (expm1(x) − x)/x² (53 flops; ≈ 8 ulps at the switch). The flops executed depend on the
+/// branch.
+template <class T>
+INCISE_KERNEL_INLINE T expm1_remainder(const T& x) {
+  using std::abs;
+  using std::expm1;
+  if (abs(x) < T(kExpm1SeriesLimit)) {
+    // 1/(k + 2)! for k = 0..13, Horner from the highest power.
+    constexpr double kInvFactorial[14] = {
+        1.0 / 2,         1.0 / 6,          1.0 / 24,          1.0 / 120,          1.0 / 720,
+        1.0 / 5040,      1.0 / 40320,      1.0 / 362880,      1.0 / 3628800,      1.0 / 39916800,
+        1.0 / 479001600, 1.0 / 6227020800, 1.0 / 87178291200, 1.0 / 1307674368000};
+    T sum = T(kInvFactorial[13]);
+    for (int k = 12; k >= 0; --k) sum = T(kInvFactorial[k]) + x * sum;
+    return sum;
+  }
+  return (expm1(x) - x) / (x * x);
+}
+
+/// Lane-wise x_minus_log1p: each lane takes its own branch (Lanes4 comparisons hold only when
+/// they hold in every lane, so the generic branch would send mixed blocks the inaccurate way).
+inline Lanes4 x_minus_log1p(const Lanes4& x) {
+  Lanes4 r;
+  for (int l = 0; l < 4; ++l) r.set(l, x_minus_log1p(x[l]));
+  return r;
+}
+
+/// Lane-wise expm1_remainder (see x_minus_log1p(Lanes4)).
+inline Lanes4 expm1_remainder(const Lanes4& x) {
+  Lanes4 r;
+  for (int l = 0; l < 4; ++l) r.set(l, expm1_remainder(x[l]));
+  return r;
+}
+
 }  // namespace detail
 
-/// St. Venant-Kirchhoff quadratic energy in E = (C − I)/2, shared by the linear and the StVK
-/// models: W = μ E:E + (λ/2)(tr E)², S = 2μE + λ tr(E) I = μ(C − I) + (λ/2)(ι1 − 3) I,
-/// ∂S/∂C : H = (λ/2) tr(H) I + μH (eqs. (2.22), (4.5)).
+/// Linearized strain ε = ½(G + Gᵀ) (thesis (2.22); 6 flops), written into `e` (in place, like
+/// the other strain helpers: see `stress` in the file comment).
+template <class T>
+INCISE_KERNEL_INLINE void linear_strain(const Mat3T<T>& g, Mat3T<T>& e) {
+  e(0, 0) = g(0, 0);
+  e(1, 1) = g(1, 1);
+  e(2, 2) = g(2, 2);
+  e(0, 1) = T(0.5) * (g(0, 1) + g(1, 0));
+  e(0, 2) = T(0.5) * (g(0, 2) + g(2, 0));
+  e(1, 2) = T(0.5) * (g(1, 2) + g(2, 1));
+  detail::symmetrize_from_upper(e);
+}
+
+/// Green strain E = ½(FᵀF − I) = ½(G + GᵀF) (GᵀF = Gᵀ + GᵀG) from G and F = I + G, upper
+/// triangle (42 flops), written into `e`. No term of size 1 enters: E keeps relative accuracy
+/// as G → 0.
+template <class T>
+INCISE_KERNEL_INLINE void green_strain(const Mat3T<T>& g, const Mat3T<T>& f, Mat3T<T>& e) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = i; j < 3; ++j)
+      e(i, j) = T(0.5) * (g(i, j) + (g(0, i) * f(0, j) + g(1, i) * f(1, j) + g(2, i) * f(2, j)));
+  detail::symmetrize_from_upper(e);
+}
+
+/// det(I + G) − 1 from G and F = I + G, by cofactors of F along its first row with the 1s taken
+/// out: (1 + G00)(1 + a) − G01 c01 + G02 c02 − 1 with 1 + a the (1,1)–(2,2) minor of F
+/// (18 flops; det F itself is 14). No term of size 1 enters.
+template <class T>
+INCISE_KERNEL_INLINE T det_minus_one(const Mat3T<T>& g, const Mat3T<T>& f) {
+  const T a = (g(1, 1) + g(2, 2)) + (g(1, 1) * g(2, 2) - g(1, 2) * g(2, 1));
+  const T c01 = g(1, 0) * f(2, 2) - g(1, 2) * g(2, 0);
+  const T c02 = g(1, 0) * g(2, 1) - f(1, 1) * g(2, 0);
+  return ((g(0, 0) + a) + g(0, 0) * a) - g(0, 1) * c01 + g(0, 2) * c02;
+}
+
+/// The strain of `Model` from the displacement gradient G and F = I + G (F unused for linear
+/// geometry), written into `s`: what the element kernels evaluate. For kUsesJ models also
+/// J − 1; the caller checks jm1 > −1 (det F > 0) before evaluating a log model.
+template <class Model, class T>
+INCISE_KERNEL_INLINE void strain_from_gradient(const Mat3T<T>& g, const Mat3T<T>& f, Strain<T>& s) {
+  if constexpr (Model::kLinearGeometry) {
+    linear_strain(g, s.e);
+  } else {
+    if constexpr (Model::kUsesJ) s.jm1 = det_minus_one(g, f);
+    green_strain(g, f, s.e);
+  }
+}
+
+/// The strain of `Model` from a right Cauchy-Green tensor C (for the linear-geometry model the
+/// linearized I + G + Gᵀ), written into `s`: E = ½(C − I) and, for kUsesJ models,
+/// J − 1 = (ι3 − 1)/(1 + √ι3) with ι3 − 1 = det(I + (C − I)) − 1 (−1 when ι3 ≤ 0). As accurate
+/// as C is; the element kernels do not go through C.
+template <class Model, class T>
+INCISE_KERNEL_INLINE void strain_from_c(const Mat3T<T>& c, Strain<T>& s) {
+  using std::sqrt;
+  for (int i = 0; i < 3; ++i)
+    for (int j = i; j < 3; ++j) s.e(i, j) = T(0.5) * (i == j ? c(i, i) - T(1) : c(i, j));
+  detail::symmetrize_from_upper(s.e);
+  if constexpr (Model::kUsesJ) {
+    Mat3T<T> d = c;
+    d(0, 0) -= T(1);
+    d(1, 1) -= T(1);
+    d(2, 2) -= T(1);
+    const T i3m1 = det_minus_one(d, c);
+    s.jm1 = i3m1 > T(-1) ? T(i3m1 / (T(1) + sqrt(T(1) + i3m1))) : T(-1);
+  }
+}
+
+/// strain_from_c returning the strain (for callers off the hot path).
+template <class Model, class T>
+Strain<T> strain_from_c(const Mat3T<T>& c) {
+  Strain<T> s;
+  strain_from_c<Model>(c, s);
+  return s;
+}
+
+/// St. Venant-Kirchhoff quadratic energy in E, shared by the linear and the StVK models:
+/// W = μ E:E + (λ/2)(tr E)², S = 2μE + λ tr(E) I (= μ(C − I) + (λ/2)(ι1 − 3) I),
+/// ∂S/∂C : H = (λ/2) tr(H) I + μH (eqs. (2.22), (4.5)). E here is ε for the linear model.
 ///
 /// This W equals the thesis' (2.17) plus the constant 3μ/4 + 9λ/8, chosen so that W(I) = 0
 /// (§4.3: "we arbitrarily set W = 0 for C = I"); S and the tangent are identical.
 struct QuadraticEnergy {
   static constexpr bool kDefinedWhenInverted = true;
+  static constexpr bool kUsesJ = false;
   static constexpr bool kHasIsotropicTerms = true;
   static constexpr bool kHasInverseTerms = false;
 
   template <class T>
-  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Mat3T<T>& c) {
-    // E = (C − I)/2;  E:E = (tr C² − 2 tr C + 3)/4.
-    const T i1 = c.trace();
-    const T tre = T(0.5) * (i1 - T(3));
-    const T ee = T(0.25) * (detail::symmetric_trace_square(c) - T(2) * i1 + T(3));
-    return T(p.mu) * ee + T(0.5 * p.lambda) * tre * tre;
+  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Strain<T>& s) {
+    const T tre = s.e.trace();
+    return T(p.mu) * detail::symmetric_trace_square(s.e) + T(0.5 * p.lambda) * tre * tre;
   }
 
   template <class T>
-  static INCISE_KERNEL_INLINE Mat3T<T> stress(const Lame& p, const Mat3T<T>& c,
-                                              MaterialState<T>& st) {
-    st.i1 = c.trace();
-    const T diag = T(0.5 * p.lambda) * (st.i1 - T(3)) - T(p.mu);
-    Mat3T<T> s;
-    s(0, 0) = T(p.mu) * c(0, 0) + diag;
-    s(1, 1) = T(p.mu) * c(1, 1) + diag;
-    s(2, 2) = T(p.mu) * c(2, 2) + diag;
-    s(0, 1) = T(p.mu) * c(0, 1);
-    s(0, 2) = T(p.mu) * c(0, 2);
-    s(1, 2) = T(p.mu) * c(1, 2);
-    detail::symmetrize_from_upper(s);
-    return s;
+  static INCISE_KERNEL_INLINE void stress(const Lame& p, const Strain<T>& s, MaterialState<T>&,
+                                          Mat3T<T>& r) {
+    const T diag = T(p.lambda) * s.e.trace();
+    r(0, 0) = T(2.0 * p.mu) * s.e(0, 0) + diag;
+    r(1, 1) = T(2.0 * p.mu) * s.e(1, 1) + diag;
+    r(2, 2) = T(2.0 * p.mu) * s.e(2, 2) + diag;
+    r(0, 1) = T(2.0 * p.mu) * s.e(0, 1);
+    r(0, 2) = T(2.0 * p.mu) * s.e(0, 2);
+    r(1, 2) = T(2.0 * p.mu) * s.e(1, 2);
+    detail::symmetrize_from_upper(r);
   }
 
   template <class T>
@@ -223,8 +408,8 @@ struct QuadraticEnergy {
 };
 
 /// Linear elasticity (thesis (2.22), §3.1, §4.3.2): the quadratic energy above evaluated at the
-/// linearized strain ε = (G + Gᵀ)/2, i.e. the kernels receive C_lin = I + G + Gᵀ and the
-/// element uses T = S (linear geometry). Defined for every G (no inversion notion).
+/// linearized strain ε = ½(G + Gᵀ), and the element uses T = S (linear geometry). Defined for
+/// every G (no inversion notion).
 struct LinearElastic : QuadraticEnergy {
   static constexpr const char* kName = "linear";
   static constexpr bool kLinearGeometry = true;
@@ -242,49 +427,81 @@ struct StVenantKirchhoff : QuadraticEnergy {
 /// Compressible neo-Hookean (thesis (4.6)):
 /// W = ½(μ(ι1 − 3) − μ ln ι3 + λ(√ι3 − 1)²) = μ/2 (ι1 − 3) − μ ln J + λ/2 (J − 1)²,
 /// S = μ I + (λ(J − 1)J − μ) C⁻¹, ∂S/∂C : H = −(λ(J−1)J − μ) C⁻¹HC⁻¹ + λ/2 (2J−1)J (C⁻¹:H) C⁻¹,
-/// with J = √ι3 = |det F|. Undefined for det F ≤ 0 (ln J): the element reports inverted.
+/// with J = √ι3 = det F. Undefined for det F ≤ 0 (ln J): the element reports inverted.
+///
+/// Evaluated without cancellation, with I2, I3 the invariants of E and j1 = J − 1:
+/// ι3 = (1 + j1)² = 1 + 2 tr E + 4 I2 + 8 I3 gives tr E − j1 = j1²/2 − 2 I2 − 4 I3, so
+/// W = μ(j1²/2 − 2 I2 − 4 I3 + (j1 − ln(1 + j1))) + λ/2 j1² (every term O(‖E‖²));
+/// S = (μ − λ J j1)(I − C⁻¹) + λ J j1 I with I − C⁻¹ = (2/ι3)(E + (2 I2 + 4 I3) I − 2 adj E)
+/// (no O(1) term) and C⁻¹ = I − (I − C⁻¹).
 struct NeoHookean {
   static constexpr const char* kName = "neohookean";
   static constexpr bool kLinearGeometry = false;
   static constexpr bool kDefinedWhenInverted = false;
+  static constexpr bool kUsesJ = true;
   static constexpr bool kHasIsotropicTerms = false;
   static constexpr bool kHasInverseTerms = true;
 
   template <class T>
-  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Mat3T<T>& c) {
-    using std::log;
-    using std::sqrt;
-    const T i3 = detail::symmetric_det(c);
-    if (!(i3 > T(0))) return detail::infinity<T>();
-    const T j = sqrt(i3);
-    const T jm1 = j - T(1);
-    return T(0.5 * p.mu) * (c.trace() - T(3)) - T(0.5 * p.mu) * log(i3) +
-           T(0.5 * p.lambda) * jm1 * jm1;
+  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Strain<T>& s) {
+    if (!(s.jm1 > T(-1))) return detail::infinity<T>();
+    const T& j1 = s.jm1;
+    const T i2 = detail::symmetric_second_invariant(s.e);
+    const T i3 = detail::symmetric_det(s.e);
+    const T j1sq = j1 * j1;
+    // μ(tr E − ln J) = μ((tr E − j1) + (j1 − ln(1 + j1))).
+    const T dev = (T(0.5) * j1sq - T(2) * i2 - T(4) * i3) + detail::x_minus_log1p(j1);
+    return T(p.mu) * dev + T(0.5 * p.lambda) * j1sq;
   }
 
   template <class T>
-  static INCISE_KERNEL_INLINE Mat3T<T> stress(const Lame& p, const Mat3T<T>& c,
-                                              MaterialState<T>& st) {
-    using std::sqrt;
-    st.i3 = detail::symmetric_inverse(c, st.c_inv);
-    st.j = sqrt(st.i3);
-    const T k = T(p.lambda) * (st.j - T(1)) * st.j - T(p.mu);
-    Mat3T<T> s;
-    s(0, 0) = k * st.c_inv(0, 0) + T(p.mu);
-    s(1, 1) = k * st.c_inv(1, 1) + T(p.mu);
-    s(2, 2) = k * st.c_inv(2, 2) + T(p.mu);
-    s(0, 1) = k * st.c_inv(0, 1);
-    s(0, 2) = k * st.c_inv(0, 2);
-    s(1, 2) = k * st.c_inv(1, 2);
-    detail::symmetrize_from_upper(s);
-    return s;
+  static INCISE_KERNEL_INLINE void stress(const Lame& p, const Strain<T>& s, MaterialState<T>& st,
+                                          Mat3T<T>& r) {
+    // With D = C − I = 2E: ι3 (I − C⁻¹) = ι3 I − adj C = D + (I2(D) + I3(D)) I − adj D, every
+    // term O(‖E‖) or smaller. In E: h = ½ ι3 (I − C⁻¹) = E + (2 I2 + 4 I3) I − 2 adj E.
+    const Mat3T<T>& e = s.e;
+    const T a00 = e(1, 1) * e(2, 2) - e(1, 2) * e(1, 2);
+    const T a11 = e(0, 0) * e(2, 2) - e(0, 2) * e(0, 2);
+    const T a22 = e(0, 0) * e(1, 1) - e(0, 1) * e(0, 1);
+    const T a01 = e(0, 2) * e(1, 2) - e(0, 1) * e(2, 2);
+    const T a02 = e(0, 1) * e(1, 2) - e(0, 2) * e(1, 1);
+    const T a12 = e(0, 1) * e(0, 2) - e(0, 0) * e(1, 2);
+    const T i2 = (a00 + a11) + a22;
+    const T i3 = e(0, 0) * a00 + e(0, 1) * a01 + e(0, 2) * a02;
+    const T sd = T(2) * i2 + T(4) * i3;
+    Mat3T<T> h;
+    h(0, 0) = (e(0, 0) + sd) - T(2) * a00;
+    h(1, 1) = (e(1, 1) + sd) - T(2) * a11;
+    h(2, 2) = (e(2, 2) + sd) - T(2) * a22;
+    h(0, 1) = e(0, 1) - T(2) * a01;
+    h(0, 2) = e(0, 2) - T(2) * a02;
+    h(1, 2) = e(1, 2) - T(2) * a12;
+    st.jm1 = s.jm1;
+    st.j = T(1) + s.jm1;
+    st.i3 = st.j * st.j;
+    const T r2 = T(2) / st.i3;  // I − C⁻¹ = r2·h
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) st.c_inv(i, j) = -r2 * h(i, j);
+    st.c_inv(0, 0) += T(1);
+    st.c_inv(1, 1) += T(1);
+    st.c_inv(2, 2) += T(1);
+    detail::symmetrize_from_upper(st.c_inv);
+    // S = μ(I − C⁻¹) + k C⁻¹ = (μ − k)(I − C⁻¹) + k I, k = λ J (J − 1).
+    const T k = T(p.lambda) * st.j * st.jm1;
+    const T a = (T(p.mu) - k) * r2;
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) r(i, j) = a * h(i, j);
+    r(0, 0) += k;
+    r(1, 1) += k;
+    r(2, 2) += k;
+    detail::symmetrize_from_upper(r);
   }
 
   template <class T>
   static INCISE_KERNEL_INLINE TangentModuli<T> moduli(const Lame& p, const MaterialState<T>& st) {
     TangentModuli<T> m;
     m.c3 = T(0.5 * p.lambda) * (T(2) * st.j - T(1)) * st.j;
-    m.c4 = T(p.mu) - T(p.lambda) * (st.j - T(1)) * st.j;
+    m.c4 = T(p.mu) - T(p.lambda) * st.jm1 * st.j;
     return m;
   }
 
@@ -307,57 +524,60 @@ struct NeoHookean {
 /// S = (2μ e^{γ(ι1−3)} − μ ι1) I + μ C + (λ/2)(ι3 − 1) C⁻¹                       (4.7)
 /// ∂S/∂C : H = μ(2γ e^{γ(ι1−3)} − 1) tr(H) I + μH
 ///             + (λ/2)(ι3 (C⁻¹:H) C⁻¹ − (ι3 − 1) C⁻¹HC⁻¹)                         (4.8)
-/// For γ = 0 the exponential term is its limit 2μ(ι1 − 3)/2 (computed with expm1, so small γ
-/// loses no digits). Its small-strain limit is linear elasticity with μ and
-/// λ_eff = λ + 2μ(2γ − 1), not λ (the inconsistency the thesis remarks on). Undefined for
-/// det F ≤ 0 (ln ι3 with the orientation lost): the element reports inverted.
+/// Its small-strain limit is linear elasticity with μ and λ_eff = λ + 2μ(2γ − 1), not λ (the
+/// inconsistency the thesis remarks on). Undefined for det F ≤ 0 (ln ι3 with the orientation
+/// lost): the element reports inverted.
+///
+/// Evaluated without cancellation, with x = γ(ι1 − 3) = 2γ tr E, ι2 − 3 = 4 tr E + 4 I2 and
+/// ι3 − 1 = (J − 1)(J + 1): the terms linear in tr E cancel exactly, leaving
+/// W = 2μ tr E · x · (eˣ − 1 − x)/x² − 2μ I2 + (λ/4)((ι3 − 1) − ln(1 + (ι3 − 1)))
+/// (for γ = 0 the first term is 0, the limit of (2μ/γ)(eˣ − 1) − 4μ tr E), and
+/// S = 2μ(expm1(x) − tr E) I + 2μE + (λ/2)(ι3 − 1) C⁻¹.
 struct VerondaWestmann {
   static constexpr const char* kName = "veronda-westmann";
   static constexpr bool kLinearGeometry = false;
   static constexpr bool kDefinedWhenInverted = false;
+  static constexpr bool kUsesJ = true;
   static constexpr bool kHasIsotropicTerms = true;
   static constexpr bool kHasInverseTerms = true;
 
   template <class T>
-  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Mat3T<T>& c) {
-    using std::expm1;
-    using std::log;
-    const T i3 = detail::symmetric_det(c);
-    if (!(i3 > T(0))) return detail::infinity<T>();
-    const T i1 = c.trace();
-    const T i2 = T(0.5) * (i1 * i1 - detail::symmetric_trace_square(c));
-    const T x = i1 - T(3);
-    const T expo =
-        p.gamma > 0.0 ? T(2.0 * p.mu / p.gamma) * expm1(T(p.gamma) * x) : T(2.0 * p.mu) * x;
-    return T(0.5) * (expo - T(p.mu) * (i2 - T(3)) + T(0.5 * p.lambda) * (i3 - T(1) - log(i3)));
+  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Strain<T>& s) {
+    if (!(s.jm1 > T(-1))) return detail::infinity<T>();
+    const T tre = s.e.trace();
+    const T x = T(2.0 * p.gamma) * tre;
+    const T i3m1 = s.jm1 * (T(2) + s.jm1);
+    return T(2.0 * p.mu) * tre * x * detail::expm1_remainder(x) -
+           T(2.0 * p.mu) * detail::symmetric_second_invariant(s.e) +
+           T(0.25 * p.lambda) * detail::x_minus_log1p(i3m1);
   }
 
   template <class T>
-  static INCISE_KERNEL_INLINE Mat3T<T> stress(const Lame& p, const Mat3T<T>& c,
-                                              MaterialState<T>& st) {
-    using std::exp;
-    st.i3 = detail::symmetric_inverse(c, st.c_inv);
-    st.i1 = c.trace();
-    st.e = p.gamma > 0.0 ? exp(T(p.gamma) * (st.i1 - T(3))) : T(1);
-    const T diag = T(2.0 * p.mu) * st.e - T(p.mu) * st.i1;
-    const T k = T(0.5 * p.lambda) * (st.i3 - T(1));
-    Mat3T<T> s;
+  static INCISE_KERNEL_INLINE void stress(const Lame& p, const Strain<T>& s, MaterialState<T>& st,
+                                          Mat3T<T>& r) {
+    using std::expm1;
+    (void)detail::symmetric_inverse(detail::right_cauchy_green(s.e), st.c_inv);
+    st.i3m1 = s.jm1 * (T(2) + s.jm1);
+    st.i3 = T(1) + st.i3m1;
+    const T tre = s.e.trace();
+    st.em1 = p.gamma > 0.0 ? T(expm1(T(2.0 * p.gamma) * tre)) : T(0);
+    const T diag = T(2.0 * p.mu) * (st.em1 - tre);
+    const T k = T(0.5 * p.lambda) * st.i3m1;
     for (int i = 0; i < 3; ++i)
-      for (int j = i; j < 3; ++j) s(i, j) = T(p.mu) * c(i, j) + k * st.c_inv(i, j);
-    s(0, 0) += diag;
-    s(1, 1) += diag;
-    s(2, 2) += diag;
-    detail::symmetrize_from_upper(s);
-    return s;
+      for (int j = i; j < 3; ++j) r(i, j) = T(2.0 * p.mu) * s.e(i, j) + k * st.c_inv(i, j);
+    r(0, 0) += diag;
+    r(1, 1) += diag;
+    r(2, 2) += diag;
+    detail::symmetrize_from_upper(r);
   }
 
   template <class T>
   static INCISE_KERNEL_INLINE TangentModuli<T> moduli(const Lame& p, const MaterialState<T>& st) {
     TangentModuli<T> m;
-    m.c1 = T(p.mu) * (T(2.0 * p.gamma) * st.e - T(1));
+    m.c1 = T(p.mu) * (T(2.0 * p.gamma) * (T(1) + st.em1) - T(1));
     m.c2 = T(p.mu);
     m.c3 = T(0.5 * p.lambda) * st.i3;
-    m.c4 = T(-0.5 * p.lambda) * (st.i3 - T(1));
+    m.c4 = T(-0.5 * p.lambda) * st.i3m1;
     return m;
   }
 
