@@ -99,10 +99,15 @@ TEST(CantileverSceneConvergence, LinearCgReachesRoundingFloorIndependentOfE) {
     // Within 2× of the floor: the floor estimate's ½-ulp perturbation is 1–2× the size of a
     // correct rounding, and CG stops within the noise of its own last correction.
     EXPECT_LE(best, 2.0 * floor) << "E = " << e;
+    // Plain CG confirms convergence on the true residual (residual replacement, linear_cg.hpp),
+    // so it reaches the same floor by itself (measured 1.55e-12 and 1.49e-12; before residual
+    // replacement it stopped at the recursive residual's drift, 2.2e-11). It reports
+    // `stagnated`, honestly: the thesis' 1e-12 is below this mesh's rounding floor.
+    EXPECT_LE(plain.back(), 2.0 * floor) << "E = " << e;
   }
   // K ∝ E and u ∝ 1/E: with a scale-free kernel the relative residual of plain CG depends on E
-  // only through rounding patterns (measured 2.2e-11 vs 1.9e-11); the old kernels gave 2.7e-11
-  // vs 1.5e-8. Factor 3: two realizations of the same recursive-residual drift.
+  // only through rounding patterns (measured 1.55e-12 vs 1.49e-12); the old kernels gave
+  // 2.7e-11 vs 1.5e-8. Factor 3: two realizations of the same rounding floor.
   EXPECT_LE(plain[1], 3.0 * plain[0]);
   EXPECT_LE(plain[0], 3.0 * plain[1]);
 }
