@@ -100,6 +100,7 @@ struct Row {
   long pcg_iterations = 0;
   bool pcg_converged = false;
   double rel_error = -1;  ///< ‖a_aug − a_exact‖/‖a_exact‖ (−1 when not compared)
+  double ref_rcond = -1;  ///< CHOLMOD's rcond (min/max pivot) of the refactored system (−1: n/a)
   double rel_residual = -1;  ///< backward error ‖K a − f − r‖/(‖K‖₁‖a‖ + ‖f + r‖)
   bool swapped = false;      ///< background factor swapped in at this step
   std::string status;
@@ -452,6 +453,7 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
           for (int i = 0; i < k.rows(); ++i)
             if (red.full_to_free[i] >= 0) ax(i) = x(red.full_to_free[i]);
           row.rel_error = (a - ax).norm() / std::max(ax.norm(), 1e-300);
+          row.ref_rcond = fac.rcond();
         }
         row.cpu_refactor = detail::cpu_seconds() - cpu1;
       }
