@@ -91,7 +91,8 @@ struct Row {
   /// Analyze + factorize of the modified system (s); forming the reduced matrix is not
   /// included (the CPU time cpu_refactor excludes it too), so speed-ups are conservative.
   double t_refactor = 0;
-  double t_refactor_solve = 0;       ///< triangular solves of the refactored system (s)
+  double t_refactor_solve = 0;     ///< triangular solves of the refactored system (s)
+  double t_numeric_refactor = -1;  ///< wall s of factorize + solve with a kept pattern (−1: n/a)
   double cpu_numeric_refactor = -1;  ///< CPU s of factorize + solve with a kept pattern (−1: n/a)
   double t_pcg = -1;                 ///< Jacobi-PCG (s), −1 when not run
   double cpu_pcg = -1;               ///< process CPU time of the Jacobi-PCG solve (s)
@@ -465,10 +466,13 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
             if (fixed[j] || fixed[it.row()]) it.valueRef() = it.row() == j ? 1.0 : 0.0;
         for (const auto& [dd, v] : dirichlet) b(dd) = v;
         const double cpu1 = detail::cpu_seconds();
+        tr.restart();
         Eigen::VectorXd x;
         if (numeric_factor.factorize(kk) == FactorStatus::kOk &&
-            numeric_factor.solve(b, x) == FactorStatus::kOk)
+            numeric_factor.solve(b, x) == FactorStatus::kOk) {
+          row.t_numeric_refactor = tr.seconds();
           row.cpu_numeric_refactor = detail::cpu_seconds() - cpu1;
+        }
       }
       if (opt.pcg_every > 0 && step % opt.pcg_every == 0) {
         detail::MatrixProblem prob(red.matrix, rhs);

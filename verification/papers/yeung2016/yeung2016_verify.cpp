@@ -74,8 +74,9 @@ std::vector<yeung2016::Row> check(const yeung2016::Options& opt) {
     EXPECT_LE(r.gmres_iterations, std::max(r.m, 1)) << "step " << r.step;
     // Fig. 4 on the paper's beam: |closure_L(J a₂)| ≈ 1 % of n₀ (README: 650–900 positions of
     // 76,725; 1.5 % leaves room for the ordering's variation, 100 % is what a dense update costs).
-    if (opt.geometry == yeung2016::Geometry::kBeam && opt.h == 1024)
+    if (opt.geometry == yeung2016::Geometry::kBeam && opt.h == 1024) {
       EXPECT_LE(r.closure_ja2, 0.015 * info.n0) << "step " << r.step;
+    }
   }
   return rows;
 }
