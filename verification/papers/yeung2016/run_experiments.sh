@@ -22,12 +22,18 @@ run() {  # name, args...
 if [[ "$quick" == headline ]]; then
   # Thread counts: update T (step 3) / reference refactorization. CHOLMOD's simplicial
   # factorization is serial; the supernodal one gets T OpenBLAS threads (--threads sets both).
+  # Each exact run has a --no-exact twin (NAME_upd) for the update times (see twin() below);
+  # the supernodal runs share the twin of the simplicial run with the same T.
   for rep in 1 2; do
     for kind in deform cut; do
-      run "headline_${kind}_t1_simplicial_$rep" "$kind" --h 1024 --steps 8 --schur direct --threads 1
-      run "headline_${kind}_t2_supernodal_$rep" "$kind" --h 1024 --steps 8 --schur direct --threads 2 \
-        --ref-kind supernodal
-      run "headline_${kind}_t2_simplicial_$rep" "$kind" --h 1024 --steps 8 --schur direct --threads 2
+      for t in 1 2; do
+        run "headline_${kind}_t${t}_simplicial_$rep" "$kind" --h 1024 --steps 8 --schur direct \
+          --threads "$t"
+        run "headline_${kind}_t${t}_upd_$rep" "$kind" --h 1024 --steps 8 --schur direct \
+          --threads "$t" --no-exact
+      done
+      run "headline_${kind}_t2_supernodal_$rep" "$kind" --h 1024 --steps 8 --schur direct \
+        --threads 2 --ref-kind supernodal
     done
   done
   echo "done: $out" >&2
