@@ -18,11 +18,19 @@
 ///                      [--schur gmres|direct] (eq. 17: GMRES, or GMRES preconditioned by the
 ///                      explicit H R⁻¹ J in capacitance form; then "+N Schur solves" counts the
 ///                      restricted solves spent on new columns of G)
-///                      [--threads T] (threads of step 3's backward pass; 1 by default)
+///                      [--threads T] (threads of both sides: step 3's backward pass, and the
+///                      OpenBLAS threads of a supernodal reference refactorization — CHOLMOD's
+///                      simplicial factorization is serial, so with --ref-kind simplicial the
+///                      reference has one thread whatever T; 1 by default)
 ///                      [--gmres-tol TOL] (relative residual of eq. 17; 1e-12 by default)
 ///                      [--csv FILE] (also write the rows as CSV, for yeung2016_plots)
-///    prints one Markdown row per step: m, GMRES iterations, closure sizes, update time and
-///    rate, refactorization + solve time, speed-up, Jacobi-PCG time, relative error.
+///    prints the thread counts of both sides and the load average before and after, then one
+///    Markdown row per step: m, GMRES iterations, closure sizes, update wall and CPU time and
+///    rate, the reference refactorization + solve (analysis + factorization + solve) in wall and
+///    CPU time, for deformation also the numeric-only refactorization + solve with the pattern
+///    kept (symbolic analysis of K⁰ reused), the speed-ups over both in wall and CPU time,
+///    Jacobi-PCG time, relative and backward error; and a summary line of the speed-ups over
+///    the steps ≥ 1 with m ≤ 100 (min / median / max). CPU time is the process's (all threads).
 ///    `--mesh liver` is reference_data/meshes/liver_coarse.mesh (mm, scaled to m).
 
 #include "yeung2016_experiment.hpp"
@@ -33,9 +41,14 @@
 
 #include <benchmark/benchmark.h>
 
+#include <dlfcn.h>
+
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -192,6 +205,40 @@ void BM_CholmodSolve(benchmark::State& s) {
 BENCHMARK(BM_CholmodNumericRefactor)->Arg(1024)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CholmodSolve)->Arg(1024)->Unit(benchmark::kMillisecond);
 
+// OpenBLAS's thread count (CHOLMOD's supernodal factorization runs its dense kernels through
+// BLAS). Looked up at run time so that the benchmark still links against another BLAS; returns
+// false when the loaded BLAS has no such control.
+bool set_blas_threads(int threads) {
+  using SetThreads = void (*)(int);
+  const auto set =
+      reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));  // NOLINT
+  if (set == nullptr) return false;
+  set(threads);
+  return true;
+}
+
+std::string load_average() {
+  std::ifstream in("/proc/loadavg");
+  std::string one, five, fifteen;
+  in >> one >> five >> fifteen;
+  return one + " " + five + " " + fifteen;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n == 0 ? 0.0 : n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// "min / median / max" of `v` (or "-" when empty).
+std::string spread(const std::vector<double>& v) {
+  if (v.empty()) return "-";
+  char b[96];
+  std::snprintf(b, sizeof b, "%.1f / %.1f / %.1f", *std::min_element(v.begin(), v.end()), median(v),
+                *std::max_element(v.begin(), v.end()));
+  return b;
+}
+
 int run_table(int argc, char** argv) {
   Options opt;
   std::string csv_path;
@@ -251,6 +298,9 @@ int run_table(int argc, char** argv) {
       return 2;
     }
   }
+  const bool blas_set = set_blas_threads(opt.solve_threads);
+  const bool simplicial_ref = opt.reference_kind == incise::linalg::CholmodKind::kSimplicialLdl;
+  const std::string load_before = load_average();
   Info info;
   const std::vector<Row> rows = incise::yeung2016::run(opt, info);
   std::printf(
@@ -259,11 +309,21 @@ int run_table(int argc, char** argv) {
   std::printf("# assembly %.3f s, initial factorization + LDL' extraction %.3f s; blas: %s\n",
               info.t_assemble, info.t_initial_factor, incise::bench::loaded_blas().c_str());
   std::printf(
+      "# threads: update %d (step 3); reference refactorization %s%s\n", opt.solve_threads,
+      simplicial_ref
+          ? "simplicial LDL', serial: 1 thread"
+          : ("supernodal, " + std::to_string(opt.solve_threads) + " BLAS threads").c_str(),
+      blas_set || simplicial_ref ? "" : " (BLAS thread count not settable: OPENBLAS_NUM_THREADS)");
+  std::printf("# load average (1/5/15 min) before %s, after %s\n", load_before.c_str(),
+              load_average().c_str());
+  std::printf(
       "| step | n | m | GMRES it | clos f | clos y | clos Ja2 | clos step3 | changes ms | solve "
-      "ms (setup/1/2/3) | update Hz | refactor+solve ms | speed-up | CPU ms upd / ref / num | CPU "
-      "speed-up ref / num | PCG ms wall / CPU (it) | rel. error | "
-      "backward error | status |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "ms (setup/1/2/3) | update Hz | update ms wall / CPU | refactor+solve ms wall / CPU | "
+      "numeric refactor+solve ms wall / CPU | speed-up ref wall / CPU | speed-up num wall / CPU "
+      "| PCG ms wall / CPU (it) | rel. error | backward error | status |\n");
+  std::printf(
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::vector<double> ref_wall, ref_cpu, num_wall, num_cpu;  // speed-ups, steps ≥ 1, m ≤ 100
   for (const Row& r : rows) {
     const double upd = r.t_changes + r.t_solve;
     const double ref = r.t_refactor + r.t_refactor_solve;
@@ -276,22 +336,44 @@ int run_table(int argc, char** argv) {
       std::snprintf(its, sizeof its, "%d (+%d Schur solves)", r.gmres_iterations, r.schur_solves);
     else
       std::snprintf(its, sizeof its, "%d", r.gmres_iterations);
-    char num[32] = "-", num_speed[32] = "-";
-    if (r.cpu_numeric_refactor >= 0) {
-      std::snprintf(num, sizeof num, "%.1f", 1e3 * r.cpu_numeric_refactor);
-      std::snprintf(num_speed, sizeof num_speed, "%.1f",
-                    r.cpu_update > 0 ? r.cpu_numeric_refactor / r.cpu_update : 0.0);
+    char ref_txt[48] = "-", ref_speed[48] = "-", num[48] = "-", num_speed[48] = "-";
+    const bool have_ref = opt.exact && ref > 0 && upd > 0 && r.cpu_update > 0;
+    if (have_ref) {
+      std::snprintf(ref_txt, sizeof ref_txt, "%.1f / %.1f", 1e3 * ref, 1e3 * r.cpu_refactor);
+      std::snprintf(ref_speed, sizeof ref_speed, "%.1f / %.1f", ref / upd,
+                    r.cpu_refactor / r.cpu_update);
+    }
+    const bool have_num = r.cpu_numeric_refactor >= 0 && upd > 0 && r.cpu_update > 0;
+    if (have_num) {
+      std::snprintf(num, sizeof num, "%.1f / %.1f", 1e3 * r.t_numeric_refactor,
+                    1e3 * r.cpu_numeric_refactor);
+      std::snprintf(num_speed, sizeof num_speed, "%.1f / %.1f", r.t_numeric_refactor / upd,
+                    r.cpu_numeric_refactor / r.cpu_update);
+    }
+    if (r.step >= 1 && r.m <= 100) {
+      if (have_ref) {
+        ref_wall.push_back(ref / upd);
+        ref_cpu.push_back(r.cpu_refactor / r.cpu_update);
+      }
+      if (have_num) {
+        num_wall.push_back(r.t_numeric_refactor / upd);
+        num_cpu.push_back(r.cpu_numeric_refactor / r.cpu_update);
+      }
     }
     std::printf(
         "| %d | %d | %d | %s | %d | %d | %d | %d | %.3f | %.2f (%.2f/%.2f/%.2f/%.2f) | %.0f | "
-        "%.1f | %.1f | %.2f / %.1f / %s | %.1f / %s | %s | %.1e | %.1e | %s%s |\n",
+        "%.2f / %.2f | %s | %s | %s | %s | %s | %.1e | %.1e | %s%s |\n",
         r.step, r.n, r.m, its, r.closure_f, r.closure_y, r.closure_ja2, r.closure_step3,
         1e3 * r.t_changes, 1e3 * r.t_solve, 1e3 * r.t_setup, 1e3 * r.t_step1, 1e3 * r.t_step2,
-        1e3 * r.t_step3, upd > 0 ? 1.0 / upd : 0.0, 1e3 * ref, upd > 0 ? ref / upd : 0.0,
-        1e3 * r.cpu_update, 1e3 * r.cpu_refactor, num,
-        r.cpu_update > 0 ? r.cpu_refactor / r.cpu_update : 0.0, num_speed, pcg, r.rel_error,
-        r.rel_residual, r.status.c_str(), r.swapped ? " (swap)" : "");
+        1e3 * r.t_step3, upd > 0 ? 1.0 / upd : 0.0, 1e3 * upd, 1e3 * r.cpu_update, ref_txt, num,
+        ref_speed, num_speed, pcg, r.rel_error, r.rel_residual, r.status.c_str(),
+        r.swapped ? " (swap)" : "");
   }
+  std::printf(
+      "# speed-up over steps >= 1 with m <= 100 (%zu steps), min / median / max: refactorization "
+      "+ solve wall %s, CPU %s; numeric refactorization + solve (pattern kept) wall %s, CPU %s\n",
+      ref_cpu.size(), spread(ref_wall).c_str(), spread(ref_cpu).c_str(), spread(num_wall).c_str(),
+      spread(num_cpu).c_str());
   if (!csv_path.empty()) {
     FILE* out = std::fopen(csv_path.c_str(), "w");
     if (out == nullptr) {
@@ -299,27 +381,30 @@ int run_table(int argc, char** argv) {
       return 1;
     }
     std::fprintf(
-        out, "# %s,%s,%d,%d,%d,%lld,threads=%d,schur=%s,precond=%s\n", info.name.c_str(),
+        out, "# %s,%s,%d,%d,%d,%lld,threads=%d,schur=%s,precond=%s,ref=%s\n", info.name.c_str(),
         opt.kind == Kind::kCut ? "cut" : "deform", info.nodes, info.elements, info.n0, info.nnz_l,
         opt.solve_threads,
         opt.schur_solver == incise::linalg::SchurSolver::kDirectCached ? "direct" : "gmres",
         opt.preconditioner == incise::linalg::SchurPreconditioner::kNone       ? "none"
         : opt.preconditioner == incise::linalg::SchurPreconditioner::kDiagonal ? "diag"
-                                                                               : "spai");
+                                                                               : "spai",
+        simplicial_ref ? "simplicial" : "supernodal");
     std::fprintf(
         out,
         "step,n,m,gmres_it,closure_f,closure_y,closure_ja2,closure_step3,t_update,"
         "t_setup,t_step1,t_step2,t_step3,t_refactor,cpu_update,cpu_refactor,"
-        "cpu_numeric_refactor,t_pcg,cpu_pcg,pcg_it,pcg_converged,rel_error,backward_error,ok\n");
+        "cpu_numeric_refactor,t_pcg,cpu_pcg,pcg_it,pcg_converged,rel_error,backward_error,ok,"
+        "t_numeric_refactor\n");
     for (const Row& r : rows)
       std::fprintf(out,
                    "%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,"
-                   "%.6g,%ld,%d,%.6g,%.6g,%d\n",
+                   "%.6g,%ld,%d,%.6g,%.6g,%d,%.6g\n",
                    r.step, r.n, r.m, r.gmres_iterations, r.closure_f, r.closure_y, r.closure_ja2,
                    r.closure_step3, r.t_changes + r.t_solve, r.t_setup, r.t_step1, r.t_step2,
                    r.t_step3, r.t_refactor + r.t_refactor_solve, r.cpu_update, r.cpu_refactor,
                    r.cpu_numeric_refactor, r.t_pcg, r.cpu_pcg, r.pcg_iterations,
-                   r.pcg_converged ? 1 : 0, r.rel_error, r.rel_residual, r.status == "ok" ? 1 : 0);
+                   r.pcg_converged ? 1 : 0, r.rel_error, r.rel_residual, r.status == "ok" ? 1 : 0,
+                   r.t_numeric_refactor);
     std::fclose(out);
   }
   return 0;

@@ -25,6 +25,8 @@ namespace {
 constexpr int kThesisFaces = 108, kThesisDegenerate = 143, kThesisItersWithout = 2439,
               kThesisCollapses = 99, kThesisIncollapsible = 13, kThesisElements = 3034,
               kThesisNodes = 823, kThesisItersWith = 236;
+// Our CG iterations after the cut, columns (b), (c), (d) of README.md's table.
+constexpr long kReadmeItersB = 560, kReadmeItersC = 335, kReadmeItersD = 221;
 
 /// The diagonal cut of README.md with the given options (cube and equilibrium computed once).
 CutOutcome run(bool remove_degeneracies, bool refuse_inverting_snaps, bool remark = true) {
@@ -94,6 +96,30 @@ TEST(Nienhuys2003Ch3, LargeDiagonalCutInTheCube) {
   // With removal every element below the aspect-ratio threshold is collapsed or cut free.
   EXPECT_EQ(c.degenerate_after, 0);
   EXPECT_EQ(d.degenerate_after, 0);
+  // README, "What matches": dissection keeps the element count; refusing inverting snaps
+  // lowers the degenerate count ((a) → (b)); thesis-faithful snapping inverts elements and
+  // removal repairs them ((a) → (d)); without re-marking fewer faces are dissected ((e) < (a)).
+  EXPECT_EQ(a.elements, 3072);
+  EXPECT_EQ(b.elements, 3072);
+  EXPECT_LT(b.degenerate_after, a.degenerate_after);
+  EXPECT_GT(a.inverted, 0);
+  EXPECT_EQ(d.inverted, 0);
+  EXPECT_LT(e.totals.faces_dissected, a.totals.faces_dissected);
+
+  // README, "removal makes the warm-restarted CG converge faster: 560 → 335" (b → c), and (d)
+  // converges in 221. The counts are those of a deterministic solve; ±10 % admits the rounding
+  // changes of an element-kernel rewrite (the issue-14 strain form moved (b) from 569 to 560),
+  // a larger move means the README's table is stale. The speed-up itself is asserted with
+  // margin: removal saves 40 % here, so ≥ 25 % is required.
+  ASSERT_TRUE(d.solve.attempted);
+  EXPECT_TRUE(d.solve.converged);
+  auto near = [](long measured, long documented) {
+    return std::abs(double(measured) - double(documented)) <= 0.1 * double(documented);
+  };
+  EXPECT_TRUE(near(b.solve.iterations, kReadmeItersB)) << b.solve.iterations;
+  EXPECT_TRUE(near(c.solve.iterations, kReadmeItersC)) << c.solve.iterations;
+  EXPECT_TRUE(near(d.solve.iterations, kReadmeItersD)) << d.solve.iterations;
+  EXPECT_LT(double(c.solve.iterations), 0.75 * double(b.solve.iterations));
 }
 
 /// §3.3's second experiment: three large pie-like cuts in a Delaunay tetrahedralization of a

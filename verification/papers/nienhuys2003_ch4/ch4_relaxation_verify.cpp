@@ -8,17 +8,22 @@
 /// model, §4.2); energy error (e, e)_{K(û)} traced against seconds and counted flops for static
 /// CG (linear CG for the linear model; nonlinear CG with the Newton, secant and scale-dependent
 /// secant line searches, PR and FR) and for SS22 dynamic relaxation with η = 2√λ₁ (inverse
-/// iteration) and 2/3, 3/2 of it (the thesis' under/over-damped curves), Δt from the thesis'
-/// procedure (§4.4.1). Writes CSV and SVG plots next to the test binary (INCISE_CH4_OUTPUT_DIR)
-/// and checks the thesis' conclusions (§4.5.3, §4.5.4, §4.5.5, §4.3.1).
+/// iteration) and 2/3, 3/2 of it (the thesis' under/over-damped curves), extended by factors
+/// 1.5 until the best damping is bracketed, Δt from the thesis' procedure (§4.4.1). Methods are
+/// compared by the flops after which the energy error stays below a level fixed per case
+/// before the runs (comparison_level()). Writes CSV and SVG plots next to the test binary
+/// (INCISE_CH4_OUTPUT_DIR) and checks the thesis' conclusions (§4.5.1, §4.5.3, §4.5.4, §4.5.5,
+/// §4.3.1) with two-sided windows.
 ///
-/// Default executable (papers_ch4_relaxation_verify): the linear model on the small mesh and the
-/// StVK inversion check (§4.3.1). The `slow` executable (papers_ch4_relaxation_all_verify, this
+/// Default executable (papers_ch4_relaxation_verify): the linear model on the small mesh, a quick
+/// form of the three nonlinear models on the small mesh, and the StVK inversion check (§4.3.1).
+/// The `slow` executable (papers_ch4_relaxation_all_verify, this
 /// file built with INCISE_CH4_SLOW=1): all four models on both meshes plus the figure-specific
 /// runs: Fig. 4.8 (ε_newton), Fig. 4.9 (mesh size), Fig. 4.13 (StVK, E = 2e4). Every thesis
 /// figure 4.7–4.13 gets one SVG fig4_<n>_analogue_*.svg (top panel: energy error vs seconds, as
 /// the thesis plots it; bottom panel: vs counted MFLOP, which is reproducible).
 #include <incise/certify/svg_plot.hpp>
+#include <incise/core/timer.hpp>
 #include <incise/fem/elastic_problem.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
@@ -83,7 +88,9 @@ CylinderSetup cylinder(const Case& c) {
 }
 
 // Reference solution (§4.2): NCG to ‖r‖ ≤ 1e-2‖f‖, then truncated Newton to 1e-8 (1e-12 linear).
-SolverReport reference_solution(fem::ElasticProblem& p, const std::string& material, VecX& ref) {
+// `epsilon` > 0 overrides the Newton tolerance (the quick default-run cases).
+SolverReport reference_solution(fem::ElasticProblem& p, const std::string& material, VecX& ref,
+                                double epsilon = 0.0) {
   ref = VecX::Zero(p.size());
   NonlinearCgOptions o;
   o.stop.rule = ResidualRule::kExternalForce;
@@ -92,7 +99,7 @@ SolverReport reference_solution(fem::ElasticProblem& p, const std::string& mater
   (void)nonlinear_cg(p, ref, o);
   TruncatedNewtonOptions t;
   t.stop.rule = ResidualRule::kExternalForce;
-  t.stop.epsilon = material == "linear" ? 1e-12 : 1e-8;
+  t.stop.epsilon = epsilon > 0.0 ? epsilon : material == "linear" ? 1e-12 : 1e-8;
   t.budget.max_iterations = 200;
   return truncated_newton(p, ref, t);
 }
@@ -103,16 +110,24 @@ struct TracedRun {
   std::vector<EnergyErrorTrace::Sample> samples;
 };
 
-// Counted flops / seconds at which the energy error first drops to `level`; +∞ if never.
+// Counted flops / seconds from which on the energy error stays at or below `level` until the
+// end of the run; +∞ if it never settles there. For (nonlinear) CG the error decreases, so this
+// is where it first reaches the level; a damped oscillation can pass through the level and
+// rise again, and only where it stays below counts (an underdamped run is not credited with a
+// transient crossing).
+std::size_t settled_index(const TracedRun& r, double level) {
+  std::size_t i = r.samples.size();
+  while (i > 0 && r.samples[i - 1].energy_error <= level) --i;
+  return i;
+}
 double flops_to(const TracedRun& r, double level) {
-  for (const auto& s : r.samples)
-    if (s.energy_error <= level) return double(s.flops);
-  return std::numeric_limits<double>::infinity();
+  const std::size_t i = settled_index(r, level);
+  return i < r.samples.size() ? double(r.samples[i].flops)
+                              : std::numeric_limits<double>::infinity();
 }
 double seconds_to(const TracedRun& r, double level) {
-  for (const auto& s : r.samples)
-    if (s.energy_error <= level) return s.seconds;
-  return std::numeric_limits<double>::infinity();
+  const std::size_t i = settled_index(r, level);
+  return i < r.samples.size() ? r.samples[i].seconds : std::numeric_limits<double>::infinity();
 }
 double min_error(const TracedRun& r) {
   double lowest = std::numeric_limits<double>::infinity();
@@ -205,14 +220,50 @@ struct CaseResult {
   double best_dyn = 0.0;  // flops of the best dynamic run to the level
   double static_flops = 0.0;
   InversionCheck inverted;
-  double dt = 0.0;           // time step of the damped runs (s)
-  int extra_reductions = 0;  // 15 % reductions beyond the thesis' procedure
+  double dt = 0.0;            // time step of the damped runs (s)
+  int extra_reductions = 0;   // 15 % reductions beyond the thesis' procedure
+  double eta_estimate = 0.0;  // 2√λ₁ (1/s)
+  double best_eta = 0.0;      // damping of the best dynamic run (1/s)
+  bool bracketed = false;     // a worse dynamic run on both sides of the best one
 };
+
+// Comparison level relative to the initial energy error, fixed before the runs so that "reaches
+// the level" is a result, not a consequence of how the level was chosen: 1e-6 (the depth of the
+// thesis' plots), except Veronda–Westmann, whose static method (NCG secant PR) stops short of
+// it within the flop budget — there the level is the one it reaches (measured minimum 1.5e-3 on
+// the small mesh and ≈ 1e-6 on the large one; README).
+double comparison_level(const Case& c) {
+  if (c.material == "veronda-westmann") return c.large ? 3e-6 : 3e-3;
+  return 1e-6;
+}
 
 struct RunOptions {
   bool line_searches = true;            // NCG Newton / scale-dep. secant / FR as well
   std::vector<double> newton_epsilons;  // Fig. 4.8: extra Newton line-search runs
+  double level = 0.0;                   // relative comparison level; 0: comparison_level()
+  double flop_budget = 0.0;             // per run; 0: 300 MFLOP small, 10 GFLOP large
+  double reference_epsilon = 0.0;       // Newton tolerance of û; 0: 1e-8 (linear 1e-12)
+  // Relative change of the Rayleigh quotient that stops the inverse iteration for λ₁. The
+  // cylinder's two bending modes share λ₁ (symmetric cross-section), so the iterate converges
+  // slowly (369 iterations to 1e-6, 5 to 1e-4), while the quotient is accurate to the square of
+  // the vector's error (2√λ₁ = 31.2 vs 31.0 1/s) and η only centres the sweep: 1e-4.
+  double lambda1_tolerance = 1e-4;
 };
+
+// Ordering of dynamic runs by how well they do at the comparison level: reaching it beats not
+// reaching it; then fewer flops to it; among runs that do not reach it, the lower error reached.
+// A run that blew up or inverted is worse than any other.
+struct DynamicScore {
+  bool failed = false;
+  double flops = std::numeric_limits<double>::infinity();
+  double min_error = std::numeric_limits<double>::infinity();
+};
+bool better(const DynamicScore& a, const DynamicScore& b) {
+  if (a.failed != b.failed) return !a.failed;
+  const bool ra = std::isfinite(a.flops), rb = std::isfinite(b.flops);
+  if (ra != rb) return ra;
+  return ra ? a.flops < b.flops : a.min_error < b.min_error;
+}
 
 CaseResult run_case(const Case& c, const RunOptions& ro = {}) {
   CylinderSetup setup = cylinder(c);
@@ -222,22 +273,24 @@ CaseResult run_case(const Case& c, const RunOptions& ro = {}) {
   const VecX u0 = VecX::Zero(p.size());
   CaseResult out;
   out.c = c;
+  Timer phase;
 
   VecX ref;
   {
-    const SolverReport rr = reference_solution(p, c.material, ref);
+    const SolverReport rr = reference_solution(p, c.material, ref, ro.reference_epsilon);
     EXPECT_TRUE(rr.ok()) << tag << " reference: " << to_string(rr.status);
     out.inverted = inversion(m, ref);
     std::printf(
         "%s reference: %ld Newton steps, %ld inner, |r|/|f| = %.2e, %d inverted elements "
-        "(farthest %.4f m from the clamp), tip sag %.4f m\n",
+        "(farthest %.4f m from the clamp), tip sag %.4f m (%.2f s)\n",
         tag.c_str(), rr.iterations, rr.inner_iterations, rr.residual_norm / p.external_force_norm(),
-        out.inverted.inverted_elements, farthest_from_clamp(m, out.inverted), -ref.minCoeff());
+        out.inverted.inverted_elements, farthest_from_clamp(m, out.inverted), -ref.minCoeff(),
+        phase.seconds());
   }
 
   // The large mesh needs more flops per iteration (7.3×) and more iterations (h is 1.7× smaller),
   // and the stiffening / inverting models converge slowly there: 10 GFLOP per run.
-  const double flop_budget = c.large ? 10000e6 : 300e6;
+  const double flop_budget = ro.flop_budget > 0.0 ? ro.flop_budget : c.large ? 10000e6 : 300e6;
   std::vector<TracedRun>& runs = out.runs;
   auto trace_run = [&](const std::string& label, auto&& solve) {
     EnergyErrorTrace trace(p, ref);
@@ -253,6 +306,7 @@ CaseResult run_case(const Case& c, const RunOptions& ro = {}) {
   stop.rule = ResidualRule::kExternalForce;
   stop.epsilon = 1e-7;
 
+  phase.restart();
   if (c.material == "linear") {
     trace_run("static CG", [&](VecX& u, IterationObserver obs) {
       LinearCgOptions o;
@@ -286,14 +340,21 @@ CaseResult run_case(const Case& c, const RunOptions& ro = {}) {
     std::snprintf(label, sizeof label, "NCG newton PR, eps_newton = %g", eps);
     ncg(label, LineSearchKind::kNewton, BetaRule::kPolakRibiere, eps);
   }
+  const double static_seconds = phase.seconds();
 
   // Dynamic parameters: Δt by the thesis' procedure, capped by 0.9·2/√λ_n (see
   // verification/solver/damping_verify.cpp: for stiffening materials the procedure's step can
-  // become unstable late in the swing); η = 2√λ₁ and 2/3, 3/2 of it.
+  // become unstable late in the swing); η from the estimate 2√λ₁ (below).
+  phase.restart();
   const EigenEstimate big = largest_eigenvalue(p, u0, EigenOptions{1e-7, 20000, 1e-8, 1});
-  const EigenEstimate small = smallest_eigenvalue(p, u0, EigenOptions{1e-6, 500, 1e-6, 1});
+  const EigenEstimate small =
+      smallest_eigenvalue(p, u0, EigenOptions{ro.lambda1_tolerance, 500, 1e-6, 1});
   EXPECT_TRUE(big.ok()) << to_string(big.status) << " after " << big.iterations;
   EXPECT_TRUE(small.ok()) << to_string(small.status) << " after " << small.iterations;
+  std::printf("%s eigenvalue estimates: lambda_n %ld iterations, lambda_1 %ld (%ld inner)\n",
+              tag.c_str(), big.iterations, small.iterations, small.inner_iterations);
+  const double eigen_seconds = phase.seconds();
+  phase.restart();
   double h = 1e300;
   for (Index e = 0; e < m.num_cells(); ++e)
     for (int a = 0; a < 4; ++a)
@@ -305,35 +366,65 @@ CaseResult run_case(const Case& c, const RunOptions& ro = {}) {
   EXPECT_TRUE(st.found);
   const double dt = std::min(st.time_step, 0.9 * critical_time_step(big.value));
   const double eta = critical_damping(small.value);
-  std::printf("%s dt = %.4g s (procedure %.4g, 2/sqrt(lambda_n) %.4g), eta_crit = %.3g 1/s\n",
-              tag.c_str(), dt, st.time_step, critical_time_step(big.value), eta);
-  const std::vector<std::pair<std::string, double>> dampings = {
-      {"dynamic (underdamped 2/3)", 2.0 / 3.0 * eta},
-      {"dynamic (critical)", eta},
-      {"dynamic (overdamped 3/2)", 1.5 * eta}};
-  // The procedure tests only the first 50 MFLOP from u = 0; when a full damped run still blows
-  // up or steps into det F ≤ 0 later in the swing (the tangent stiffens or, for StVK, changes
-  // as elements invert), Δt is lowered by 15 % again — the thesis' rule — and all three
-  // damped runs are repeated with the common step. The number of extra reductions is reported.
+  out.eta_estimate = eta;
+  std::printf(
+      "%s dt = %.4g s (procedure %.4g, 2/sqrt(lambda_n) %.4g), eta_crit = %.3g 1/s (eigenvalues "
+      "%.2f s, time-step procedure %.2f s)\n",
+      tag.c_str(), dt, st.time_step, critical_time_step(big.value), eta, eigen_seconds,
+      phase.seconds());
+
+  // The comparison level is fixed before any run (comparison_level()).
+  const double initial = runs.front().samples.front().energy_error;
+  out.level = (ro.level > 0.0 ? ro.level : comparison_level(c)) * initial;
+
+  // Damping η_k = 1.5^k · 2√λ₁. The thesis' three curves are k = −1, 0, 1 (under-, critically,
+  // over-damped). Since 2√λ₁ is itself the estimate under test, the sweep is not confined to
+  // them: it is extended one step at a time beyond whichever end is best until a worse run lies
+  // on both sides of the best one (the optimum is bracketed to a factor 1.5), or k reaches −8
+  // (η/26) or +4 (5η). Labels keep the thesis' names for k = −1, 0, 1.
+  auto label_of = [](int k) -> std::string {
+    if (k == -1) return "dynamic (underdamped 2/3)";
+    if (k == 0) return "dynamic (critical)";
+    if (k == 1) return "dynamic (overdamped 3/2)";
+    char l[48];
+    std::snprintf(l, sizeof l, "dynamic (eta x %.3g)", std::pow(1.5, k));
+    return l;
+  };
+  auto damped_run = [&](int k, double time_step) {
+    const double d = std::pow(1.5, k) * eta;
+    trace_run(label_of(k), [&](VecX& u, IterationObserver obs) {
+      DynamicRelaxationOptions o;
+      o.time_step = time_step;
+      o.damping = d;
+      o.stop = stop;
+      o.budget.max_flops = flop_budget;
+      o.observer = std::move(obs);
+      return dynamic_relaxation(p, u, o);
+    });
+    const StopReason why = runs.back().report.status;
+    DynamicScore sc;
+    sc.failed = why == StopReason::kUnstable || why == StopReason::kInverted;
+    sc.flops = flops_to(runs.back(), out.level);
+    sc.min_error = min_error(runs.back());
+    return sc;
+  };
+  // The procedure tests only the first 50 MFLOP from u = 0; when a full damped run of the
+  // thesis' three still blows up or steps into det F ≤ 0 later in the swing (the tangent
+  // stiffens or, for StVK, changes as elements invert), Δt is lowered by 15 % again — the
+  // thesis' rule — and the three damped runs are repeated with the common step. The number of
+  // extra reductions is reported.
+  phase.restart();
   const std::size_t static_runs = runs.size();
   double dt_used = dt;
   int extra_reductions = 0;
+  std::vector<std::pair<int, DynamicScore>> sweep;  // (k, score), ascending k
   for (;;) {
     runs.resize(static_runs);
+    sweep.clear();
     bool failed = false;
-    for (const auto& [label, damping] : dampings) {
-      const double d = damping;
-      trace_run(label, [&](VecX& u, IterationObserver obs) {
-        DynamicRelaxationOptions o;
-        o.time_step = dt_used;
-        o.damping = d;
-        o.stop = stop;
-        o.budget.max_flops = flop_budget;
-        o.observer = std::move(obs);
-        return dynamic_relaxation(p, u, o);
-      });
-      const StopReason why = runs.back().report.status;
-      failed = failed || why == StopReason::kUnstable || why == StopReason::kInverted;
+    for (int k = -1; k <= 1; ++k) {
+      sweep.emplace_back(k, damped_run(k, dt_used));
+      failed = failed || sweep.back().second.failed;
     }
     if (!failed || extra_reductions == 20) break;
     dt_used *= 0.85;
@@ -341,24 +432,40 @@ CaseResult run_case(const Case& c, const RunOptions& ro = {}) {
   }
   out.dt = dt_used;
   out.extra_reductions = extra_reductions;
-  std::printf("%s damped runs: dt = %.4g s after %d extra 15%% reductions\n", tag.c_str(), dt_used,
-              extra_reductions);
+  auto best_index = [&] {
+    std::size_t b = 0;
+    for (std::size_t i = 1; i < sweep.size(); ++i)
+      if (better(sweep[i].second, sweep[b].second)) b = i;
+    return b;
+  };
+  for (;;) {
+    const std::size_t b = best_index();
+    if (b == 0 && sweep.front().first > -8) {
+      const int k = sweep.front().first - 1;
+      sweep.insert(sweep.begin(), {k, damped_run(k, dt_used)});
+    } else if (b + 1 == sweep.size() && sweep.back().first < 4) {
+      const int k = sweep.back().first + 1;
+      sweep.emplace_back(k, damped_run(k, dt_used));
+    } else {
+      out.bracketed = b > 0 && b + 1 < sweep.size();
+      out.best_eta = std::pow(1.5, sweep[b].first) * eta;
+      break;
+    }
+  }
+  std::printf(
+      "%s damped runs: dt = %.4g s after %d extra 15%% reductions; eta swept over 1.5^k x %.3g "
+      "for k = %d..%d, best %.3g 1/s (%.3g x the estimate, %s) (%.2f s)\n",
+      tag.c_str(), dt_used, extra_reductions, eta, sweep.front().first, sweep.back().first,
+      out.best_eta, out.best_eta / eta, out.bracketed ? "bracketed" : "NOT bracketed",
+      phase.seconds());
   write_csv(c.name(), runs);
 
   for (const TracedRun& r : runs)
     for (const auto& s : r.samples) EXPECT_FALSE(std::isnan(s.energy_error)) << r.label;
 
-  // Comparison level: 1e-6 of the initial energy error, or — when the static method of the
-  // thesis (linear CG / NCG secant PR) or every dynamic run stops short of that within the
-  // flop budget (Veronda-Westmann) — the deepest level both reached.
   const std::string static_label = c.material == "linear" ? "static CG" : "NCG secant PR";
-  const double initial = runs.front().samples.front().energy_error;
-  const double best_dyn_min = std::min({min_error(find(runs, "dynamic (critical)")),
-                                        min_error(find(runs, "dynamic (underdamped 2/3)")),
-                                        min_error(find(runs, "dynamic (overdamped 3/2)"))});
-  out.level = std::max({1e-6 * initial, min_error(find(runs, static_label)), best_dyn_min});
-  std::printf("%s to reach energy error %.3g J (%.1e of the initial):\n", tag.c_str(), out.level,
-              out.level / initial);
+  std::printf("%s to reach energy error %.3g J (%.1e of the initial; static runs %.2f s):\n",
+              tag.c_str(), out.level, out.level / initial, static_seconds);
   std::printf("   %-34s %-18s %8s %10s %9s %8s %9s\n", "method", "end", "iters", "MFLOP", "seconds",
               "iter/s", "MFLOP/it");
   for (const TracedRun& r : runs)
@@ -366,30 +473,53 @@ CaseResult run_case(const Case& c, const RunOptions& ro = {}) {
                 to_string(r.report.status), r.report.iterations, flops_to(r, out.level) * 1e-6,
                 seconds_to(r, out.level), r.report.iterations / r.report.seconds,
                 r.report.flops * 1e-6 / std::max<long>(1, r.report.iterations));
-  out.best_dyn = std::min({flops_to(find(runs, "dynamic (critical)"), out.level),
-                           flops_to(find(runs, "dynamic (underdamped 2/3)"), out.level),
-                           flops_to(find(runs, "dynamic (overdamped 3/2)"), out.level)});
+  out.best_dyn = std::numeric_limits<double>::infinity();
+  for (const auto& [k, sc] : sweep) out.best_dyn = std::min(out.best_dyn, sc.flops);
   out.static_flops = flops_to(find(runs, static_label), out.level);
+  // Both can fail now: the level does not depend on the runs.
+  EXPECT_TRUE(std::isfinite(out.static_flops)) << tag << " " << static_label << " missed the level";
   EXPECT_TRUE(std::isfinite(out.best_dyn)) << tag << " no dynamic run reached the level";
+  // The best damping lies inside the sweep, so "the best dynamic run" is an optimum over η
+  // (to a factor 1.5), not the best of three values around the estimate under test.
+  EXPECT_TRUE(out.bracketed) << tag << " best eta at the end of the sweep";
   return out;
 }
 
-// The thesis' conclusions for one case (§4.5.4, §4.5.5, §4.3.1).
+bool has_run(const std::vector<TracedRun>& runs, const std::string& label) {
+  for (const TracedRun& r : runs)
+    if (r.label == label) return true;
+  return false;
+}
+
+// The thesis' conclusions for one case (§4.5.1, §4.5.4, §4.5.5, §4.3.1), each a two-sided
+// window on what README.md states.
 void check_conclusions(const CaseResult& r) {
   const std::string tag = "[" + r.c.name() + "]";
   if (r.c.material == "linear") {
     // §4.5.4: "the CG iteration outperforms dynamic relaxation, by approximately a factor 5 to
-    // 10". We require linear CG to need at most half the flops of the best dynamic run.
-    std::printf("%s best dynamic / linear CG flops = %.2f (thesis: 5-10)\n", tag.c_str(),
-                r.best_dyn / r.static_flops);
-    EXPECT_LT(2.0 * r.static_flops, r.best_dyn) << tag;
+    // 10". README: best dynamic / linear CG is 4.3 (small) and 7.2 (large) here; the window is
+    // the thesis' range with its lower end at 3.5, which admits our small mesh (see README).
+    const double ratio = r.best_dyn / r.static_flops;
+    std::printf("%s best dynamic / linear CG flops = %.2f (thesis: 5-10)\n", tag.c_str(), ratio);
+    EXPECT_GE(ratio, 3.5) << tag;
+    EXPECT_LE(ratio, 10.0) << tag;
   } else {
     // §4.5.5: "the CG iteration is as quick as a dynamic relaxation with optimal parameters".
-    // We require the thesis' setting (secant, PR) within a factor 3 of the best dynamic run.
+    // README: the thesis' setting (secant, PR) is within a factor 2 of the best dynamic run,
+    // either way, on every case.
+    const double ratio = r.static_flops / r.best_dyn;
     std::printf("%s NCG secant PR / best dynamic flops = %.2f (thesis: about 1)\n", tag.c_str(),
-                r.static_flops / r.best_dyn);
-    EXPECT_LT(r.static_flops, 3.0 * r.best_dyn) << tag;
-    EXPECT_LT(r.best_dyn, 3.0 * r.static_flops) << tag;
+                ratio);
+    EXPECT_LE(ratio, 2.0) << tag;
+    EXPECT_GE(ratio, 0.5) << tag;
+    // §4.5.1 / Fig. 4.7: the scale-dependent secant is the fastest line search, Newton's the
+    // slowest (flops to the level; +∞ when a run does not reach it, which ranks last).
+    if (has_run(r.runs, "NCG scale-dep. secant PR")) {
+      const double sds = flops_to(find(r.runs, "NCG scale-dep. secant PR"), r.level);
+      const double newton = flops_to(find(r.runs, "NCG newton PR"), r.level);
+      EXPECT_LE(sds, r.static_flops) << tag;
+      EXPECT_GE(newton, r.static_flops) << tag;
+    }
   }
   if (r.c.material == "neohookean" || r.c.material == "veronda-westmann") {
     EXPECT_EQ(r.inverted.inverted_elements, 0) << tag;  // log-barrier models reject det F ≤ 0
@@ -440,6 +570,25 @@ TEST(Chapter4, LinearModelSmallMesh_Sec4_5_4_Fig4_10) {
   check_conclusions(r);
   write_figure("fig4_10_analogue_linear_small.svg", "Fig. 4.10 analogue: " + figure_title(r.c),
                r.runs);
+}
+
+// Default run, quick form of the nonlinear cases (§4.5.5): StVK, neo-Hookean and
+// Veronda–Westmann on the small mesh, the thesis' static method (NCG secant PR) against the
+// damping sweep, to a shallower level (1e-3 of the initial energy error; Veronda–Westmann 1e-2,
+// since its static method does not reach 1e-3 within 300 MFLOP), 200 MFLOP per run, with a
+// reference û to ‖r‖ ≤ 1e-6‖f‖ (its own energy error is ≤ κ·(1e-6)² ≈ 5e-9 of the initial one,
+// κ = λ_n/λ₁ ≈ 5e3 at u = 0: far below the level), and the checks of the slow run except the
+// line-search order (one line search here). The full cases run in
+// papers_ch4_relaxation_all_materials.
+TEST(Chapter4, NonlinearModelsSmallMeshQuick_Sec4_5_5) {
+  for (const std::string material : {"stvk", "neohookean", "veronda-westmann"}) {
+    RunOptions ro;
+    ro.line_searches = false;
+    ro.level = material == "veronda-westmann" ? 1e-2 : 1e-3;
+    ro.reference_epsilon = 1e-6;
+    ro.flop_budget = 200e6;
+    check_conclusions(run_case(Case{material, false, 1e4}, ro));
+  }
 }
 
 #else
@@ -525,11 +674,12 @@ TEST(Chapter4, MeshSizeNeoHookean_Sec4_5_3_Fig4_9) {
       "[fig 4.9] large/small flops to %.1e of the initial error: static %.2f, dynamic "
       "%.2f (ratio %.2f; thesis: the same amount)\n",
       rel, fs, fd, fs / fd);
-  // "Slowed down by the same amount": within a factor 2.5 of each other (the per-iteration cost
-  // ratio is identical, so this compares iteration growth, which CG and SS22 share as √κ).
+  // "Slowed down by the same amount": within a factor 1.5 of each other (measured 0.90; the
+  // per-iteration cost ratio is identical, so this compares iteration growth, which CG and SS22
+  // share as √κ; 1.5 is the resolution of the damping sweep, which sets the dynamic count).
   EXPECT_TRUE(std::isfinite(fs) && std::isfinite(fd));
-  EXPECT_LT(fs / fd, 2.5);
-  EXPECT_GT(fs / fd, 1.0 / 2.5);
+  EXPECT_LT(fs / fd, 1.5);
+  EXPECT_GT(fs / fd, 1.0 / 1.5);
 }
 
 // Fig. 4.13 / §4.5.5: StVK with E = 2e4: no inversion, and static ≈ dynamic again.

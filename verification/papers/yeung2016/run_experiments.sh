@@ -2,8 +2,10 @@
 # Runs the Yeung, Crouch & Pothen 2016 §4.3 experiments (beams, bricks, liver; deformation and
 # cutting) with benchmarks/linalg/augmented_bench and writes one Markdown table (.md) and one CSV
 # per run into OUT; then `yeung2016_plots OUT` draws the SVG figures (README.md).
-# Usage: run_experiments.sh BUILD_DIR OUT_DIR [quick]
+# Usage: run_experiments.sh BUILD_DIR OUT_DIR [quick|headline]
 # Expected runtime: ≈ 15 min on the shared (loaded) 2-core machine, less when idle; quick ≈ 2 min.
+# headline: only the runs behind README.md's "Headline" (25,600-node beam, 8 steps, explicit
+# H R⁻¹ J; one and two threads on both sides; each configuration twice), ≈ 3 min loaded.
 set -euo pipefail
 build=${1:?build dir}
 out=${2:?output dir}
@@ -17,6 +19,26 @@ run() {  # name, args...
   echo "== $name: augmented_bench --table $*" >&2
   "$bench" --table "$@" --csv "$out/$name.csv" >"$out/$name.md"
 }
+if [[ "$quick" == headline ]]; then
+  # Thread counts: update T (step 3) / reference refactorization. CHOLMOD's simplicial
+  # factorization is serial; the supernodal one gets T OpenBLAS threads (--threads sets both).
+  # Each exact run has a --no-exact twin (NAME_upd) for the update times (see twin() below);
+  # the supernodal runs share the twin of the simplicial run with the same T.
+  for rep in 1 2; do
+    for kind in deform cut; do
+      for t in 1 2; do
+        run "headline_${kind}_t${t}_simplicial_$rep" "$kind" --h 1024 --steps 8 --schur direct \
+          --threads "$t"
+        run "headline_${kind}_t${t}_upd_$rep" "$kind" --h 1024 --steps 8 --schur direct \
+          --threads "$t" --no-exact
+      done
+      run "headline_${kind}_t2_supernodal_$rep" "$kind" --h 1024 --steps 8 --schur direct \
+        --threads 2 --ref-kind supernodal
+    done
+  done
+  echo "done: $out" >&2
+  exit 0
+fi
 if [[ "$quick" == quick ]]; then
   beams=(16 64)
   bricks=(4 8)

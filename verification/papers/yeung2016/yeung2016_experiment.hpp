@@ -91,7 +91,8 @@ struct Row {
   /// Analyze + factorize of the modified system (s); forming the reduced matrix is not
   /// included (the CPU time cpu_refactor excludes it too), so speed-ups are conservative.
   double t_refactor = 0;
-  double t_refactor_solve = 0;       ///< triangular solves of the refactored system (s)
+  double t_refactor_solve = 0;     ///< triangular solves of the refactored system (s)
+  double t_numeric_refactor = -1;  ///< wall s of factorize + solve with a kept pattern (−1: n/a)
   double cpu_numeric_refactor = -1;  ///< CPU s of factorize + solve with a kept pattern (−1: n/a)
   double t_pcg = -1;                 ///< Jacobi-PCG (s), −1 when not run
   double cpu_pcg = -1;               ///< process CPU time of the Jacobi-PCG solve (s)
@@ -100,6 +101,7 @@ struct Row {
   long pcg_iterations = 0;
   bool pcg_converged = false;
   double rel_error = -1;  ///< ‖a_aug − a_exact‖/‖a_exact‖ (−1 when not compared)
+  double ref_rcond = -1;  ///< CHOLMOD's rcond (min/max pivot) of the refactored system (−1: n/a)
   double rel_residual = -1;  ///< backward error ‖K a − f − r‖/(‖K‖₁‖a‖ + ‖f + r‖)
   bool swapped = false;      ///< background factor swapped in at this step
   std::string status;
@@ -452,6 +454,7 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
           for (int i = 0; i < k.rows(); ++i)
             if (red.full_to_free[i] >= 0) ax(i) = x(red.full_to_free[i]);
           row.rel_error = (a - ax).norm() / std::max(ax.norm(), 1e-300);
+          row.ref_rcond = fac.rcond();
         }
         row.cpu_refactor = detail::cpu_seconds() - cpu1;
       }
@@ -463,10 +466,13 @@ inline std::vector<Row> run(const Options& opt, Info& info) {
             if (fixed[j] || fixed[it.row()]) it.valueRef() = it.row() == j ? 1.0 : 0.0;
         for (const auto& [dd, v] : dirichlet) b(dd) = v;
         const double cpu1 = detail::cpu_seconds();
+        tr.restart();
         Eigen::VectorXd x;
         if (numeric_factor.factorize(kk) == FactorStatus::kOk &&
-            numeric_factor.solve(b, x) == FactorStatus::kOk)
+            numeric_factor.solve(b, x) == FactorStatus::kOk) {
+          row.t_numeric_refactor = tr.seconds();
           row.cpu_numeric_refactor = detail::cpu_seconds() - cpu1;
+        }
       }
       if (opt.pcg_every > 0 && step % opt.pcg_every == 0) {
         detail::MatrixProblem prob(red.matrix, rhs);
