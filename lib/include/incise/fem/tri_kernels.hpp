@@ -82,15 +82,15 @@ struct TriKernel {
     const Mat2T<T> g = differences(x) * z_inv;
     Mat2T<T> e;
     T j2m1(0);
-    st.f = g;
-    st.f(0, 0) += T(1);
-    st.f(1, 1) += T(1);
     if constexpr (Model::kLinearGeometry) {
       e(0, 0) = g(0, 0);
       e(1, 1) = g(1, 1);
       e(0, 1) = e(1, 0) = T(0.5) * (g(0, 1) + g(1, 0));
       st.f.setIdentity();
     } else {
+      st.f = g;
+      st.f(0, 0) += T(1);
+      st.f(1, 1) += T(1);
       for (int i = 0; i < 2; ++i)
         for (int j = i; j < 2; ++j)
           e(i, j) = T(0.5) * (g(i, j) + (g(0, i) * st.f(0, j) + g(1, i) * st.f(1, j)));

@@ -21,7 +21,7 @@
 /// distance to q² = 0 (models with J only: the others are defined, if unphysical, for q² ≤ 0).
 /// Converged when the correction falls below kNewtonTolerance · (|E₃₃| + ‖E₂‖_max) or stops
 /// shrinking (the residual has reached its rounding floor), and then |S₃₃| ≤
-/// kResidualTolerance × the largest diagonal stress term; otherwise status kNotConverged (e.g.
+/// kResidualTolerance · max(|S_ii|, (λ + 2μ)(|E₃₃| + ‖E₂‖_max)); otherwise kNotConverged (e.g.
 /// Veronda-Westmann with λ = 0 at large stretch, whose root lies at q² < 0).
 ///
 /// Strain inputs are cancellation-free (as models.hpp): E₂ from G₂, and J₂ − 1 = det F₂ − 1;
