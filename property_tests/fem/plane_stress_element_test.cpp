@@ -134,7 +134,7 @@ TEST_P(PlaneStressElement, ForceIsEnergyGradient_SweepAndTaylor) {
     for (const auto& def : families(rng)) {
       SCOPED_TRACE(def.family);
       const Case c = make_case(rng, def.f);
-      Mat23 q;
+      Mat23 q = Mat23::Zero();
       if (has_no_plane_stress_state(m.name(), GetParam().nu, def.family)) {
         EXPECT_EQ(K::forces(m.lame(), c.ref.z_inv, c.ref.b, c.x, q),
                   PlaneStressStatus::kNotConverged);
@@ -164,7 +164,7 @@ TEST_P(PlaneStressElement, TangentIsForceDerivative_SweepAndTaylor) {
     for (const auto& def : families(rng)) {
       SCOPED_TRACE(def.family);
       const Case c = make_case(rng, def.f);
-      Mat23 q, dq, q2;
+      Mat23 dq = Mat23::Zero(), q2 = Mat23::Zero();
       Mat6 kt;
       if (has_no_plane_stress_state(m.name(), GetParam().nu, def.family)) continue;
       ASSERT_EQ(K::product(m.lame(), c.ref.z_inv, c.ref.b, c.x, c.d, dq), PlaneStressStatus::kOk);
@@ -188,7 +188,7 @@ TEST_P(PlaneStressElement, TangentIsForceDerivative_SweepAndTaylor) {
       std::uniform_real_distribution<double> uw(-1.0, 1.0);
       for (int i = 0; i < 6; ++i) w(i % 2, i / 2) = uw(rng);
       auto phi = [&](double t) {
-        Mat23 qt;
+        Mat23 qt = Mat23::Zero();
         EXPECT_EQ(K::forces(m.lame(), c.ref.z_inv, c.ref.b, Mat23(c.x + t * c.d), qt),
                   PlaneStressStatus::kOk);
         return (qt.array() * w.array()).sum();
@@ -230,7 +230,9 @@ TEST_P(PlaneStressElement, OutOfPlaneStressVanishes) {
       const bool closed = std::string(Model::kName) == "linear" ||
                           std::string(Model::kName) == "stvk" ||
                           (std::string(Model::kName) == "neohookean" && GetParam().nu == 0.0);
-      if (closed) EXPECT_EQ(st.newton_iterations, 1);
+      if (closed) {
+        EXPECT_EQ(st.newton_iterations, 1);
+      }
     }
     return 0;
   });
@@ -244,9 +246,9 @@ INSTANTIATE_TEST_SUITE_P(AllRegistered, PlaneStressElement, ::testing::ValuesIn(
                            }
                            return v;
                          }()),
-                         [](const auto& info) {
-                           std::string s =
-                               info.param.material + (info.param.nu == 0.0 ? "_nu0" : "_nu03");
+                         [](const auto& param_info) {
+                           std::string s = param_info.param.material +
+                                           (param_info.param.nu == 0.0 ? "_nu0" : "_nu03");
                            for (char& ch : s)
                              if (ch == '-') ch = '_';
                            return s;

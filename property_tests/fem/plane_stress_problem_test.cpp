@@ -101,8 +101,8 @@ TEST_P(PlaneStressProblemProperty, EnergyGradientHessianChain) {
 
 INSTANTIATE_TEST_SUITE_P(AllRegistered, PlaneStressProblemProperty,
                          ::testing::ValuesIn(incise::material::registered_material_names()),
-                         [](const auto& info) {
-                           std::string s = info.param;
+                         [](const auto& param_info) {
+                           std::string s = param_info.param;
                            for (char& ch : s)
                              if (ch == '-') ch = '_';
                            return s;
