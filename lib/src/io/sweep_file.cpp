@@ -23,7 +23,14 @@ std::vector<SweepEvent> read_sweep_file(const std::string& path, double scale) {
       continue;
     }
     static const char* const kWhat[9] = {"nine numbers (ax ay az bx by bz cx cy cz) or 'end'",
-                                         "ay", "az", "bx", "by", "bz", "cx", "cy", "cz"};
+                                         "ay",
+                                         "az",
+                                         "bx",
+                                         "by",
+                                         "bz",
+                                         "cx",
+                                         "cy",
+                                         "cz"};
     for (int k = 0; k < 9; ++k) {
       const double x = r.real(kWhat[k]);
       if (k == 0) ev.line = r.line();

@@ -18,9 +18,10 @@ namespace incise::io {
 
 /// One event of a sweep file.
 struct SweepEvent {
-  bool end_incision = false;      ///< the line was `end`; `triangle` is unused
-  std::array<Vec3, 3> triangle{Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};  ///< corners (file units × scale)
-  long line = 0;                  ///< 1-based line in the file
+  bool end_incision = false;  ///< the line was `end`; `triangle` is unused
+  std::array<Vec3, 3> triangle{Vec3::Zero(), Vec3::Zero(),
+                               Vec3::Zero()};  ///< corners (file units × scale)
+  long line = 0;                               ///< 1-based line in the file
 };
 
 /// Reads a sweep file, multiplying every coordinate by `scale` (> 0 and finite). Throws
