@@ -247,7 +247,16 @@ LoadedMesh finalize(RawMesh&& raw, const std::string& file, const ReadOptions& o
   INCISE_CHECK_PARAM(options.scale > 0 && std::isfinite(options.scale),
                      "ReadOptions::scale must be positive and finite");
   if (options.scale != 1.0)
-    for (double& x : raw.xyz) x *= options.scale;
+    for (std::size_t i = 0; i < raw.xyz.size(); ++i) {
+      const double x = raw.xyz[i];
+      raw.xyz[i] *= options.scale;
+      if (!std::isfinite(raw.xyz[i])) {
+        std::ostringstream os;
+        os << "coordinate " << x << " times the scale " << options.scale
+           << " is not finite: expected coordinates within the doubles after scaling";
+        throw ParseError(file, raw.point_lines[i / 3], os.str());
+      }
+    }
   const bool volume = !raw.tets.empty();
   if (!volume && raw.tris.empty())
     throw ParseError(file, 0, "no tetrahedra or triangles found: expected a simplicial mesh");
