@@ -14,8 +14,10 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <limits>
@@ -43,10 +45,12 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     const std::string& a = args[i];
     if (a == "--memory-mb") {
       const std::string v = option_value(args, i, "--memory-mb");
-      const double mb = positive_number(v, "--memory-mb");
-      if (mb != std::floor(mb) || mb > std::numeric_limits<int>::max())
+      char* end = nullptr;
+      errno = 0;
+      memory_mb = std::strtoll(v.c_str(), &end, 10);
+      if (v.empty() || *end != '\0' || errno == ERANGE || memory_mb < 1 ||
+          memory_mb > std::numeric_limits<int>::max())
         throw UsageError("--memory-mb expects an integer in [1, 2147483647], got '" + v + "'");
-      memory_mb = static_cast<std::int64_t>(mb);
     } else if (a == "--summary-json") {
       summary_json = option_value(args, i, "--summary-json");
     } else if (a == "--progress") {
