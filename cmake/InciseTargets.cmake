@@ -42,3 +42,25 @@ function(incise_add_benchmark name)
   target_link_libraries(${name} PRIVATE ${A_LIBS} incise_bench_support benchmark::benchmark
                                         incise_options)
 endfunction()
+
+# incise_add_cli_test(NAME EXIT <status|nonzero> [STDERR <regex>] [USAGE] LABELS ... ARGS ...)
+#   Runs `incise ARGS` in the source tree and requires the exit status and, if given, that stderr
+#   matches the regex; stderr must be one line unless USAGE (usage text follows the error).
+function(incise_add_cli_test name)
+  cmake_parse_arguments(A "USAGE" "EXIT;STDERR" "ARGS;LABELS" ${ARGN})
+  if(NOT TARGET incise)
+    return()
+  endif()
+  set(extra)
+  if(DEFINED A_STDERR)
+    list(APPEND extra "-DSTDERR_REGEX=${A_STDERR}")
+  endif()
+  if(A_USAGE)
+    list(APPEND extra -DMULTILINE=ON)
+  endif()
+  add_test(NAME ${name}
+           COMMAND ${CMAKE_COMMAND} "-DCMD=$<TARGET_FILE:incise>;${A_ARGS}" -DEXIT=${A_EXIT}
+                   ${extra} -P ${PROJECT_SOURCE_DIR}/property_tests/io/cli_expect.cmake
+           WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+  set_tests_properties(${name} PROPERTIES LABELS "${A_LABELS}")
+endfunction()

@@ -1,4 +1,5 @@
-// `incise run SCENE [--summary-json PATH] [--progress auto|bar|lines|none]`: parse and build a
+// `incise run SCENE [--summary-json PATH] [--progress auto|bar|lines|none] [--memory-mb N]`:
+// parse and build a
 // scene (docs/scenes.md), run its solver with progress, print a summary (iterations, flops,
 // time, final residual, probes, what was built and what it cost), write the scene's outputs.
 //
@@ -13,9 +14,13 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstdint>
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 #include "cli_util.hpp"
@@ -35,9 +40,18 @@ std::string join_vec(const Vec3& v) {
 
 int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   std::string scene_path, summary_json, progress = "auto";
+  std::int64_t memory_mb = 0;  // 0: the scene's limits (or the default budget)
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
-    if (a == "--summary-json") {
+    if (a == "--memory-mb") {
+      const std::string v = option_value(args, i, "--memory-mb");
+      char* end = nullptr;
+      errno = 0;
+      memory_mb = std::strtoll(v.c_str(), &end, 10);
+      if (v.empty() || *end != '\0' || errno == ERANGE || memory_mb < 1 ||
+          memory_mb > std::numeric_limits<int>::max())
+        throw UsageError("--memory-mb expects an integer in [1, 2147483647], got '" + v + "'");
+    } else if (a == "--summary-json") {
       summary_json = option_value(args, i, "--summary-json");
     } else if (a == "--progress") {
       progress = option_value(args, i, "--progress");
@@ -45,8 +59,10 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
         throw UsageError("--progress expects auto, bar, lines or none, got '" + progress + "'");
     } else if (a == "--help" || a == "-h") {
       out << "usage: incise run SCENE.json [--summary-json PATH] "
-             "[--progress auto|bar|lines|none]\n"
-             "Runs a scene (format: docs/scenes.md) and prints a summary.\n";
+             "[--progress auto|bar|lines|none] [--memory-mb N]\n"
+             "Runs a scene (format: docs/scenes.md) and prints a summary.\n"
+             "  --memory-mb N   memory budget of the build in MiB (overrides the scene's\n"
+             "                  limits.memory_mb; default half the physical memory)\n";
       return 0;
     } else if (!a.empty() && a[0] == '-') {
       throw UsageError("unknown option '" + a + "' (see incise run --help)");
@@ -58,13 +74,15 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   }
   if (scene_path.empty())
     throw UsageError(
-        "usage: incise run SCENE.json [--summary-json PATH] [--progress auto|bar|lines|none]");
+        "usage: incise run SCENE.json [--summary-json PATH] [--progress auto|bar|lines|none] "
+        "[--memory-mb N]");
   if (progress == "auto")
     progress = (&out == &std::cout && isatty(STDOUT_FILENO)) ? "bar" : "lines";
 
   // Parse and build everything first: errors stop the run before any file is written.
   Timer total;
-  const scene::SceneSpec spec = scene::load_scene(scene_path);
+  scene::SceneSpec spec = scene::load_scene(scene_path);
+  if (memory_mb > 0) spec.limits.memory_mb = memory_mb;
   scene::BuiltScene built = scene::build_scene(spec);
 
   out << "scene: " << scene_path << (spec.name.empty() ? "" : "  (" + spec.name + ")") << "\n";

@@ -1,6 +1,6 @@
-# ctest helper: run CMD (a ;-list) and require exit status EXIT (0 or "nonzero") and that
-# stderr matches STDERR_REGEX (if given).
-#   cmake -DCMD=... -DEXIT=nonzero -DSTDERR_REGEX=... -P cli_expect.cmake
+# ctest helper: run CMD (a ;-list) and require exit status EXIT (a number or "nonzero"), that
+# stderr matches STDERR_REGEX (if given) and is one line (unless MULTILINE, for usage text).
+#   cmake -DCMD=... -DEXIT=nonzero -DSTDERR_REGEX=... [-DMULTILINE=ON] -P cli_expect.cmake
 execute_process(COMMAND ${CMD} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 message(STATUS "exit ${rc}\n${out}\nstderr: ${err}")
 if(EXIT STREQUAL "nonzero")
@@ -15,6 +15,6 @@ if(DEFINED STDERR_REGEX AND NOT err MATCHES "${STDERR_REGEX}")
 endif()
 string(REGEX MATCHALL "\n" lines "${err}")
 list(LENGTH lines n)
-if(n GREATER 1)
+if(n GREATER 1 AND NOT MULTILINE)
   message(FATAL_ERROR "stderr has ${n} lines; expected at most one")
 endif()

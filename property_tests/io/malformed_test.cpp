@@ -225,6 +225,75 @@ TEST(Malformed, OffErrors) {
                      "expected vertex index (0-based) in [0, 2], got 3");
 }
 
+// Issue 18: the OFF reader ignored data after the declared face count (count - 1 dropped a
+// triangle, exit 0); now it is refused like the other readers' trailing data.
+TEST(Malformed, OffDataAfterTheDeclaredFaces) {
+  // The issue's input: a closed tetrahedron surface whose header declares 3 of its 4 faces.
+  const std::string tet =
+      "OFF\n3 3 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n";
+  expect_parse_error(write_temp("count.off", replace(tet, "3 3 0", "4 3 0")), 10,
+                     "unexpected data after the 3 faces the header declares: expected end of "
+                     "file, got '3' (is the face count too small?)");
+  // Trailing comments and blank lines are no data; a colour after a face is allowed.
+  EXPECT_EQ(read_mesh(write_temp("tail.off", replace(tet, "3 3 0", "4 4 0") + "\n# end\n\n"))
+                .mesh.num_cells(),
+            4);
+}
+
+// Issue 18: an inconsistently oriented OFF surface passed the reader and failed later with an
+// assertion text naming connectivity.cpp; the reader names the two faces and their edge, and the
+// reorient option makes the surface consistent (then the connectivity builds).
+TEST(Malformed, InconsistentSurfaceOrientationNamesTheFacesAndReorientFixesIt) {
+  const std::string tet =  // face at line 7 flipped relative to its neighbours
+      "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n3 1 2 3\n3 0 3 2\n";
+  const std::string p = write_temp("flip.off", tet);
+  expect_parse_error(p, 8,
+                     "triangles at lines 7 and 8 traverse their common edge (vertices at lines "
+                     "3, 4) in the same direction: the surface is not consistently oriented (the "
+                     "reorient option orients each connected part like its first triangle)");
+  ReadOptions reorient;
+  reorient.reorient = true;
+  const LoadedMesh fixed = read_mesh(p, reorient);
+  EXPECT_EQ(fixed.report.reoriented, 3);  // oriented like the first triangle (line 7)
+  EXPECT_EQ(fixed.mesh.cells.col(0), (Eigen::Vector3i{0, 1, 2}));
+  EXPECT_EQ(fixed.mesh.cells.col(1), (Eigen::Vector3i{0, 3, 1}));
+  // The 5-vertex Moebius band (triangles (i, i+1, i+2) mod 5) has no consistent orientation.
+  const std::string band =
+      "OFF\n5 5 0\n1 0 0\n0.3 0.95 0.3\n-0.8 0.6 0.6\n-0.8 -0.6 0.9\n0.3 -0.95 1.2\n"
+      "3 0 1 2\n3 1 2 3\n3 2 3 4\n3 3 4 0\n3 4 0 1\n";
+  expect_parse_error(write_temp("band.off", band), 12,
+                     "triangles at lines 11 and 12 traverse their common edge (vertices at lines "
+                     "3, 7) in the same direction: the surface is not orientable",
+                     reorient);
+}
+
+// Every face of a tetrahedral mesh lies between at most two cells, one on each side; the same
+// oriented face twice (overlapping cells) or three cells on a face is refused at the cell's line.
+TEST(Malformed, OverlappingAndNonManifoldCells) {
+  // Vertex 5 moved below face (2,3,4) (x + y + z < 1), the second cell positively ordered: both
+  // cells lie on the vertex-1 side of that face.
+  const std::string overlap =
+      replace(replace(kMedit, "1 1 1 2", "0.1 0.1 0.1 2"), "2 5 3 4 6", "2 3 5 4 6");
+  expect_parse_error(write_temp("overlap.mesh", overlap), 13,
+                     "tetrahedra at lines 12 and 13 lie on the same side of their common face "
+                     "(vertices at lines 6, 7, 8): they overlap");
+  // A third tetrahedron on face (2,3,4).
+  std::string three = replace(kMedit, "5\n0 0 0 1", "6\n0 0 0 1");
+  three = replace(three, "1 1 1 2\n", "1 1 1 2\n2 2 2 2\n");
+  three = replace(three, "2\n1 2 3 4 5\n2 5 3 4 6\n", "3\n1 2 3 4 5\n2 5 3 4 6\n2 6 3 4 6\n");
+  expect_parse_error(write_temp("three.mesh", three), 15,
+                     "face (vertices at lines 6, 7, 8) shared by 3 tetrahedra (lines 13, 14, 15): "
+                     "expected a manifold mesh, each face in at most two tetrahedra");
+}
+
+// A scale that makes a coordinate non-finite is refused at the line of that vertex.
+TEST(Malformed, ScaleOverflowNamesTheVertexLine) {
+  ReadOptions big;
+  big.scale = 1e300;
+  expect_parse_error(write_temp("scaled.mesh", replace(kMedit, "1 1 1 2", "1e10 1 1 2")), 9,
+                     "coordinate 1e+10 times the scale 1e+300 is not finite", big);
+}
+
 TEST(Malformed, MissingEmptyAndUnknownFiles) {
   expect_parse_error(write_temp("empty.mesh", ""), 1, "expected MeshVersionFormatted");
   expect_parse_error(write_temp("empty.msh", ""), 1,

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace incise::mesh {
@@ -57,6 +59,68 @@ TEST(MakeBox, FiveSplitIsConformingAndPositive) {
 TEST(MakeBox, RejectsBadParameters) {
   EXPECT_THROW(make_box(0, 1, 1, 1, 1, 1), ParameterError);
   EXPECT_THROW(make_box(1, 1, 1, 1, -1, 1), ParameterError);
+}
+
+// The parameter a generator refuses, and its message ("" when it accepts).
+template <class F>
+std::pair<std::string, std::string> refusal(F&& f) {
+  try {
+    (void)f();
+  } catch (const GeneratorError& e) {
+    return {e.parameter(), e.what()};
+  }
+  return {"", ""};
+}
+
+// Issue 18: degenerate generated geometry (lx = 1e300, a cylinder of length 1e-320) gave
+// "element 0 has non-positive reference volume nan" downstream; the generators refuse every
+// cell size outside [1e-100, 1e100] m, naming the parameter, before allocating.
+TEST(GeneratorLimits, CellSizesOutsideTheRepresentableRangeNameTheParameter) {
+  EXPECT_EQ(refusal([] { return make_box(1, 1, 1, 1e300, 0.2, 0.3); }),
+            std::make_pair(std::string("lx"),
+                           std::string("make_box: cell size lx / nx = 1e+300 / 1 = 1e+300 m is "
+                                       "outside [1e-100, 1e+100] m (cell volumes would not be "
+                                       "representable)")));
+  EXPECT_EQ(refusal([] { return make_box(1, 1000, 1, 1, 1e-98, 1); }).first, "ly");
+  EXPECT_EQ(refusal([] { return make_box(1, 1, 1, 1, 1, 1e-320); }).first, "lz");
+  EXPECT_EQ(refusal([] { return make_box(1, 1, 1, 1, 1, std::nan("")); }).first, "lz");
+  EXPECT_EQ(refusal([] { return make_box(1, 1, -2, 1, 1, 1); }).first, "nz");
+  EXPECT_EQ(refusal([] { return make_cylinder(1e-320, 0.03, 3, 8); }).first, "length");
+  EXPECT_EQ(refusal([] { return make_cylinder(0.1, 1e200, 3, 8); }).first, "radius");
+  EXPECT_EQ(refusal([] { return make_cylinder(0.1, 0.03, 0, 8); }).first, "rings");
+  EXPECT_EQ(refusal([] { return make_rectangle(1, 1, 1, 1e101); }).first, "ly");
+  EXPECT_EQ(refusal([] { return make_beam(4, 1e-101); }).first, "spacing");
+  EXPECT_EQ(refusal([] { return make_beam(1); }).first, "h");
+  EXPECT_EQ(refusal([] { return make_brick(0); }).first, "n");
+  // The ends of the range are admissible and give positive, finite volumes.
+  for (double h : {kMinCellSize, kMaxCellSize}) {
+    const MeshData m = make_box(1, 1, 1, h, h, h);
+    for (Eigen::Index c = 0; c < m.num_cells(); ++c) {
+      EXPECT_GT(volume(m, c), 0.0) << h;
+      EXPECT_TRUE(std::isfinite(volume(m, c))) << h;
+    }
+  }
+}
+
+TEST(GeneratorLimits, SizesAreKnownBeforeBuildingAndBeyondAnIndexAreRefused) {
+  const MeshData box = make_box(3, 2, 2, 1.2, 0.2, 0.3, CubeSplit::kFive);
+  const MeshSize bs = box_size(3, 2, 2, 1.2, 0.2, 0.3, CubeSplit::kFive);
+  EXPECT_EQ(bs.points, box.num_points());
+  EXPECT_EQ(bs.cells, box.num_cells());
+  const MeshData cyl = make_cylinder(0.1, 0.03, 3, 8);
+  const MeshSize cs = cylinder_size(0.1, 0.03, 3, 8);
+  EXPECT_EQ(cs.points, cyl.num_points());
+  EXPECT_EQ(cs.cells, cyl.num_cells());
+  // The issue's 1000^3 box: 6e9 tetrahedra, refused before any allocation.
+  const MeshSize huge = box_size(1000, 1000, 1000, 1, 1, 1);
+  EXPECT_EQ(huge.cells, 6000000000LL);
+  EXPECT_EQ(huge.points, 1003003001LL);
+  const auto r = refusal([] { return make_box(1000, 1000, 1000, 1, 1, 1); });
+  EXPECT_EQ(r.first, "");
+  EXPECT_EQ(r.second,
+            "make_box: 6000000000 cells on 1003003001 points are more than an Index can number "
+            "(2147483647)");
+  EXPECT_EQ(refusal([] { return make_cylinder(1, 1, 1000, 1000); }).first, "");
 }
 
 // Facets (sorted vertex tuples) of all cells with their multiplicities, via sort (fast enough

@@ -79,18 +79,23 @@ std::string with_probe(const std::string& probe) {
       "  \"solver\": {\"method\": \"cg\"},\n  \"outputs\": {\"probes\": [\n    " + probe + "]}\n");
 }
 
+// Line of the value at `pointer` in the spec's index; -1 when the index has no such value.
+long line_at(const incise::scene::SceneSpec& s, const std::string& pointer) {
+  return s.lines.contains(pointer) ? s.lines.line(pointer) : -1;
+}
+
 TEST(SceneErrorLines, ValidSceneRecordsTheLineOfEveryValue) {
   const auto s = parse_scene(kScene, "scene.json", "");
-  EXPECT_EQ(s.lines.at(""), 1);
-  EXPECT_EQ(s.lines.at("/name"), 3);  // a string holding braces, quotes and ": " is skipped whole
-  EXPECT_EQ(s.lines.at("/mesh/nx"), 4);
-  EXPECT_EQ(s.lines.at("/mesh/lz"), 5);
-  EXPECT_EQ(s.lines.at("/material"), 6);  // an object member: the line of its key
-  EXPECT_EQ(s.lines.at("/material/nu"), 9);
-  EXPECT_EQ(s.lines.at("/fixed/1"), 13);  // an array element: the line where it begins
-  EXPECT_EQ(s.lines.at("/fixed/1/axis"), 14);
-  EXPECT_EQ(s.lines.at("/loads/0/at/2"), 16);
-  EXPECT_EQ(s.lines.at("/solver/method"), 17);
+  EXPECT_EQ(line_at(s, ""), 1);
+  EXPECT_EQ(line_at(s, "/name"), 3);  // a string holding braces, quotes and ": " is skipped whole
+  EXPECT_EQ(line_at(s, "/mesh/nx"), 4);
+  EXPECT_EQ(line_at(s, "/mesh/lz"), 5);
+  EXPECT_EQ(line_at(s, "/material"), 6);  // an object member: the line of its key
+  EXPECT_EQ(line_at(s, "/material/nu"), 9);
+  EXPECT_EQ(line_at(s, "/fixed/1"), 13);  // an array element: the line where it begins
+  EXPECT_EQ(line_at(s, "/fixed/1/axis"), 14);
+  EXPECT_EQ(line_at(s, "/loads/0/at/2"), 16);
+  EXPECT_EQ(line_at(s, "/solver/method"), 17);
 }
 
 TEST(SceneErrorLines, OutOfRangeValueNamesItsLine) {
@@ -146,6 +151,64 @@ TEST(SceneErrorLines, BuilderErrorNamesTheLineOfTheRegion) {
   EXPECT_EQ(e.what.rfind("scene.json:13: /fixed/1: region selects no node", 0), 0u) << e.what;
 }
 
+// Issue 18: degenerate generated geometry is the generator's refusal (mesh::GeneratorError) at
+// the JSON path and line of the parameter, before anything is allocated.
+TEST(SceneErrorLines, DegenerateGeneratedGeometryNamesTheParameterAndItsLine) {
+  EXPECT_EQ(build_error(parse_scene(edited("\"lx\": 1.2", "\"lx\": 1e300"), "scene.json", "")).what,
+            "scene.json:5: /mesh/lx: make_box: cell size lx / nx = 1e+300 / 2 = 5e+299 m is "
+            "outside [1e-100, 1e+100] m (cell volumes would not be representable)");
+  const std::string cylinder = edited(
+      "\"mesh\": {\"type\": \"box\", \"nx\": 2, \"ny\": 1, \"nz\": 1,\n           \"lx\": 1.2, "
+      "\"ly\": 0.2, \"lz\": 0.3},",
+      "\"mesh\": {\"type\": \"cylinder\", \"radius\": 0.1,\n  \"length\": 1e-320, \"rings\": 2, "
+      "\"layers\": 2},");
+  const BuildError e = build_error(parse_scene(cylinder, "scene.json", ""));
+  EXPECT_EQ(e.line, 5);
+  EXPECT_EQ(e.what.rfind("scene.json:5: /mesh/length: make_cylinder: cell size length / layers", 0),
+            0u)
+      << e.what;
+}
+
+// Issue 18: the build's memory estimate is checked against the budget before the mesh exists.
+TEST(SceneErrorLines, MeshBeyondTheMemoryBudgetIsRefusedWithEstimateAndBudget) {
+  const std::string big =
+      edited("\"nx\": 2, \"ny\": 1, \"nz\": 1", "\"nx\": 100, \"ny\": 10, \"nz\": 10");
+  const auto with_limit = [&](const std::string& scene, const std::string& limit) {
+    std::string t = scene;
+    t.replace(t.find("  \"version\": 1,"), 15,
+              "  \"version\": 1, \"limits\": {\"memory_mb\": " + limit + "},");
+    return t;
+  };
+  const BuildError e = build_error(parse_scene(with_limit(big, "1"), "scene.json", ""));
+  EXPECT_EQ(e.line, 4);
+  EXPECT_EQ(
+      e.what.rfind("scene.json:4: /mesh: the mesh and its elastic problem need an estimated ", 0),
+      0u)
+      << e.what;
+  EXPECT_NE(e.what.find("(60000 tetrahedra, 12221 nodes), more than the memory budget of 1 MiB "
+                        "(limits.memory_mb = 1)"),
+            std::string::npos)
+      << e.what;
+  EXPECT_EQ(build_error(parse_scene(with_limit(big, "64"), "scene.json", "")).line, -1);  // builds
+  EXPECT_EQ(parse_error(with_limit(kScene, "0")),
+            "scene.json:2: /limits/memory_mb: expected an integer in [1, 2147483647], got 0");
+  // The issue's 1000^3 box against the default budget (half the physical memory: smaller on any
+  // machine with less than 2.4 TB): 6e9 cells × 184 B (4 indices, element reference and cell of
+  // the problem) + 1.003e9 nodes × 99 B (coordinates, 3 DOFs × (load, mass, flag)) = 1.148e6 MiB.
+  const BuildError d = build_error(parse_scene(
+      edited("\"nx\": 2, \"ny\": 1, \"nz\": 1", "\"nx\": 1000, \"ny\": 1000, \"nz\": 1000"),
+      "scene.json", ""));
+  EXPECT_NE(d.what.find("/mesh: the mesh and its elastic problem need an estimated 1.148e+06 MiB "
+                        "(6000000000 tetrahedra, 1003003001 nodes), more than the memory budget "
+                        "of "),
+            std::string::npos)
+      << d.what;
+  EXPECT_NE(d.what.find("(by default half the physical memory; set \"limits\": {\"memory_mb\": "
+                        "N} or incise run --memory-mb N)"),
+            std::string::npos)
+      << d.what;
+}
+
 TEST(SceneErrorLines, ProbeNameOutsideTheCsvAlphabetNamesItsLine) {
   // docs/scenes.md, outputs: probe names become CSV column names.
   const std::string text = with_probe("{\"name\": \"tip probe\", \"at\": [1.2, 0.2, 0.3]}");
@@ -165,7 +228,7 @@ TEST(SceneErrorLines, ProbeOutsideTheMeshNamesTheLineOfItsLocation) {
 
 TEST(SceneErrorLines, SpecMadeInCodeHasNoLine) {
   auto spec = parse_scene(kScene, "scene.json", "");
-  spec.lines.clear();
+  spec.lines = {};
   spec.fixed[1].value = 5.0;
   const BuildError e = build_error(spec);
   EXPECT_EQ(e.line, 0);

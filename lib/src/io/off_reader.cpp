@@ -2,7 +2,7 @@
 
 #include <incise/io/read_mesh.hpp>
 
-#include <sstream>
+#include <string>
 
 #include "text_reader.hpp"
 
@@ -34,6 +34,12 @@ LoadedMesh read_off(const std::string& path, const ReadOptions& options) {
       raw.tris.push_back(static_cast<Index>(r.integer("vertex index (0-based)", 0, nv - 1)));
     raw.tri_lines.push_back(r.line());
     r.skip_line();  // optional colour
+  }
+  if (!r.at_end()) {
+    const std::string extra(r.token("end of file").substr(0, 40));
+    r.fail("unexpected data after the " + std::to_string(nf) +
+           " faces the header declares: expected end of file, got '" + extra +
+           "' (is the face count too small?)");
   }
   return detail::finalize(std::move(raw), path, options);
 }

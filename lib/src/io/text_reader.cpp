@@ -2,6 +2,7 @@
 
 #include <incise/mesh/quality.hpp>
 #include <incise/mesh/repair.hpp>
+#include <incise/mesh/tet_faces.hpp>
 
 #include <algorithm>
 #include <array>
@@ -232,6 +233,128 @@ void count_labels(const std::vector<int>& tags, std::map<int, Index>& out) {
   for (int t : tags) ++out[t];
 }
 
+// Face j (opposite vertex j) of cell c of `cells` (k = 4: kTetFace; k = 3: the edge
+// (v_{j+1}, v_{j+2})): its sorted vertices (unused entries -1) and the parity of the sort.
+// Two cells on opposite sides of a face give it opposite parities (thesis invariant 7.4).
+struct OrientedFace {
+  std::array<Index, 3> key;
+  int parity;
+  Index cell;
+};
+
+OrientedFace oriented_face(const mesh::CellMatrix& cells, Index c, int j) {
+  const int k = static_cast<int>(cells.rows());
+  std::array<Index, 3> v{-1, -1, -1};
+  for (int r = 0; r < k - 1; ++r) v[r] = cells(k == 4 ? mesh::kTetFace[j][r] : (j + 1 + r) % 3, c);
+  int parity = 0;  // of the bubble sort below: one swap per inversion
+  for (int pass = 0; pass < k - 2; ++pass)
+    for (int a = 0; a + 1 < k - 1 - pass; ++a)
+      if (v[a] > v[a + 1]) std::swap(v[a], v[a + 1]), parity ^= 1;
+  return {v, parity, c};
+}
+
+// Surfaces in 3D: flips triangles so that each edge shared by two triangles is traversed in
+// opposite directions, orienting every connected part like its first triangle. Returns the
+// flipped cells.
+std::vector<Index> orient_surface(mesh::CellMatrix& tris) {
+  const Index n = static_cast<Index>(tris.cols());
+  std::vector<OrientedFace> edges;
+  edges.reserve(3 * static_cast<std::size_t>(n));
+  for (Index c = 0; c < n; ++c)
+    for (int j = 0; j < 3; ++j) edges.push_back(oriented_face(tris, c, j));
+  std::sort(edges.begin(), edges.end(),
+            [](const OrientedFace& a, const OrientedFace& b) { return a.key < b.key; });
+  // Neighbours across manifold edges (exactly two triangles), with "same direction" flags.
+  std::vector<std::vector<std::pair<Index, int>>> next(static_cast<std::size_t>(n));
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t e = i;
+    while (e < edges.size() && edges[e].key == edges[i].key) ++e;
+    if (e - i == 2 && edges[i].cell != edges[i + 1].cell) {
+      const int same = edges[i].parity == edges[i + 1].parity ? 1 : 0;
+      next[static_cast<std::size_t>(edges[i].cell)].push_back({edges[i + 1].cell, same});
+      next[static_cast<std::size_t>(edges[i + 1].cell)].push_back({edges[i].cell, same});
+    }
+    i = e;
+  }
+  std::vector<int> state(static_cast<std::size_t>(n), -1);  // -1 unseen, 0 kept, 1 flipped
+  std::vector<Index> flipped, queue;
+  for (Index s = 0; s < n; ++s) {
+    if (state[static_cast<std::size_t>(s)] >= 0) continue;
+    state[static_cast<std::size_t>(s)] = 0;
+    queue.assign(1, s);
+    while (!queue.empty()) {
+      const Index c = queue.back();
+      queue.pop_back();
+      for (const auto& [d, same] : next[static_cast<std::size_t>(c)]) {
+        if (state[static_cast<std::size_t>(d)] >= 0) continue;
+        // d must be flipped relative to its file orientation iff it then disagrees with c.
+        state[static_cast<std::size_t>(d)] = state[static_cast<std::size_t>(c)] ^ same;
+        queue.push_back(d);
+      }
+    }
+  }
+  for (Index c = 0; c < n; ++c)
+    if (state[static_cast<std::size_t>(c)] == 1) {
+      std::swap(tris(1, c), tris(2, c));
+      flipped.push_back(c);
+    }
+  return flipped;
+}
+
+// Refuses a (d-1)-face shared by more than two cells and two cells on the same side of a face
+// (the same oriented face twice: overlapping cells, or a surface whose neighbouring triangles
+// disagree in orientation), naming the lines of the cells and of the face's vertices.
+void check_faces(const std::string& file, const mesh::CellMatrix& cells,
+                 const std::vector<long>& cell_lines, const std::vector<long>& point_lines,
+                 bool surface, bool reoriented) {
+  const int k = static_cast<int>(cells.rows());
+  const char* what = k == 4 ? "tetrahedra" : "triangles";
+  std::vector<OrientedFace> faces;
+  faces.reserve(static_cast<std::size_t>(k) * static_cast<std::size_t>(cells.cols()));
+  for (Index c = 0; c < cells.cols(); ++c)
+    for (int j = 0; j < k; ++j) faces.push_back(oriented_face(cells, c, j));
+  std::sort(faces.begin(), faces.end(), [](const OrientedFace& a, const OrientedFace& b) {
+    return a.key != b.key ? a.key < b.key : a.cell < b.cell;
+  });
+  auto vertex_lines = [&](const std::array<Index, 3>& key) {
+    std::ostringstream os;
+    os << "vertices at lines " << point_lines[static_cast<std::size_t>(key[0])];
+    for (int r = 1; r < k - 1; ++r) os << ", " << point_lines[static_cast<std::size_t>(key[r])];
+    return os.str();
+  };
+  auto line = [&](Index c) { return cell_lines[static_cast<std::size_t>(c)]; };
+  for (std::size_t i = 0; i < faces.size();) {
+    std::size_t e = i;
+    while (e < faces.size() && faces[e].key == faces[i].key) ++e;
+    const OrientedFace& a = faces[i];
+    std::ostringstream os;
+    if (e - i > 2) {
+      os << (k == 4 ? "face" : "edge") << " (" << vertex_lines(a.key) << ") shared by " << e - i
+         << " " << what << " (lines " << line(a.cell) << ", " << line(faces[i + 1].cell) << ", "
+         << line(faces[i + 2].cell) << (e - i > 3 ? ", ..." : "")
+         << "): expected a manifold mesh, each " << (k == 4 ? "face" : "edge") << " in at most two "
+         << what;
+      throw ParseError(file, line(faces[i + 2].cell), os.str());
+    }
+    if (e - i == 2 && a.parity == faces[i + 1].parity) {
+      const OrientedFace& b = faces[i + 1];
+      os << what << " at lines " << line(a.cell) << " and " << line(b.cell);
+      if (surface) {
+        os << " traverse their common edge (" << vertex_lines(a.key) << ") in the same direction: "
+           << (reoriented ? "the surface is not orientable"
+                          : "the surface is not consistently oriented (the reorient option "
+                            "orients each connected part like its first triangle)");
+      } else {
+        os << " lie on the same side of their common " << (k == 4 ? "face" : "edge") << " ("
+           << vertex_lines(a.key) << "): they overlap; expected the two cells of a "
+           << (k == 4 ? "face" : "edge") << " on opposite sides";
+      }
+      throw ParseError(file, line(b.cell), os.str());
+    }
+    i = e;
+  }
+}
+
 }  // namespace
 
 LoadedMesh finalize(RawMesh&& raw, const std::string& file, const ReadOptions& options) {
@@ -247,7 +370,16 @@ LoadedMesh finalize(RawMesh&& raw, const std::string& file, const ReadOptions& o
   INCISE_CHECK_PARAM(options.scale > 0 && std::isfinite(options.scale),
                      "ReadOptions::scale must be positive and finite");
   if (options.scale != 1.0)
-    for (double& x : raw.xyz) x *= options.scale;
+    for (std::size_t i = 0; i < raw.xyz.size(); ++i) {
+      const double x = raw.xyz[i];
+      raw.xyz[i] *= options.scale;
+      if (!std::isfinite(raw.xyz[i])) {
+        std::ostringstream os;
+        os << "coordinate " << x << " times the scale " << options.scale
+           << " is not finite: expected coordinates within the doubles after scaling";
+        throw ParseError(file, raw.point_lines[i / 3], os.str());
+      }
+    }
   const bool volume = !raw.tets.empty();
   if (!volume && raw.tris.empty())
     throw ParseError(file, 0, "no tetrahedra or triangles found: expected a simplicial mesh");
@@ -374,6 +506,22 @@ LoadedMesh finalize(RawMesh&& raw, const std::string& file, const ReadOptions& o
        << line_list(flipped_lines, 5) << ")";
     rep.notes.push_back(os.str());
   }
+
+  // Surfaces in 3D have no signed area: their orientation is that of their neighbours.
+  if (rep.surface && options.reorient) {
+    const std::vector<Index> flipped = orient_surface(m.cells);
+    if (!flipped.empty()) {
+      std::vector<long> l;
+      for (Index c : flipped) l.push_back(lines[static_cast<std::size_t>(c)]);
+      std::ostringstream os;
+      os << flipped.size() << " of " << nc
+         << " surface triangles were flipped to agree with their neighbours (" << line_list(l, 5)
+         << ")";
+      rep.notes.push_back(os.str());
+      rep.reoriented += static_cast<Index>(flipped.size());
+    }
+  }
+  check_faces(file, m.cells, lines, raw.point_lines, rep.surface, options.reorient);
 
   if (options.split_pinched_vertices) {
     const mesh::PinchSplit split = mesh::split_pinched_vertices(m);

@@ -4,11 +4,57 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
+#include <sstream>
 #include <vector>
 
 namespace incise::mesh {
 
 namespace {
+
+std::string num(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+void check_count(const char* generator, const char* name, int n) {
+  if (n < 1)
+    throw GeneratorError(
+        name, std::string(generator) + ": " + name + " = " + std::to_string(n) + " must be >= 1");
+}
+
+void check_length(const char* generator, const char* name, double l) {
+  if (!(l > 0 && std::isfinite(l)))
+    throw GeneratorError(name, std::string(generator) + ": " + name + " = " + num(l) +
+                                   " must be positive and finite");
+}
+
+// The cell size length / count along one axis (length itself when count_name is null) must
+// lie in [kMinCellSize, kMaxCellSize].
+void check_cell_size(const char* generator, const char* length_name, const char* count_name,
+                     double length, int count) {
+  check_length(generator, length_name, length);
+  if (count_name) check_count(generator, count_name, count);
+  const double h = count_name ? length / count : length;
+  if (!(h >= kMinCellSize && h <= kMaxCellSize))
+    throw GeneratorError(length_name,
+                         std::string(generator) + ": cell size " + length_name +
+                             (count_name ? std::string(" / ") + count_name + " = " + num(length) +
+                                               " / " + std::to_string(count)
+                                         : std::string()) +
+                             " = " + num(h) + " m is outside [" + num(kMinCellSize) + ", " +
+                             num(kMaxCellSize) + "] m (cell volumes would not be representable)");
+}
+
+void check_index_range(const char* generator, const MeshSize& s) {
+  constexpr std::int64_t kMax = std::numeric_limits<Index>::max();
+  if (s.points > kMax || s.cells > kMax)
+    throw GeneratorError("", std::string(generator) + ": " + std::to_string(s.cells) +
+                                 " cells on " + std::to_string(s.points) +
+                                 " points are more than an Index can number (" +
+                                 std::to_string(kMax) + ")");
+}
 
 double signed_volume(const Eigen::Matrix3Xd& p, Index a, Index b, Index c, Index d) {
   const Vec3 e1 = p.col(b) - p.col(a);
@@ -19,11 +65,17 @@ double signed_volume(const Eigen::Matrix3Xd& p, Index a, Index b, Index c, Index
 
 }  // namespace
 
+MeshSize box_size(int nx, int ny, int nz, double lx, double ly, double lz, CubeSplit split) {
+  check_cell_size("make_box", "lx", "nx", lx, nx);
+  check_cell_size("make_box", "ly", "ny", ly, ny);
+  check_cell_size("make_box", "lz", "nz", lz, nz);
+  const std::int64_t cubes = std::int64_t{nx} * ny * nz;
+  return {(std::int64_t{nx} + 1) * (std::int64_t{ny} + 1) * (std::int64_t{nz} + 1),
+          cubes * (split == CubeSplit::kSix ? 6 : 5)};
+}
+
 MeshData make_box(int nx, int ny, int nz, double lx, double ly, double lz, CubeSplit split) {
-  INCISE_CHECK_PARAM(nx >= 1 && ny >= 1 && nz >= 1, "make_box: cell counts must be >= 1");
-  INCISE_CHECK_PARAM(
-      lx > 0 && ly > 0 && lz > 0 && std::isfinite(lx) && std::isfinite(ly) && std::isfinite(lz),
-      "make_box: box lengths must be positive and finite");
+  check_index_range("make_box", box_size(nx, ny, nz, lx, ly, lz, split));
   MeshData m;
   m.dimension = 3;
   const Index px = nx + 1, py = ny + 1, pz = nz + 1;
@@ -79,21 +131,29 @@ MeshData make_box(int nx, int ny, int nz, double lx, double ly, double lz, CubeS
 }
 
 MeshData make_beam(int h, double spacing) {
-  INCISE_CHECK_PARAM(h >= 2, "make_beam: h (nodes along the axis) must be >= 2");
-  INCISE_CHECK_PARAM(spacing > 0 && std::isfinite(spacing),
-                     "make_beam: spacing must be positive and finite");
+  if (h < 2)
+    throw GeneratorError(
+        "h", "make_beam: h (nodes along the axis) = " + std::to_string(h) + " must be >= 2");
+  check_cell_size("make_beam", "spacing", nullptr, spacing, 1);
   return make_box(4, 4, h - 1, 4 * spacing, 4 * spacing, (h - 1) * spacing, CubeSplit::kFive);
 }
 
 MeshData make_brick(int n) {
-  INCISE_CHECK_PARAM(n >= 1, "make_brick: resolution n must be >= 1");
+  check_count("make_brick", "n", n);
+  if (n > std::numeric_limits<int>::max() / 2)
+    throw GeneratorError("n", "make_brick: n = " + std::to_string(n) + " is too large");
   return make_box(n, n, 2 * n, 1.0, 1.0, 2.0, CubeSplit::kFive);
 }
 
+MeshSize cylinder_size(double length, double radius, int rings, int layers) {
+  check_cell_size("make_cylinder", "radius", "rings", radius, rings);
+  check_cell_size("make_cylinder", "length", "layers", length, layers);
+  const std::int64_t r = rings;
+  return {(1 + 3 * r * (r + 1)) * (std::int64_t{layers} + 1), 18 * r * r * layers};
+}
+
 MeshData make_cylinder(double length, double radius, int rings, int layers) {
-  INCISE_CHECK_PARAM(rings >= 1 && layers >= 1, "make_cylinder: rings and layers must be >= 1");
-  INCISE_CHECK_PARAM(length > 0 && radius > 0 && std::isfinite(length) && std::isfinite(radius),
-                     "make_cylinder: length and radius must be positive and finite");
+  check_index_range("make_cylinder", cylinder_size(length, radius, rings, layers));
   constexpr double kTwoPi = 6.28318530717958647692;
   // Cross-section: ring k (k = 0..rings) holds max(1, 6k) nodes; node (k, j) at angle 2πj/(6k).
   std::vector<Index> ring_start(rings + 2, 0);
@@ -180,9 +240,10 @@ MeshData make_thesis_cylinder_large() {
 }
 
 MeshData make_rectangle(int nx, int ny, double lx, double ly, GridDiagonal diagonal) {
-  INCISE_CHECK_PARAM(nx >= 1 && ny >= 1, "make_rectangle: cell counts must be >= 1");
-  INCISE_CHECK_PARAM(lx > 0 && ly > 0 && std::isfinite(lx) && std::isfinite(ly),
-                     "make_rectangle: lengths must be positive and finite");
+  check_cell_size("make_rectangle", "lx", "nx", lx, nx);
+  check_cell_size("make_rectangle", "ly", "ny", ly, ny);
+  check_index_range("make_rectangle",
+                    {(std::int64_t{nx} + 1) * (std::int64_t{ny} + 1), 2 * std::int64_t{nx} * ny});
   MeshData m;
   m.dimension = 2;
   const Index px = nx + 1;

@@ -1,7 +1,10 @@
 #include "json_reader.hpp"
 
+#include <incise/scene/scene_parser.hpp>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
 
@@ -239,58 +242,139 @@ void JsonObject::finish() const {
 
 namespace {
 
-// Tracks the JSON pointer of the value being parsed, to name duplicate keys.
-struct Frame {
+std::string mib(std::size_t bytes) {
+  std::ostringstream os;
+  os.precision(3);
+  os << static_cast<double>(bytes) / (1024.0 * 1024.0) << " MiB";
+  return os.str();
+}
+
+// Refuses arrays and objects nested deeper than kMaxSceneDepth, at the line of the first
+// bracket beyond it. Counts the brackets outside strings only (any text: it runs before the
+// JSON parser has checked the syntax).
+void check_depth(const std::string& text, const std::string& file) {
+  int depth = 0;
+  long line = 1;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') ++line;
+    if (in_string) {
+      if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n')
+        ++i;
+      else if (c == '"')
+        in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxSceneDepth)
+        throw ParseError(file, line,
+                         "arrays and objects nested deeper than " + std::to_string(kMaxSceneDepth) +
+                             " levels (a scene needs at most 6; docs/scenes.md, Limits)");
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+}
+
+// One open array or object of the line-index scan.
+struct Level {
+  LineIndex::Id id = LineIndex::kNone;
   bool is_array = false;
-  long index = -1;
-  std::string key;
-  std::set<std::string> keys;
+  std::size_t count = 0;         // arrays: elements begun
+  bool want_key = true;          // objects: the next string is a key
+  std::string key;               // objects: the current member's key
+  long key_line = 0;             // objects: the line of that key
+  std::set<std::string> keys{};  // objects: the keys seen so far
 };
 
-std::string frames_path(const std::vector<Frame>& st, std::size_t upto) {
+// JSON pointer of the value the innermost level is at (its current element or member).
+std::string current_path(const std::vector<Level>& st) {
   std::string p;
-  for (std::size_t i = 0; i < upto; ++i) {
-    p += st[i].is_array ? child_path("", static_cast<std::size_t>(st[i].index))
-                        : child_path("", st[i].key);
-  }
+  for (const Level& l : st)
+    p += l.is_array ? child_path("", l.count == 0 ? 0 : l.count - 1) : child_path("", l.key);
   return p;
+}
+
+// Builds the line index of `text` (valid JSON up to the first number nlohmann refused, if any)
+// in one pass; refuses duplicate keys and numbers beyond the finite doubles at their line.
+LineIndex index_lines(const std::string& text, const std::string& file) {
+  LineIndex lines;
+  std::vector<Level> st;
+  long line = 1;
+  // A value begins at the current position: add it to the index.
+  auto begin_value = [&]() -> LineIndex::Id {
+    if (st.empty()) return lines.empty() ? lines.add(LineIndex::kNone, line) : LineIndex::kNone;
+    Level& l = st.back();
+    if (l.is_array) {
+      ++l.count;
+      return lines.add(l.id, line);
+    }
+    return lines.add(l.id, l.key_line, &l.key);
+  };
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+    } else if (c == '{' || c == '[') {
+      Level l;
+      l.id = begin_value();
+      l.is_array = c == '[';
+      st.push_back(std::move(l));
+    } else if (c == '}' || c == ']') {
+      if (!st.empty()) st.pop_back();
+    } else if (c == ',') {
+      if (!st.empty() && !st.back().is_array) st.back().want_key = true;
+    } else if (c == '"') {
+      std::size_t end = i + 1;  // the closing quote (no raw newline can occur in a string)
+      while (end < text.size() && text[end] != '"') end += text[end] == '\\' ? 2 : 1;
+      if (!st.empty() && !st.back().is_array && st.back().want_key) {
+        Level& l = st.back();
+        l.key = Json::parse(text.substr(i, end - i + 1)).get<std::string>();
+        l.key_line = line;
+        l.want_key = false;
+        if (!l.keys.insert(l.key).second)
+          throw ParseError(file, line,
+                           current_path(st) + ": duplicate key \"" + l.key +
+                               "\" (each key may appear once per object)");
+      } else {
+        begin_value();
+      }
+      i = end;
+    } else if (c == '-' || (c >= '0' && c <= '9') || c == 't' || c == 'f' || c == 'n') {
+      begin_value();  // number or literal: skip to its end
+      const std::size_t start = i;
+      while (i + 1 < text.size() &&
+             std::string(",]} \t\r\n").find(text[i + 1]) == std::string::npos)
+        ++i;
+      if (c != 't' && c != 'f' && c != 'n') {
+        const std::string number = text.substr(start, i + 1 - start);
+        if (!std::isfinite(std::strtod(number.c_str(), nullptr))) {
+          const std::string path = current_path(st);
+          throw ParseError(file, line,
+                           (path.empty() ? std::string("/") : path) + ": number " +
+                               (number.size() > 40 ? number.substr(0, 37) + "..." : number) +
+                               " is out of range: expected a finite number (magnitude below "
+                               "1.8e308)");
+        }
+      }
+    }
+  }
+  return lines;
 }
 
 }  // namespace
 
-Json parse_strict(const std::string& text, const std::string& file) {
-  std::vector<Frame> st;
-  auto element_started = [&st]() {
-    if (!st.empty() && st.back().is_array) ++st.back().index;
-  };
-  Json::parser_callback_t cb = [&](int, Json::parse_event_t ev, Json& parsed) -> bool {
-    switch (ev) {
-      case Json::parse_event_t::object_start:
-        element_started();
-        st.push_back(Frame{});
-        break;
-      case Json::parse_event_t::array_start:
-        element_started();
-        st.push_back(Frame{true, -1, {}, {}});
-        break;
-      case Json::parse_event_t::object_end:
-      case Json::parse_event_t::array_end:
-        if (!st.empty()) st.pop_back();
-        break;
-      case Json::parse_event_t::key: {
-        const std::string k = parsed.get<std::string>();
-        if (!st.back().keys.insert(k).second)
-          fail(file, frames_path(st, st.size() - 1) + child_path("", k),
-               "duplicate key \"" + k + "\" (each key may appear once per object)");
-        st.back().key = k;
-        break;
-      }
-      case Json::parse_event_t::value: element_started(); break;
-    }
-    return true;
-  };
+ParsedJson parse_strict(const std::string& text, const std::string& file) {
+  if (text.size() > kMaxSceneBytes)
+    throw ParseError(file, 0,
+                     "scene text of " + std::to_string(text.size()) +
+                         " bytes is larger than the limit of " + mib(kMaxSceneBytes) + " (" +
+                         std::to_string(kMaxSceneBytes) + " bytes; docs/scenes.md, Limits)");
+  check_depth(text, file);
+  ParsedJson out;
   try {
-    return Json::parse(text, cb, /*allow_exceptions=*/true, /*ignore_comments=*/false);
+    out.value = Json::parse(text, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/false);
   } catch (const Json::parse_error& e) {
     // Translate the byte offset into line and column.
     const std::size_t byte = std::min<std::size_t>(e.byte, text.size());
@@ -304,86 +388,26 @@ Json parse_strict(const std::string& text, const std::string& file) {
     if (colon != std::string::npos) what = what.substr(colon + 2);
     throw ParseError(file, line,
                      "invalid JSON at column " + std::to_string(byte - line_start) + ": " + what);
+  } catch (const Json::out_of_range&) {
+    // A number beyond the doubles (nlohmann error 406): the scan below names it and its line.
+    (void)index_lines(text, file);
+    throw ParseError(file, 0, "a number is out of range: expected finite numbers");
   }
+  out.lines = index_lines(text, file);
+  return out;
 }
 
-std::map<std::string, long> value_lines(const std::string& text) {
-  struct Level {
-    bool is_array;
-    std::string path;
-    std::size_t count = 0;  // elements begun (arrays)
-    bool want_key = true;   // objects: the next string is a key
-    std::string key;        // objects: the current member's key
-    long key_line = 0;      // objects: the line of that key
-  };
-  std::map<std::string, long> lines;
-  std::vector<Level> st;
-  long line = 1;
-  // A value begins at the current position: record its pointer and line.
-  auto begin_value = [&]() -> std::string {
-    if (st.empty()) {
-      lines.emplace("", line);
-      return "";
-    }
-    Level& l = st.back();
-    const std::string p = l.is_array ? child_path(l.path, l.count++) : child_path(l.path, l.key);
-    lines.emplace(p, l.is_array ? line : l.key_line);
-    return p;
-  };
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (c == '\n') {
-      ++line;
-    } else if (c == '{' || c == '[') {
-      const std::string p = begin_value();
-      st.push_back(Level{c == '[', p, 0, true, {}, 0});
-    } else if (c == '}' || c == ']') {
-      if (!st.empty()) st.pop_back();
-    } else if (c == ',') {
-      if (!st.empty() && !st.back().is_array) st.back().want_key = true;
-    } else if (c == '"') {
-      std::size_t end = i + 1;  // the closing quote (no raw newline can occur in a string)
-      while (end < text.size() && text[end] != '"') end += text[end] == '\\' ? 2 : 1;
-      if (!st.empty() && !st.back().is_array && st.back().want_key) {
-        st.back().key = Json::parse(text.substr(i, end - i + 1)).get<std::string>();
-        st.back().key_line = line;
-        st.back().want_key = false;
-      } else {
-        begin_value();
-      }
-      i = end;
-    } else if (c == '-' || (c >= '0' && c <= '9') || c == 't' || c == 'f' || c == 'n') {
-      begin_value();  // number or literal: skip to its end
-      while (i + 1 < text.size() &&
-             std::string(",]} \t\r\n").find(text[i + 1]) == std::string::npos)
-        ++i;
-    }
-  }
-  return lines;
-}
-
-long line_of(const std::map<std::string, long>& lines, const std::string& path) {
-  std::string p = path;
-  while (true) {
-    const auto it = lines.find(p);
-    if (it != lines.end()) return it->second;
-    if (p.empty()) return 0;
-    p.erase(p.rfind('/') == std::string::npos ? 0 : p.rfind('/'));
-  }
-}
-
-ParseError with_line(const ParseError& e, const std::string& file,
-                     const std::map<std::string, long>& lines) {
+ParseError with_line(const ParseError& e, const std::string& file, const LineIndex& lines) {
   if (e.line() > 0 || e.file() != file || e.message().empty() || e.message()[0] != '/') return e;
   // The path is the longest prefix followed by ": " that names a value (a key may hold ": ").
   const std::string& m = e.message();
   std::string path;
   for (std::size_t at = m.find(": "); at != std::string::npos; at = m.find(": ", at + 1)) {
     const std::string candidate = m.substr(0, at);
-    if (path.empty() || lines.count(candidate)) path = candidate;
+    if (path.empty() || lines.contains(candidate)) path = candidate;
   }
   const std::string key = path == "/" ? "" : path;  // fail() writes the root as "/"
-  return ParseError(file, line_of(lines, key), m);
+  return ParseError(file, lines.line(key), m);
 }
 
 }  // namespace incise::scene::detail

@@ -8,10 +8,10 @@
 #include <incise/core/error.hpp>
 #include <incise/core/name_table.hpp>
 #include <incise/core/types.hpp>
+#include <incise/scene/line_index.hpp>
 
 #include <nlohmann/json.hpp>
 
-#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -107,19 +107,22 @@ class JsonObject {
 double as_number(const Json& j, const std::string& file, const std::string& path, const Range& r);
 Vec3 as_vec3(const Json& j, const std::string& file, const std::string& path);
 
-/// Parses JSON text strictly: syntax errors report line and column, duplicate keys are errors.
-Json parse_strict(const std::string& text, const std::string& file);
+/// A JSON text parsed by parse_strict: its value and the line of each of its values.
+struct ParsedJson {
+  Json value;
+  LineIndex lines;
+};
 
-/// Line (1-based) of every value of `text` by JSON pointer ("" is the root); for an object member
-/// the line of its key. Precondition: parse_strict accepted `text`.
-std::map<std::string, long> value_lines(const std::string& text);
-
-/// Line of `path` in `lines`, or of its nearest ancestor listed there; 0 when none is.
-long line_of(const std::map<std::string, long>& lines, const std::string& path);
+/// Parses a scene's JSON text strictly, in memory linear in its size and stack bounded by
+/// kMaxSceneDepth (scene_parser.hpp). Refused with ParseError(file, line, ...): a text longer
+/// than kMaxSceneBytes; arrays and objects nested deeper than kMaxSceneDepth (found by a scan of
+/// the brackets outside strings before the JSON parser recurses); syntax errors (with column);
+/// duplicate keys (at the repeated key, with its JSON path); numbers beyond the finite doubles
+/// (at the number, with its path).
+ParsedJson parse_strict(const std::string& text, const std::string& file);
 
 /// `e` with the line of the JSON path its message starts with ("<path>: ...", as fail() writes
 /// it) when `e` names `file` without a line; otherwise `e` unchanged.
-ParseError with_line(const ParseError& e, const std::string& file,
-                     const std::map<std::string, long>& lines);
+ParseError with_line(const ParseError& e, const std::string& file, const LineIndex& lines);
 
 }  // namespace incise::scene::detail

@@ -1,6 +1,7 @@
 #include <incise/scene/scene_builder.hpp>
 
 #include <incise/core/error.hpp>
+#include <incise/core/memory_budget.hpp>
 #include <incise/core/timer.hpp>
 #include <incise/cut/cutter.hpp>
 #include <incise/io/read_mesh.hpp>
@@ -10,8 +11,6 @@
 
 #include <algorithm>
 #include <sstream>
-
-#include "json_reader.hpp"
 
 namespace incise::scene {
 
@@ -35,40 +34,97 @@ std::string bbox_str(const mesh::MeshData& m) {
 
 [[noreturn]] void region_error(const SceneSpec& spec, const std::string& path,
                                const std::string& what, const mesh::MeshData& m) {
-  throw ParseError(spec.file, detail::line_of(spec.lines, path),
-                   path + ": " + what + " (" + bbox_str(m) + ")");
+  throw ParseError(spec.file, spec.lines.line(path), path + ": " + what + " (" + bbox_str(m) + ")");
 }
 
-std::size_t matrix_bytes(const mesh::MeshData& m) {
-  return static_cast<std::size_t>(m.points.size()) * sizeof(double) +
-         static_cast<std::size_t>(m.cells.size() + m.facets.size()) * sizeof(Index) +
-         (m.cell_tags.size() + m.point_tags.size() + m.facet_tags.size()) * sizeof(int);
+// Bytes of the mesh arrays: points, cells, facets and tags.
+std::uint64_t mesh_bytes(std::uint64_t points, std::uint64_t cell_entries,
+                         std::uint64_t facet_entries, std::uint64_t tags) {
+  return points * 3 * sizeof(double) + (cell_entries + facet_entries) * sizeof(Index) +
+         tags * sizeof(int);
 }
 
-mesh::MeshData make_mesh(const MeshSpec& ms, std::string& what) {
+std::uint64_t matrix_bytes(const mesh::MeshData& m) {
+  return mesh_bytes(static_cast<std::uint64_t>(m.num_points()),
+                    static_cast<std::uint64_t>(m.cells.size()),
+                    static_cast<std::uint64_t>(m.facets.size()),
+                    m.cell_tags.size() + m.point_tags.size() + m.facet_tags.size());
+}
+
+// Bytes of the elastic problem of `cells` tetrahedra on `points` nodes: element references and
+// cells, and per DOF the load, mass and fixed flag.
+std::uint64_t problem_bytes(std::uint64_t points, std::uint64_t cells) {
+  return cells * (sizeof(fem::TetReference) + 4 * sizeof(Index)) +
+         3 * points * (3 * sizeof(double) + 1);
+}
+
+std::string mib(std::uint64_t bytes) {
   std::ostringstream os;
-  switch (ms.source) {
-    case MeshSpec::Source::kBox: {
-      os << "mesh: box " << ms.nx << "x" << ms.ny << "x" << ms.nz << " of " << ms.lx << "x" << ms.ly
-         << "x" << ms.lz << " m";
-      what = os.str();
-      return mesh::make_box(ms.nx, ms.ny, ms.nz, ms.lx, ms.ly, ms.lz, ms.split);
-    }
-    case MeshSpec::Source::kCylinder: {
-      os << "mesh: cylinder r=" << ms.radius << " m, L=" << ms.length << " m, " << ms.rings
-         << " rings, " << ms.layers << " layers";
-      what = os.str();
-      return mesh::make_cylinder(ms.length, ms.radius, ms.rings, ms.layers);
-    }
-    case MeshSpec::Source::kFile: {
-      io::LoadedMesh loaded = io::read_mesh(ms.file);
-      what = "mesh: " + ms.file + " (" + loaded.report.format + ")";
-      if (ms.scale != 1.0) {
-        loaded.mesh.points *= ms.scale;
-        what += ", coordinates scaled by " + std::to_string(ms.scale);
+  os.precision(4);
+  os << static_cast<double>(bytes) / (1024.0 * 1024.0) << " MiB";
+  return os.str();
+}
+
+// Refuses a build whose mesh arrays and elastic problem, for a mesh of `size`, are estimated
+// above the scene's memory budget; reported at /mesh.
+void check_memory(const SceneSpec& spec, const mesh::MeshSize& size) {
+  const auto points = static_cast<std::uint64_t>(size.points);
+  const auto cells = static_cast<std::uint64_t>(size.cells);
+  const std::uint64_t estimate = mesh_bytes(points, 4 * cells, 0, 0) + problem_bytes(points, cells);
+  const bool from_scene = spec.limits.memory_mb > 0;
+  const std::uint64_t budget = from_scene ? static_cast<std::uint64_t>(spec.limits.memory_mb) << 20
+                                          : default_memory_budget_bytes();
+  if (estimate <= budget) return;
+  throw ParseError(
+      spec.file, spec.lines.line("/mesh"),
+      "/mesh: the mesh and its elastic problem need an estimated " + mib(estimate) + " (" +
+          std::to_string(size.cells) + " tetrahedra, " + std::to_string(size.points) +
+          " nodes), more than the memory budget of " + mib(budget) +
+          (from_scene ? " (limits.memory_mb = " + std::to_string(spec.limits.memory_mb) + ")"
+                      : " (by default half the physical memory; set \"limits\": {\"memory_mb\": "
+                        "N} or incise run --memory-mb N)"));
+}
+
+// A generator's refusal of a scene mesh parameter, at its JSON path (the keys of a generated
+// mesh are the generator's parameter names).
+[[noreturn]] void generator_error(const SceneSpec& spec, const mesh::GeneratorError& e) {
+  const std::string path = e.parameter().empty() ? "/mesh" : "/mesh/" + e.parameter();
+  throw ParseError(spec.file, spec.lines.line(path), path + ": " + e.what());
+}
+
+mesh::MeshData make_mesh(const SceneSpec& spec, std::string& what) {
+  const MeshSpec& ms = spec.mesh;
+  std::ostringstream os;
+  try {
+    switch (ms.source) {
+      case MeshSpec::Source::kBox: {
+        os << "mesh: box " << ms.nx << "x" << ms.ny << "x" << ms.nz << " of " << ms.lx << "x"
+           << ms.ly << "x" << ms.lz << " m";
+        what = os.str();
+        check_memory(spec, mesh::box_size(ms.nx, ms.ny, ms.nz, ms.lx, ms.ly, ms.lz, ms.split));
+        return mesh::make_box(ms.nx, ms.ny, ms.nz, ms.lx, ms.ly, ms.lz, ms.split);
       }
-      return std::move(loaded.mesh);
+      case MeshSpec::Source::kCylinder: {
+        os << "mesh: cylinder r=" << ms.radius << " m, L=" << ms.length << " m, " << ms.rings
+           << " rings, " << ms.layers << " layers";
+        what = os.str();
+        check_memory(spec, mesh::cylinder_size(ms.length, ms.radius, ms.rings, ms.layers));
+        return mesh::make_cylinder(ms.length, ms.radius, ms.rings, ms.layers);
+      }
+      case MeshSpec::Source::kFile: {
+        // The reader scales before its geometry checks, so that coordinates the scale makes
+        // non-finite or flat are reported at their line of the mesh file.
+        io::ReadOptions options;
+        options.scale = ms.scale;
+        io::LoadedMesh loaded = io::read_mesh(ms.file, options);
+        what = "mesh: " + ms.file + " (" + loaded.report.format + ")";
+        if (ms.scale != 1.0) what += ", coordinates scaled by " + std::to_string(ms.scale);
+        check_memory(spec, {loaded.mesh.num_points(), loaded.mesh.num_cells()});
+        return std::move(loaded.mesh);
+      }
     }
+  } catch (const mesh::GeneratorError& e) {
+    generator_error(spec, e);
   }
   throw UsageError("scene mesh source not handled");
 }
@@ -152,9 +208,9 @@ BuiltScene build_scene(const SceneSpec& spec) {
 
   // Mesh.
   std::string what;
-  b.mesh = make_mesh(spec.mesh, what);
+  b.mesh = make_mesh(spec, what);
   if (b.mesh.dimension != 3)
-    throw ParseError(spec.file, detail::line_of(spec.lines, "/mesh"),
+    throw ParseError(spec.file, spec.lines.line("/mesh"),
                      "/mesh: expected a tetrahedral (3D) mesh, got dimension " +
                          std::to_string(b.mesh.dimension));
   what += " -> " + std::to_string(b.mesh.num_cells()) + " tets, " +
@@ -296,8 +352,7 @@ BuiltScene build_scene(const SceneSpec& spec) {
     if (gravity.squaredNorm() > 0) b.problem->add_gravity(gravity);
     b.external_force = b.problem->external_force();
     const std::size_t m = static_cast<std::size_t>(b.mesh.num_cells());
-    const std::size_t bytes = m * (sizeof(fem::TetReference) + 4 * sizeof(Index)) +
-                              static_cast<std::size_t>(ndof) * (3 * sizeof(double) + 1);
+    const std::size_t bytes = problem_bytes(static_cast<std::uint64_t>(n), m);
     const auto& ef = b.problem->element_flop_counts();
     b.record("elastic problem: material \"" + spec.material.model + "\", " + std::to_string(m) +
                  " element references; counted flops/element: force " + std::to_string(ef.force) +

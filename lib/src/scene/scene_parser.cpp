@@ -9,7 +9,6 @@
 #include <map>
 #include <regex>
 #include <set>
-#include <sstream>
 
 #include "json_reader.hpp"
 
@@ -374,6 +373,13 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
   } else {
     root.get("outputs");
   }
+  if (root.has("limits")) {
+    JsonObject limits = root.object("limits", "a limits object {\"memory_mb\": N}");
+    s.limits.memory_mb = limits.integer("memory_mb", 1, std::numeric_limits<int>::max(), 0);
+    limits.finish();
+  } else {
+    root.get("limits");
+  }
   root.finish();
   return s;
 }
@@ -382,25 +388,31 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
 
 SceneSpec parse_scene(const std::string& text, const std::string& file,
                       const std::string& base_dir) {
-  const Json root_json = detail::parse_strict(text, file);
-  std::map<std::string, long> lines = detail::value_lines(text);
+  detail::ParsedJson parsed = detail::parse_strict(text, file);
   try {
-    SceneSpec s = parse_root(root_json, file, base_dir);
-    s.lines = std::move(lines);
+    SceneSpec s = parse_root(parsed.value, file, base_dir);
+    s.lines = std::move(parsed.lines);
     return s;
   } catch (const ParseError& e) {
-    throw detail::with_line(e, file, lines);  // "<file>:<line>: <path>: ..."
+    throw detail::with_line(e, file, parsed.lines);  // "<file>:<line>: <path>: ..."
   }
 }
 
 SceneSpec load_scene(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ParseError(path, 0, "cannot open scene file");
-  std::ostringstream os;
-  os << in.rdbuf();
+  // Read no further than the limit (the file may be a pipe, or endless like /dev/zero).
+  std::string text;
+  char buf[1 << 16];
+  while (text.size() <= kMaxSceneBytes && in.read(buf, sizeof buf).gcount() > 0)
+    text.append(buf, static_cast<std::size_t>(in.gcount()));
   if (in.bad()) throw ParseError(path, 0, "error while reading scene file");
+  if (text.size() > kMaxSceneBytes)
+    throw ParseError(path, 0,
+                     "scene file is larger than the limit of 16 MiB (" +
+                         std::to_string(kMaxSceneBytes) + " bytes; docs/scenes.md, Limits)");
   const std::string base = std::filesystem::path(path).parent_path().string();
-  return parse_scene(os.str(), path, base);
+  return parse_scene(text, path, base);
 }
 
 }  // namespace incise::scene

@@ -5,8 +5,11 @@
 ///
 /// Bad input throws incise::ParseError(file, line, "expected ...") — truncated files, bad
 /// numbers, NaN/inf coordinates, indices out of range, unsupported element types, repeated
-/// vertices in a cell, duplicate cells, degenerate (zero-volume) cells and inverted cells
-/// (unless ReadOptions::reorient). Nothing in a file can crash the reader. The accepted
+/// vertices in a cell, duplicate cells, degenerate (zero-volume) cells, inverted cells and
+/// inconsistently oriented surfaces (unless ReadOptions::reorient), faces shared by more than two
+/// cells or by two on the same side (thesis invariant 7.4), data after the declared records.
+/// Nothing in a file can crash the reader, and every mesh it returns builds a
+/// mesh::Connectivity. The accepted
 /// syntax of each format, the checks and the options are documented in docs/mesh_formats.md.
 
 #include <incise/mesh/mesh_data.hpp>
@@ -29,8 +32,10 @@ enum class MeshFormat {
 /// Options of every reader.
 struct ReadOptions {
   /// Flip inverted cells (negative signed volume, or negative xy area for planar triangle
-  /// meshes) by swapping their last two vertices, and count them in LoadReport::reoriented.
-  /// When false an inverted cell is a ParseError.
+  /// meshes) by swapping their last two vertices, and count them in LoadReport::reoriented;
+  /// orient each connected part of a surface in 3D like its first triangle (flips counted too).
+  /// When false an inverted cell, or two neighbouring surface triangles traversing their common
+  /// edge in the same direction, is a ParseError.
   bool reorient = false;
   /// A cell is degenerate (ParseError) when |6√2·V| ≤ tol·ℓ_max³ (tetrahedra) or
   /// |4/√3·A| ≤ tol·ℓ_max² (triangles), i.e. its volume relative to the regular cell with the
@@ -51,14 +56,14 @@ struct ReadOptions {
 
 /// What a reader found in a file.
 struct LoadReport {
-  std::string file;              ///< path as given
-  std::string format;            ///< e.g. "gmsh 4.1", "medit 1", "tetgen", "off"
-  Index num_points = 0;          ///< vertices in the returned mesh
-  Index num_cells = 0;           ///< tetrahedra (dimension 3) or triangles (dimension 2)
-  Index num_facets = 0;          ///< boundary triangles given by the file (dimension 3 only)
-  Index ignored_elements = 0;    ///< points, lines, edges and other lower-dimensional records
-  bool surface = false;          ///< dimension-2 mesh not contained in the plane z = const
-  Index reoriented = 0;          ///< cells flipped because they were inverted (reorient option)
+  std::string file;            ///< path as given
+  std::string format;          ///< e.g. "gmsh 4.1", "medit 1", "tetgen", "off"
+  Index num_points = 0;        ///< vertices in the returned mesh
+  Index num_cells = 0;         ///< tetrahedra (dimension 3) or triangles (dimension 2)
+  Index num_facets = 0;        ///< boundary triangles given by the file (dimension 3 only)
+  Index ignored_elements = 0;  ///< points, lines, edges and other lower-dimensional records
+  bool surface = false;        ///< dimension-2 mesh not contained in the plane z = const
+  Index reoriented = 0;        ///< cells flipped: inverted, or surface triangles (reorient option)
   Index duplicate_vertices = 0;  ///< vertices whose coordinates equal an earlier vertex's
   Index merged_vertices = 0;     ///< of those, merged (merge_duplicate_vertices option)
   Index unused_vertices = 0;     ///< vertices referenced by no cell
@@ -107,7 +112,8 @@ LoadedMesh read_medit(const std::string& path, const ReadOptions& options = {});
 LoadedMesh read_tetgen(const std::string& path, const ReadOptions& options = {});
 
 /// OFF (Object File Format) surface: "OFF", counts, vertices, faces "3 i j k [colour]".
-/// Faces with other than 3 vertices are an error. Result has dimension 2.
+/// Faces with other than 3 vertices and data after the declared faces are errors. Result has
+/// dimension 2.
 LoadedMesh read_off(const std::string& path, const ReadOptions& options = {});
 
 }  // namespace incise::io

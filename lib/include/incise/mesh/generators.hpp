@@ -1,10 +1,46 @@
 #pragma once
 /// \file generators.hpp
 /// Deterministic mesh generators (structured boxes, beams, bricks, cylinders, planar grids).
+///
+/// Admissible parameters, checked before anything is allocated (GeneratorError otherwise):
+/// counts ≥ 1; lengths positive and finite; every cell size (length / count along an axis, for
+/// the cylinder radius / rings and length / layers) in [kMinCellSize, kMaxCellSize], so that cell
+/// edges, their cubes and cell volumes are normal doubles (the degenerate-cell tests and the
+/// element kernels use them); node and cell counts that an Index can number. The counts of a
+/// box or cylinder are available before building it (box_size, cylinder_size), for memory
+/// budgets.
 
+#include <incise/core/error.hpp>
 #include <incise/mesh/mesh_data.hpp>
 
+#include <cstdint>
+#include <string>
+
 namespace incise::mesh {
+
+/// Smallest and largest admissible cell size of the generators (m): their cubes, 1e-300 and
+/// 1e300, and the smallest cell volumes (≈ 0.1 × 1e-300) are normal doubles.
+inline constexpr double kMinCellSize = 1e-100;
+inline constexpr double kMaxCellSize = 1e100;
+
+/// A generator parameter outside its admissible range. parameter() names it as the generator's
+/// signature does ("nx", "lx", "length", "rings", ...); empty when the error is about several
+/// (too many cells for an Index).
+class GeneratorError : public ParameterError {
+ public:
+  GeneratorError(std::string parameter, const std::string& what)
+      : ParameterError(what), parameter_(std::move(parameter)) {}
+  const std::string& parameter() const { return parameter_; }
+
+ private:
+  std::string parameter_;
+};
+
+/// Node and cell counts of a generated mesh (64-bit: computed before the Index range is checked).
+struct MeshSize {
+  std::int64_t points = 0;
+  std::int64_t cells = 0;
+};
 
 /// How each cube of a structured box is split into tetrahedra.
 enum class CubeSplit {
@@ -15,16 +51,24 @@ enum class CubeSplit {
 };
 
 /// Box [0,lx]×[0,ly]×[0,lz] divided into nx×ny×nz cubes (cells), each split into tetrahedra.
-/// Node (i,j,k) has index i + (nx+1)*(j + (ny+1)*k). Throws ParameterError for n < 1 or l ≤ 0.
-/// Example: the thesis' cantilever (Table 3.1) is make_box(16,4,4, 1.2,0.2,0.3) and finer.
+/// Node (i,j,k) has index i + (nx+1)*(j + (ny+1)*k). Throws GeneratorError for inadmissible
+/// parameters (file comment). Example: the thesis' cantilever (Table 3.1) is
+/// make_box(16,4,4, 1.2,0.2,0.3) and finer.
 MeshData make_box(int nx, int ny, int nz, double lx, double ly, double lz,
+                  CubeSplit split = CubeSplit::kSix);
+
+/// Counts of make_box(nx, ny, nz, lx, ly, lz, split) without building it: (nx+1)(ny+1)(nz+1)
+/// points, 6 or 5 cells per cube. Throws GeneratorError as make_box does, except for counts
+/// beyond the Index range (which make_box refuses).
+MeshSize box_size(int nx, int ny, int nz, double lx, double ly, double lz,
                   CubeSplit split = CubeSplit::kSix);
 
 /// Elongated beam of Yeung, Crouch & Pothen 2016, §4 item (1): nodes on a regular 5×5×h grid
 /// (h = 4…1024 in the paper; the largest, h = 1024, has 25,600 nodes and 81,840 elements), i.e.
 /// make_box(4, 4, h−1, 4s, 4s, (h−1)s, CubeSplit::kFive) with grid spacing s (m). The paper's
 /// element count 81,840 = 4·4·1023·5 shows the 5-tetrahedron split; the paper gives no physical
-/// size, so the spacing is a parameter (default 1). The beam axis is z. Requires h ≥ 2.
+/// size, so the spacing is a parameter (default 1). The beam axis is z. Requires h ≥ 2 and an
+/// admissible spacing (GeneratorError).
 MeshData make_beam(int h, double spacing = 1.0);
 
 /// Brick 1×1×2 (x, y, z) of Yeung, Crouch & Pothen 2016, §4 item (2): make_box(n, n, 2n, 1, 1, 2,
@@ -39,8 +83,13 @@ MeshData make_brick(int n);
 /// layers; each triangular prism is split into 3 tetrahedra by the smallest-global-index rule of
 /// Dompierre et al. (1999), which makes neighbouring prisms conform. Cells: 18·rings²·layers;
 /// nodes: (1 + 3·rings·(rings+1))·(layers+1). All cells positively oriented. The volume is that
-/// of the inscribed polygonal prism (slightly less than πr²L). Requires rings ≥ 1, layers ≥ 1.
+/// of the inscribed polygonal prism (slightly less than πr²L). Throws GeneratorError for
+/// inadmissible parameters (file comment; the cell sizes are radius / rings and length / layers).
 MeshData make_cylinder(double length, double radius, int rings, int layers);
+
+/// Counts of make_cylinder(length, radius, rings, layers) without building it. Throws
+/// GeneratorError as make_cylinder does, except for counts beyond the Index range.
+MeshSize cylinder_size(double length, double radius, int rings, int layers);
 
 /// Coarse cylinder like the thesis' §4.2 small mesh (Table 4.2: length 0.1 m, radius 0.03 m,
 /// 1230 elements, 308 nodes, Delaunay): make_cylinder(0.1, 0.03, 3, 8) with 1296 tetrahedra and
@@ -60,8 +109,8 @@ enum class GridDiagonal {
 
 /// Planar triangle mesh (dimension 2) of the rectangle [0,lx]×[0,ly] in the z = 0 plane: nx×ny
 /// squares each split into 2 triangles along `diagonal`. Node (i,j) has index i + (nx+1)·j;
-/// triangles are counter-clockwise (positive signed xy area). Throws ParameterError for n < 1
-/// or l ≤ 0.
+/// triangles are counter-clockwise (positive signed xy area). Throws GeneratorError for
+/// inadmissible parameters (file comment).
 MeshData make_rectangle(int nx, int ny, double lx, double ly,
                         GridDiagonal diagonal = GridDiagonal::kForward);
 

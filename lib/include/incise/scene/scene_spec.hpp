@@ -15,9 +15,10 @@
 #include <incise/linalg/augmented_system.hpp>
 #include <incise/material/parameters.hpp>
 #include <incise/mesh/generators.hpp>
+#include <incise/scene/line_index.hpp>
 #include <incise/solver/linear_cg.hpp>
 
-#include <map>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -224,6 +225,14 @@ struct OutputSpec {
   std::vector<ProbeSpec> probes;
 };
 
+/// Resource limits of building a scene (scene key `limits`).
+struct LimitsSpec {
+  /// Memory budget of the build (MiB), scene key `memory_mb`: a build whose estimate (mesh
+  /// arrays and elastic problem, scene_builder.hpp) is larger is refused before it allocates.
+  /// 0: the default, incise::default_memory_budget_bytes() (core/memory_budget.hpp).
+  std::int64_t memory_mb = 0;
+};
+
 /// A whole scene.
 struct SceneSpec {
   std::string file;         ///< the scene file the spec came from ("<memory>" if parsed from text)
@@ -236,10 +245,11 @@ struct SceneSpec {
   SolverSpec solver;
   std::vector<ToolSpec> tools;
   OutputSpec outputs;
+  LimitsSpec limits;
   /// Line (1-based) in `file` of each JSON value by JSON pointer ("/fixed/0"; an object member:
   /// the line of its key), so that errors found later (the builder's) can name it; empty for
   /// specs made in code.
-  std::map<std::string, long> lines;
+  LineIndex lines;
 };
 
 /// Names used in scene files (from the tables above).
