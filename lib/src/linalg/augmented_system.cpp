@@ -197,6 +197,11 @@ FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
   return base_->status;
 }
 
+const std::string& AugmentedSystem::factorization_message() const {
+  static const std::string kNone;
+  return base_ ? base_->message : kNone;
+}
+
 const AugmentedSystem::Column* AugmentedSystem::changed_column(int j) const {
   auto it = changed_.find(j);
   return it == changed_.end() ? nullptr : &it->second;

@@ -47,9 +47,13 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
       static_cast<std::size_t>(k.nonZeros() + factor.nnz_l()) * (sizeof(double) + sizeof(int)),
       static_cast<std::int64_t>(factor.factor_flops()));
   rep.flops = p.flops() - flops0 + static_cast<std::uint64_t>(factor.factor_flops());
-  if (st != linalg::FactorStatus::kOk) {
-    rep.status = st == linalg::FactorStatus::kNotPositiveDefinite ? solver::StopReason::kIndefinite
-                                                                  : solver::StopReason::kNonFinite;
+  if (st != linalg::FactorStatus::kOk) {  // a CHOLMOD warning (kTinyPivot) is a failure too
+    rep.status =
+        st == linalg::FactorStatus::kNotPositiveDefinite || st == linalg::FactorStatus::kTinyPivot
+            ? solver::StopReason::kIndefinite
+            : solver::StopReason::kNonFinite;
+    rep.message = std::string("CHOLMOD factorization of K: ") + linalg::to_string(st) + ": " +
+                  factor.message();
     rep.seconds = t.seconds();
     return rep;
   }

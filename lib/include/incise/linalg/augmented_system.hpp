@@ -160,9 +160,13 @@ class AugmentedSystem {
   AugmentedSystem& operator=(const AugmentedSystem&) = delete;
 
   /// Factors K⁰ (symmetric, both triangles stored, positive definite on the free DOFs) and
-  /// resets all changes, constraints and forces. Returns the factorization status; on failure
-  /// solve() reports kNoFactor. Throws UsageError for a non-square or non-symmetric pattern.
+  /// resets all changes, constraints and forces. Returns the factorization status; any status
+  /// but kOk — kTinyPivot included: the solves need R⁻¹ itself — leaves no factor, and solve()
+  /// reports kNoFactor with factorization_message(). Throws UsageError for a non-square or
+  /// non-symmetric pattern.
   [[nodiscard]] FactorStatus initialize(const SparseMatrix& k0);
+  /// CholmodFactor's message of the last initialize() (empty when it succeeded).
+  const std::string& factorization_message() const;
 
   /// Current number of DOFs n = n₀ + added DOFs.
   int num_dofs() const { return n_; }
