@@ -57,6 +57,7 @@ static_assert(!is_outcome<int>(), "the trait must be able to say no");
 TEST(Outcome, EveryNumericalReportOfTheLibraryHasTheOneShape) {
   static_assert(is_outcome<solver::SolverReport>());
   static_assert(is_outcome<solver::InnerCgResult>());
+  static_assert(is_outcome<solver::JacobiDiagonal>());
   static_assert(is_outcome<solver::EigenEstimate>());
   static_assert(is_outcome<solver::DampingTrial>());
   static_assert(is_outcome<solver::SpectralDamping>());

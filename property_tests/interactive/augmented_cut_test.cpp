@@ -500,9 +500,27 @@ TEST(AugmentedCut, NoFixedNodesIsAStatusNotACrash) {
   const Body body = small_cube();
   AugmentedCutSession session(body.mesh, linear_material(), {}, force_matrix(body), test_options());
   EXPECT_EQ(session.initial_report().status, CutSolveStatus::kSolverFailed);
+  EXPECT_NE(session.initial_report().message.find("not positive definite"), std::string::npos)
+      << session.initial_report().message;
   const AugmentedCutStepReport r =
       session.step(Vec3(0.5, -1, 2), Vec3(0.5, 2, 2), Vec3(0.5, 2, 0.5));
   EXPECT_FALSE(r.ok());
+}
+
+// A CHOLMOD warning on K⁰ is a failed initial factorization, not a solve on a perturbed
+// factor: a pivot bound above every pivot of K⁰ (CHOLMOD_DSMALL on all of them) makes the
+// initial report kSolverFailed, naming the tiny-pivot status and CHOLMOD's message.
+TEST(AugmentedCut, TinyPivotWarningOnK0IsAFailedInitialReport) {
+  const Body body = small_cube();
+  AugmentedCutOptions o = test_options();
+  o.augmented.cholmod.kind = linalg::CholmodKind::kSimplicialLdl;  // the bound applies there
+  o.augmented.cholmod.pivot_bound = 1e30;  // N/m; every pivot of K⁰ (E = 1e4 Pa) is below
+  AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), o);
+  const AugmentedCutStepReport& init = session.initial_report();
+  EXPECT_EQ(init.status, CutSolveStatus::kSolverFailed);
+  EXPECT_EQ(init.solve.status, linalg::AugmentedStatus::kNoFactor);
+  EXPECT_NE(init.message.find("tiny pivot: CHOLMOD_DSMALL"), std::string::npos) << init.message;
+  EXPECT_EQ(session.displacement(), Eigen::Matrix3Xd::Zero(3, body.mesh.num_points()));
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include "augmented_stand_in.hpp"
 #include "random_spd.hpp"
 
+#include <incise/core/error.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise_test/seed.hpp>
@@ -235,6 +236,33 @@ TEST(CholmodFactor, MinPivotRatioFlagsNumericallySingularMatrices) {
   ASSERT_EQ(g.solve(Eigen::Vector2d(1.0, 1e-15), x), FactorStatus::kOk);
   EXPECT_NEAR(x(0), 1.0, 1e-15);  // diagonal: exact up to one rounding
   EXPECT_NEAR(x(1), 1.0, 1e-15);
+}
+
+// CHOLMOD_DSMALL, the warning that pivot_bound (CHOLMOD's dbound) replaced a tiny pivot, is
+// its own status, never kOk: the factor exists and solves the perturbed matrix diag(1, bound).
+TEST(CholmodFactor, TinyPivotWarningIsAStatusNotOk) {
+  SparseMatrix a(2, 2);
+  a.insert(0, 0) = 1.0;
+  a.insert(1, 1) = 1e-20;
+  a.makeCompressed();
+  CholmodOptions o{CholmodKind::kSimplicialLdl, CholmodOrdering::kNatural};
+  o.pivot_bound = 1e-12;
+  CholmodFactor f(o);
+  EXPECT_EQ(f.compute(a, 1), FactorStatus::kTinyPivot) << f.message();
+  EXPECT_EQ(f.info(), FactorStatus::kTinyPivot);
+  EXPECT_NE(f.message().find("CHOLMOD_DSMALL: 1 pivot(s)"), std::string::npos) << f.message();
+  Eigen::VectorXd x;
+  ASSERT_EQ(f.solve(Eigen::Vector2d(2.0, 3.0), x), FactorStatus::kOk);
+  EXPECT_NEAR(x(0), 2.0, 1e-15);          // diagonal: exact up to one rounding
+  EXPECT_NEAR(x(1), 3e12, 1e-15 * 3e12);  // 3 / pivot_bound, not 3 / 1e-20
+  const auto ldl = f.extract_ldl();
+  ASSERT_NE(ldl, nullptr);
+  EXPECT_EQ(ldl->d[1], 1e-12);
+  // Without the bound the same matrix has no tiny-pivot warning (the ratio guard speaks).
+  CholmodFactor g({CholmodKind::kSimplicialLdl, CholmodOrdering::kNatural});
+  EXPECT_EQ(g.compute(a, 1), FactorStatus::kNotPositiveDefinite) << g.message();
+  o.pivot_bound = -1;
+  EXPECT_THROW(CholmodFactor bad(o), ParameterError);
 }
 
 TEST(CholmodFactor, NonFiniteEntriesAreInvalidInput) {

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace incise::solver {
 namespace {
@@ -69,6 +70,26 @@ TEST(EigenEstimates, IndefiniteReported) {
   QuadraticProblem p(-q.matrix(), q.rhs(), std::vector<bool>(10, false), VecX::Ones(10));
   const EigenEstimate e = largest_eigenvalue(p, VecX::Zero(10));
   EXPECT_EQ(e.status, StopReason::kIndefinite);
+}
+
+// Inverse iteration's Jacobi inner CG: a free DOF without stiffness (λ₁ = 0, no critical
+// damping) is reported before any step; a problem without a diagonal still gets λ₁ (plain
+// inner CG, the documented choice).
+TEST(EigenEstimates, InverseIterationReportsAFreeDofWithoutStiffness) {
+  INCISE_SEEDED_RNG(rng, 65);
+  QuadraticProblem p = separated_problem(rng, 20);
+  QuadraticProblem free_zero = test::without_stiffness_at(p, 6, /*fixed=*/false);
+  const EigenEstimate e = smallest_eigenvalue(free_zero, VecX::Zero(20));
+  EXPECT_EQ(e.status, StopReason::kIndefinite);
+  EXPECT_NE(e.message.find("free DOF i = 6"), std::string::npos) << e.message;
+  EXPECT_EQ(e.iterations, 0);
+  const VecX lam = dense_generalized_eigenvalues(p);
+  EigenOptions o;
+  o.tolerance = 1e-12;
+  test::DiagonalOverride none(p, VecX());
+  const EigenEstimate plain = smallest_eigenvalue(none, VecX::Zero(20), o);
+  ASSERT_TRUE(plain.ok()) << plain.brief();
+  EXPECT_NEAR(plain.value, lam[0], kEigenTol * lam[0]);
 }
 
 TEST(DynamicRelaxation, CflFormula2_61) {

@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <string>
 
 namespace incise::solver {
 namespace {
@@ -147,6 +149,72 @@ TEST(LinearCg, IndefiniteReportedNoNaN) {
   const SolverReport rep = linear_cg(p, u, o);
   EXPECT_EQ(rep.status, StopReason::kIndefinite);
   EXPECT_TRUE(u.allFinite());
+}
+
+// Jacobi never silently becomes plain CG: a free DOF without stiffness (K_ii = 0) is an
+// indefinite tangent and named; plain CG, which never touches that DOF, still converges; the
+// same DOF fixed is projected out and not reported.
+TEST(LinearCg, JacobiReportsAFreeDofWithoutStiffnessAsIndefinite) {
+  INCISE_SEEDED_RNG(rng, 48);
+  const QuadraticProblem spd = random_spd_problem(rng, 20, 1e2, 2);
+  LinearCgOptions o;
+  o.stop.epsilon = 1e-10;
+  o.preconditioner = Preconditioner::kJacobi;
+  QuadraticProblem free_zero = test::without_stiffness_at(spd, 7, /*fixed=*/false);
+  VecX u = VecX::Zero(20);
+  SolverReport rep = linear_cg(free_zero, u, o);
+  EXPECT_EQ(rep.status, StopReason::kIndefinite);
+  EXPECT_NE(rep.message.find("free DOF i = 7"), std::string::npos) << rep.message;
+  EXPECT_NE(rep.message.find("K_ii = 0 "), std::string::npos) << rep.message;
+  EXPECT_EQ(rep.iterations, 0);
+  EXPECT_EQ(u, VecX::Zero(20));
+  o.preconditioner = Preconditioner::kNone;
+  rep = linear_cg(free_zero, u, o);
+  EXPECT_TRUE(rep.ok()) << rep.brief();
+  QuadraticProblem fixed_zero = test::without_stiffness_at(spd, 7, /*fixed=*/true);
+  o.preconditioner = Preconditioner::kJacobi;
+  u.setZero();
+  rep = linear_cg(fixed_zero, u, o);
+  EXPECT_TRUE(rep.ok()) << rep.brief();
+  EXPECT_TRUE(rep.message.empty());
+}
+
+// A negative free diagonal entry is kIndefinite, a NaN one kNonFinite (before any step, naming
+// the DOF), a missing diagonal kPreconditionerUnavailable; u is never changed.
+TEST(LinearCg, JacobiReportsNegativeNonFiniteAndMissingDiagonals) {
+  INCISE_SEEDED_RNG(rng, 49);
+  const QuadraticProblem spd = random_spd_problem(rng, 12, 10.0, 1);
+  LinearCgOptions o;
+  o.preconditioner = Preconditioner::kJacobi;
+  VecX negative = spd.matrix().diagonal(), nan = negative;
+  negative[4] = -2.5;
+  nan[9] = std::numeric_limits<double>::quiet_NaN();
+  nan[3] = -1.0;  // a non-positive entry too: the non-finite one is reported first
+  struct Case {
+    VecX diagonal;
+    StopReason status;
+    const char* names;
+  };
+  for (const Case& c : {Case{negative, StopReason::kIndefinite, "K_ii = -2.5 at free DOF i = 4"},
+                        Case{nan, StopReason::kNonFinite, "at free DOF i = 9"},
+                        Case{VecX(), StopReason::kPreconditionerUnavailable, "hessian_diagonal"}}) {
+    test::DiagonalOverride p(spd, c.diagonal);
+    VecX u = VecX::Zero(12);
+    const SolverReport rep = linear_cg(p, u, o);
+    EXPECT_EQ(rep.status, c.status) << rep.brief();
+    EXPECT_NE(rep.message.find(c.names), std::string::npos) << rep.message;
+    EXPECT_EQ(rep.iterations, 0);
+    EXPECT_EQ(u, VecX::Zero(12));
+    EXPECT_EQ(rep.residual_norm, spd.external_force_norm());  // the start, not NaN
+  }
+  // The NaN entry at a fixed DOF (DOF 0) is never read.
+  VecX fixed_nan = spd.matrix().diagonal();
+  fixed_nan[0] = std::numeric_limits<double>::quiet_NaN();
+  test::DiagonalOverride p(spd, fixed_nan);
+  const JacobiDiagonal jd = jacobi_inverse_diagonal(p, VecX::Zero(12));
+  ASSERT_TRUE(jd.ok()) << jd.brief();
+  EXPECT_EQ(jd.inverse[0], 0.0);
+  EXPECT_EQ(jd.inverse[5], 1.0 / spd.matrix()(5, 5));
 }
 
 TEST(ProjectedCg, SolvesSpdSystemFromZero) {

@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
 namespace incise::solver {
 namespace {
 
@@ -183,6 +185,39 @@ TEST(NonlinearCg, IndefiniteProblemReportsStatus) {
   const SolverReport rep = truncated_newton(p, u, to);
   EXPECT_EQ(rep.status, StopReason::kIndefinite);
   EXPECT_TRUE(u.allFinite());
+}
+
+// Truncated Newton's default Jacobi inner CG: a free DOF without stiffness stops it at the
+// first Newton step with kIndefinite naming step and DOF (plain inner CG converges: it never
+// touches the DOF); fixed, the same DOF is not reported.
+TEST(TruncatedNewton, JacobiReportsAFreeDofWithoutStiffness) {
+  INCISE_SEEDED_RNG(rng, 58);
+  const QuadraticProblem spd = test::random_spd_problem(rng, 16, 50.0, 2);
+  TruncatedNewtonOptions to;
+  to.stop.epsilon = 1e-10;
+  QuadraticProblem free_zero = test::without_stiffness_at(spd, 11, /*fixed=*/false);
+  VecX u = VecX::Zero(16);
+  SolverReport rep = truncated_newton(free_zero, u, to);
+  EXPECT_EQ(rep.status, StopReason::kIndefinite);
+  EXPECT_NE(rep.message.find("Newton step 1: diagonal entry K_ii = 0 at free DOF i = 11"),
+            std::string::npos)
+      << rep.message;
+  EXPECT_EQ(rep.iterations, 0);
+  to.preconditioner = Preconditioner::kNone;
+  u.setZero();
+  rep = truncated_newton(free_zero, u, to);
+  EXPECT_TRUE(rep.ok()) << rep.brief();
+  to.preconditioner = Preconditioner::kJacobi;
+  QuadraticProblem fixed_zero = test::without_stiffness_at(spd, 11, /*fixed=*/true);
+  u.setZero();
+  rep = truncated_newton(fixed_zero, u, to);
+  EXPECT_TRUE(rep.ok()) << rep.brief();
+  // A problem without a diagonal: Jacobi is refused, not replaced.
+  test::DiagonalOverride none(spd, VecX());
+  u.setZero();
+  rep = truncated_newton(none, u, to);
+  EXPECT_EQ(rep.status, StopReason::kPreconditionerUnavailable);
+  EXPECT_EQ(u, VecX::Zero(16));
 }
 
 TEST(NonlinearCg, BudgetsHonoured) {

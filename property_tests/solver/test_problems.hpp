@@ -117,6 +117,36 @@ inline QuadraticProblem random_spd_problem(std::mt19937_64& rng, int n, double c
   return QuadraticProblem(0.5 * (a + a.transpose()), b, fixed, m);
 }
 
+/// `p` with DOF k decoupled and without stiffness or load: row and column k of A and b_k zeroed
+/// (a node no element uses). Free, it makes K singular; fixed, it is projected out.
+inline QuadraticProblem without_stiffness_at(const QuadraticProblem& p, int k, bool fixed) {
+  Eigen::MatrixXd a = p.matrix();
+  a.row(k).setZero();
+  a.col(k).setZero();
+  VecX b = p.rhs();
+  b[k] = 0.0;
+  std::vector<bool> f(static_cast<std::size_t>(p.size()));
+  for (int i = 0; i < int(f.size()); ++i) f[i] = p.is_fixed(i);
+  f[k] = fixed;
+  return QuadraticProblem(a, b, f, p.lumped_mass());
+}
+
+/// A QuadraticProblem whose hessian_diagonal() returns `diagonal` instead of diag A, or false
+/// when `diagonal` is empty (a problem without a diagonal); every other evaluation is A's.
+class DiagonalOverride : public QuadraticProblem {
+ public:
+  DiagonalOverride(const QuadraticProblem& p, VecX diagonal)
+      : QuadraticProblem(p), diagonal_(std::move(diagonal)) {}
+  bool hessian_diagonal(const VecX&, VecX& diag) override {
+    if (diagonal_.size() == 0) return false;
+    diag = diagonal_;
+    return true;
+  }
+
+ private:
+  VecX diagonal_;
+};
+
 /// A 1-D chain of n+1 nodes (node 0 clamped) joined by springs of rest length L with a
 /// stiffening, inversion-resisting energy per spring of stretch s = 1 + (u_{i+1} − u_i)/L:
 ///   W(s) = k L [ (s−1)²/2 + c (s−1)⁴/4 + µ (s − 1 − ln s) ],   W = +∞ for s ≤ 0,

@@ -86,11 +86,15 @@ AugmentedCutSession::AugmentedCutSession(const mesh::MeshData& mesh,
   const Timer timer;
   const linalg::FactorStatus fs = system_->initialize(k0);
   if (fs != linalg::FactorStatus::kOk) {
+    // Every status but kOk, CHOLMOD warnings included (kTinyPivot: a factor of a perturbed K⁰).
     initial_.status = CutSolveStatus::kSolverFailed;
-    initial_.message =
-        "the initial stiffness matrix is not positive definite: fix enough nodes (at least "
-        "three non-collinear ones per connected component)";
+    initial_.message = std::string("the factorization of the initial stiffness matrix failed (") +
+                       linalg::to_string(fs) + ": " + system_->factorization_message() + ")";
+    if (fs == linalg::FactorStatus::kNotPositiveDefinite)
+      initial_.message +=
+          ": fix enough nodes (at least three non-collinear ones per connected component)";
     initial_.solve.status = linalg::AugmentedStatus::kNoFactor;
+    initial_.solve.message = initial_.message;
   } else {
     solve_into(initial_);
   }

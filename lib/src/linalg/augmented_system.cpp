@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <sstream>
 #include <utility>
 
 namespace incise::linalg {
@@ -195,6 +197,11 @@ FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
   changed_since_snapshot_.clear();
   snapshot_active_ = false;
   return base_->status;
+}
+
+const std::string& AugmentedSystem::factorization_message() const {
+  static const std::string kNone;
+  return base_ ? base_->message : kNone;
 }
 
 const AugmentedSystem::Column* AugmentedSystem::changed_column(int j) const {
@@ -454,11 +461,13 @@ struct AugmentedSystem::Augmentation {
 struct AugmentedSystem::SchurLu {
   Eigen::PartialPivLU<Eigen::MatrixXd> lu;
   Eigen::VectorXd row_scale, col_scale;  // equilibration (empty: none)
-  bool usable = false;                   // factored, and its rcond estimate exceeds 1e-13
+  bool usable = false;  // factored, and its rcond estimate exceeds kMinPreconditionerRcond
+  double rcond = std::numeric_limits<double>::quiet_NaN();  // NaN: not factored
 
   // Factors `s`, equilibrated first when asked (max-norm rows, then columns). A numerically
-  // singular matrix (rcond ≤ 1e-13) is not usable: GMRES then runs unpreconditioned, and its
-  // breakdown / stagnation / amplification checks report a singular system.
+  // singular matrix (rcond ≤ kMinPreconditionerRcond) is not usable: GMRES then runs
+  // unpreconditioned (reported: note()), and its breakdown / stagnation / amplification checks
+  // report a singular system.
   void factor(Eigen::MatrixXd s, bool equilibrate) {
     if (equilibrate) {
       row_scale = s.cwiseAbs().rowwise().maxCoeff().cwiseMax(1e-300).cwiseInverse();
@@ -467,8 +476,13 @@ struct AugmentedSystem::SchurLu {
       s = s * col_scale.asDiagonal();
     }
     lu.compute(s);
-    const double rc = lu.rcond();
-    usable = std::isfinite(rc) && rc > 1e-13;
+    rcond = lu.rcond();
+    usable = std::isfinite(rcond) && rcond > kMinPreconditionerRcond;
+  }
+  // The report's preconditioner fields, once factor() ran.
+  void note(AugmentedReport& report) const {
+    report.preconditioner_rcond = rcond;
+    report.preconditioner_dropped = !usable;
   }
   // out = M⁻¹ v.
   void apply(const Eigen::VectorXd& v, Eigen::VectorXd& out) const {
@@ -755,6 +769,7 @@ Eigen::VectorXd AugmentedSystem::solve_schur_system(Augmentation& aug, const Eig
     // and span many decades on long meshes: equilibrated, so that the LU's condition estimate
     // measures singularity, not scaling.
     direct.factor(capacitance_matrix(aug, report.schur_solves), /*equilibrate=*/true);
+    direct.note(report);
     if (direct.usable) {
       prec = [&direct](const Eigen::VectorXd& v, Eigen::VectorXd& out) { direct.apply(v, out); };
     }
@@ -848,6 +863,12 @@ void AugmentedSystem::conclude(const Augmentation& aug, Eigen::VectorXd& displac
       report.message = "non-finite solution: check element matrices and forces";
     }
   }
+  if (report.status != AugmentedStatus::kOk && report.preconditioner_dropped) {
+    std::ostringstream os;
+    os << " (GMRES ran unpreconditioned: the preconditioner's LU has rcond "
+       << report.preconditioner_rcond << " <= " << kMinPreconditionerRcond << ")";
+    report.message += os.str();
+  }
 }
 
 AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::VectorXd& reaction) {
@@ -885,6 +906,7 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
   if (options_.preconditioner != SchurPreconditioner::kNone && aug.m() > 0 &&
       options_.schur_solver == SchurSolver::kGmres) {
     hsj.factor(hsj_matrix(aug), /*equilibrate=*/false);
+    hsj.note(report);
   }
   report.seconds_setup = phase.seconds();
 

@@ -1,9 +1,11 @@
+#include <incise/core/error.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
 
 #include <cholmod.h>
 
 #include <algorithm>
 #include <numeric>
+#include <sstream>
 #include <utility>
 
 namespace incise::linalg {
@@ -16,6 +18,7 @@ const char* to_string(FactorStatus status) {
     case FactorStatus::kOutOfMemory: return "out of memory";
     case FactorStatus::kInvalidInput: return "invalid input";
     case FactorStatus::kCholmodError: return "CHOLMOD error";
+    case FactorStatus::kTinyPivot: return "tiny pivot";
   }
   return "unknown";
 }
@@ -59,19 +62,33 @@ cholmod_sparse view_lower(const SparseMatrix& a) {
   return s;
 }
 
+// CHOLMOD's status codes: 0 ok, negative errors, positive warnings. Every warning is a
+// distinct, non-ok status: CHOLMOD_NOT_POSDEF (no usable factor), CHOLMOD_DSMALL (a factor of
+// a matrix with bounded pivots, kTinyPivot), any other (unknown here) kCholmodError.
 FactorStatus status_from_common(const cholmod_common& c, std::string& message) {
   switch (c.status) {
     case CHOLMOD_OK: message.clear(); return FactorStatus::kOk;
     case CHOLMOD_NOT_POSDEF:
       message = "matrix not positive definite";
       return FactorStatus::kNotPositiveDefinite;
+    case CHOLMOD_DSMALL: {
+      std::ostringstream os;
+      os << "CHOLMOD_DSMALL: " << c.ndbounds_hit
+         << " pivot(s) of magnitude below pivot_bound = " << c.dbound << " replaced by +-"
+         << c.dbound
+         << ": the factor is of a perturbed matrix; set pivot_bound = 0 for the exact factor";
+      message = os.str();
+      return FactorStatus::kTinyPivot;
+    }
     case CHOLMOD_OUT_OF_MEMORY:
       message = "CHOLMOD out of memory";
       return FactorStatus::kOutOfMemory;
     case CHOLMOD_INVALID: message = "CHOLMOD: invalid input"; return FactorStatus::kInvalidInput;
     default:
-      message = "CHOLMOD status " + std::to_string(c.status);
-      return c.status < 0 ? FactorStatus::kCholmodError : FactorStatus::kOk;
+      message = c.status < 0 ? "CHOLMOD status " + std::to_string(c.status)
+                             : "CHOLMOD warning " + std::to_string(c.status) +
+                                   " (not known to incise): the factor is not used";
+      return FactorStatus::kCholmodError;
   }
 }
 
@@ -79,7 +96,9 @@ FactorStatus status_from_common(const cholmod_common& c, std::string& message) {
 
 CholmodFactor::CholmodFactor(CholmodOptions options)
     : impl_(std::make_unique<Impl>()), options_(options) {
+  INCISE_CHECK_PARAM(options_.pivot_bound >= 0, "CholmodOptions::pivot_bound must be >= 0");
   cholmod_common& c = impl_->common;
+  c.dbound = options_.pivot_bound;
   switch (options_.kind) {
     case CholmodKind::kSupernodal: c.supernodal = CHOLMOD_SUPERNODAL; break;
     case CholmodKind::kSimplicialLdl:
@@ -160,8 +179,9 @@ FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
     status_ = FactorStatus::kNotPositiveDefinite;
     message_ = "matrix not positive definite";
   }
+  const bool usable = status_ == FactorStatus::kOk || status_ == FactorStatus::kTinyPivot;
   const cholmod_factor* l = impl_->factor;
-  if (status_ == FactorStatus::kOk && l->is_super == 0 && l->is_ll == 0) {
+  if (usable && l->is_super == 0 && l->is_ll == 0) {
     // A simplicial LDLᵀ factorization also succeeds on an indefinite matrix (CHOLMOD flags only
     // zero pivots there): every pivot D_jj — the first entry of column j — must be positive.
     const int* lp = static_cast<const int*>(l->p);
@@ -175,7 +195,8 @@ FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
       }
     }
   }
-  rcond_ = status_ == FactorStatus::kOk ? cholmod_rcond(impl_->factor, &impl_->common) : 0.0;
+  const bool factored = status_ == FactorStatus::kOk || status_ == FactorStatus::kTinyPivot;
+  rcond_ = factored ? cholmod_rcond(impl_->factor, &impl_->common) : 0.0;
   if (status_ == FactorStatus::kOk && options_.min_pivot_ratio > 0 &&
       !(rcond_ >= options_.min_pivot_ratio)) {
     status_ = FactorStatus::kNotPositiveDefinite;
@@ -187,7 +208,7 @@ FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
                     : std::string();
     message_ += " (" + where + "singular or indefinite — check constraints and inverted elements)";
   }
-  factorized_ = status_ == FactorStatus::kOk;
+  factorized_ = status_ == FactorStatus::kOk || status_ == FactorStatus::kTinyPivot;
   return status_;
 }
 

@@ -47,9 +47,13 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
       static_cast<std::size_t>(k.nonZeros() + factor.nnz_l()) * (sizeof(double) + sizeof(int)),
       static_cast<std::int64_t>(factor.factor_flops()));
   rep.flops = p.flops() - flops0 + static_cast<std::uint64_t>(factor.factor_flops());
-  if (st != linalg::FactorStatus::kOk) {
-    rep.status = st == linalg::FactorStatus::kNotPositiveDefinite ? solver::StopReason::kIndefinite
-                                                                  : solver::StopReason::kNonFinite;
+  if (st != linalg::FactorStatus::kOk) {  // a CHOLMOD warning (kTinyPivot) is a failure too
+    rep.status =
+        st == linalg::FactorStatus::kNotPositiveDefinite || st == linalg::FactorStatus::kTinyPivot
+            ? solver::StopReason::kIndefinite
+            : solver::StopReason::kNonFinite;
+    rep.message = std::string("CHOLMOD factorization of K: ") + linalg::to_string(st) + ": " +
+                  factor.message();
     rep.seconds = t.seconds();
     return rep;
   }
@@ -141,6 +145,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   std::string failure_text;
   long gmres_total = 0;
   int refactorizations = 0;  // §3.6 background factorizations swapped in
+  int dropped = 0;           // solves whose preconditioner was dropped (GMRES unpreconditioned)
   double cut_seconds = 0;
   cut::CutTotals totals;
   auto add_row = [&](int step, int tool, const interactive::AugmentedCutStepReport& r) {
@@ -159,6 +164,8 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
       row.dirichlet = r.solve.dirichlet;
       row.gmres_iterations = r.solve.gmres.iterations;
       row.gmres_relative_residual = r.solve.gmres.relative_residual;
+      row.preconditioner_dropped = r.solve.preconditioner_dropped;
+      dropped += r.solve.preconditioner_dropped ? 1 : 0;
       row.nnz_l = r.solve.nnz_l;
       row.refactorization_started = r.refactorization_started;
       row.refactorization_swapped = r.refactorization_swapped;
@@ -254,6 +261,9 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
                                            : std::string("no refactorization. "))
          << step << " steps, final m = " << session->system().num_replaced() << ", " << gmres_total
          << " GMRES iterations in all"
+         << (dropped > 0 ? "; preconditioner dropped (singular LU, GMRES unpreconditioned) in " +
+                               std::to_string(dropped) + " solves"
+                         : std::string())
          << (failed ? "; first failure at " + failure_text : std::string());
   scene.mesh = std::move(final_mesh);
   scene.fixed_nodes = std::move(held);

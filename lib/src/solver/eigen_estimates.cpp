@@ -82,7 +82,16 @@ EigenEstimate smallest_eigenvalue(Problem& problem, const VecX& u, const EigenOp
   VecX x = start_vector(problem, options.seed);
   x /= std::sqrt(x.dot(m.cwiseProduct(x)));
   VecX y, kx, b;
-  const VecX inv_diag = jacobi_inverse_diagonal(problem, u);
+  // Jacobi-preconditioned inner CG when the problem has a diagonal; a diagonal that shows K is
+  // not positive definite (or not finite) ends the estimate: λ₁ ≤ 0 has no critical damping.
+  JacobiDiagonal jd = jacobi_inverse_diagonal(problem, u);
+  if (!jd.ok() && jd.status != StopReason::kPreconditionerUnavailable) {
+    est.status = jd.status;
+    est.message = std::move(jd.message);
+    est.flops = meter.flops();
+    return est;
+  }
+  const VecX inv_diag = std::move(jd.inverse);
   const LinearOperator apply = [&](const VecX& in, VecX& out) {
     return problem.hessian_product(u, in, out);
   };

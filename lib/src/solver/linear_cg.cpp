@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 namespace incise::solver {
 namespace {
@@ -16,19 +17,46 @@ void precondition(const VecX& inv_diag, const VecX& r, VecX& z) {
 
 }  // namespace
 
-VecX jacobi_inverse_diagonal(Problem& problem, const VecX& u) {
+JacobiDiagonal jacobi_inverse_diagonal(Problem& problem, const VecX& u) {
+  JacobiDiagonal out;
   VecX diag;
-  if (!problem.hessian_diagonal(u, diag) || diag.size() != u.size()) return VecX();
-  VecX inv(diag.size());
-  for (Eigen::Index i = 0; i < diag.size(); ++i) {
-    if (problem.is_fixed(i)) {
-      inv[i] = 0.0;
-    } else {
-      if (!(diag[i] > 0.0) || !std::isfinite(diag[i])) return VecX();
-      inv[i] = 1.0 / diag[i];
-    }
+  if (!problem.hessian_diagonal(u, diag) || diag.size() != u.size()) {
+    out.status = StopReason::kPreconditionerUnavailable;
+    out.message =
+        "Jacobi preconditioning requested, but Problem::hessian_diagonal() gave no diagonal at u "
+        "(the problem provides none, or its tangent cannot be evaluated there): use "
+        "Preconditioner::kNone";
+    return out;
   }
-  return inv;
+  Eigen::Index non_finite = -1, non_positive = -1;
+  for (Eigen::Index i = 0; i < diag.size(); ++i) {
+    if (problem.is_fixed(i)) continue;
+    if (!std::isfinite(diag[i])) {
+      non_finite = i;
+      break;
+    }
+    if (!(diag[i] > 0.0) && non_positive < 0) non_positive = i;
+  }
+  const Eigen::Index bad = non_finite >= 0 ? non_finite : non_positive;
+  if (bad >= 0) {
+    std::ostringstream os;
+    os << "diagonal entry K_ii = " << diag[bad] << " at free DOF i = " << bad;
+    if (non_finite >= 0) {
+      out.status = StopReason::kNonFinite;
+      os << ": the tangent is not finite there";
+    } else {
+      out.status = StopReason::kIndefinite;
+      os << " <= 0: the tangent is not positive definite (e_i^T K e_i <= 0); a DOF without "
+            "stiffness must be fixed, an indefinite K needs a start closer to a minimum";
+    }
+    out.message = os.str();
+    return out;
+  }
+  out.inverse.resize(diag.size());
+  for (Eigen::Index i = 0; i < diag.size(); ++i)
+    out.inverse[i] = problem.is_fixed(i) ? 0.0 : 1.0 / diag[i];
+  out.status = StopReason::kConverged;
+  return out;
 }
 
 SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options) {
@@ -48,22 +76,34 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
     rep.seconds = meter.seconds();
     return rep;
   }
-  VecX inv_diag;
-  if (options.preconditioner == Preconditioner::kJacobi)
-    inv_diag = jacobi_inverse_diagonal(problem, u0);
-
   const double fex = problem.external_force_norm();
   VecX r = -g;
   problem.project(r);
+  double rnorm = r.norm();
+  double threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+  rep.residual_history.push_back(rnorm);
+  rep.energy_history.push_back(energy);
+  VecX inv_diag;
+  if (options.preconditioner == Preconditioner::kJacobi) {
+    JacobiDiagonal jd = jacobi_inverse_diagonal(problem, u0);
+    if (!jd.ok()) {
+      rep.status = jd.status;
+      rep.message = std::move(jd.message);
+      rep.residual_norm = rnorm;
+      rep.threshold = threshold;
+      rep.energy = energy;
+      rep.flops = meter.flops();
+      rep.seconds = meter.seconds();
+      return rep;
+    }
+    inv_diag = std::move(jd.inverse);
+  }
+
   VecX z, d, q(n);
   precondition(inv_diag, r, z);
   double rz = r.dot(z);
   d = z;
-  double rnorm = r.norm();
-  double threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
   meter.add(6 * nn);
-  rep.residual_history.push_back(rnorm);
-  rep.energy_history.push_back(energy);
 
   if (options.coefficients) {
     options.coefficients->alpha.clear();

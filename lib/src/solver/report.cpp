@@ -16,6 +16,7 @@ const char* to_string(StopReason r) {
     case StopReason::kLineSearchFailed: return "line_search_failed";
     case StopReason::kStagnated: return "stagnated";
     case StopReason::kUnstable: return "unstable";
+    case StopReason::kPreconditionerUnavailable: return "preconditioner_unavailable";
   }
   return "?";
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 namespace incise::solver {
 
@@ -48,8 +49,15 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
 
     // Inner solve K(u) p = r (§2.4.3 (∗)).
     VecX inv_diag;
-    if (options.preconditioner == Preconditioner::kJacobi)
-      inv_diag = jacobi_inverse_diagonal(problem, u);
+    if (options.preconditioner == Preconditioner::kJacobi) {
+      JacobiDiagonal jd = jacobi_inverse_diagonal(problem, u);
+      if (!jd.ok()) {
+        reason = jd.status;
+        rep.message = "Newton step " + std::to_string(k + 1) + ": " + jd.message;
+        break;
+      }
+      inv_diag = std::move(jd.inverse);
+    }
     const double eta = std::min(options.forcing_max, std::sqrt(rnorm / std::max(r0, 1e-300)));
     const double inner_tol = std::max(eta * rnorm, 0.5 * threshold);
     const VecX u_fixed = u;

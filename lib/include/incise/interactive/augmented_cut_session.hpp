@@ -132,9 +132,10 @@ class AugmentedCutSession {
   AugmentedCutSession(const AugmentedCutSession&) = delete;
   AugmentedCutSession& operator=(const AugmentedCutSession&) = delete;
 
-  /// Report of the initial factorization and solve (cut fields empty). When K⁰ is not
-  /// positive definite (e.g. no fixed nodes) status is kSolverFailed with solve.status
-  /// kNoFactor; steps then cut the mesh but cannot solve.
+  /// Report of the initial factorization and solve (cut fields empty). When the factorization
+  /// of K⁰ gives any FactorStatus but kOk (not positive definite, e.g. no fixed nodes; a
+  /// CHOLMOD warning such as kTinyPivot) status is kSolverFailed with solve.status kNoFactor
+  /// and a message naming the FactorStatus; steps then cut the mesh but cannot solve.
   const AugmentedCutStepReport& initial_report() const { return initial_; }
 
   /// One interactive step: Cutter::step on sweep triangle (a, b, c) (deformed configuration,

@@ -26,6 +26,7 @@
 
 #include <cstdint>
 #include <future>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -112,6 +113,11 @@ enum class AugmentedStatus {
 /// Human-readable name of an AugmentedStatus.
 const char* to_string(AugmentedStatus status);
 
+/// A preconditioner LU of eq. 17 with a reciprocal condition estimate at or below this is
+/// numerically singular and not used: GMRES runs unpreconditioned and the report says so
+/// (AugmentedReport::preconditioner_dropped; the measured margins: docs/augmented.md).
+inline constexpr double kMinPreconditionerRcond = 1e-13;
+
 /// Report of one augmented solve (one "update step" of the paper).
 /// message: what the caller can do when status != kOk.
 struct [[nodiscard]] AugmentedReport
@@ -134,7 +140,13 @@ struct [[nodiscard]] AugmentedReport
   double seconds_step2 = 0;
   double seconds_step3 = 0;
   double seconds_total = 0;
-  double amplification = 0;              ///< see AugmentedOptions::max_amplification
+  double amplification = 0;  ///< see AugmentedOptions::max_amplification
+  /// The preconditioner of eq. 17 (H S J, or the explicit H R⁻¹ J with kDirectCached) was
+  /// built but its LU is numerically singular (rcond ≤ kMinPreconditionerRcond), so GMRES ran
+  /// unpreconditioned; the message says so when the solve failed.
+  bool preconditioner_dropped = false;
+  /// rcond estimate of the preconditioner's LU (NaN: none built — kNone, or m = 0)
+  double preconditioner_rcond = std::numeric_limits<double>::quiet_NaN();
   bool refactorization_swapped = false;  ///< a background factor replaced the old one here
   FactorStatus refactorization_status = FactorStatus::kOk;  ///< of a finished background job
 };
@@ -160,9 +172,13 @@ class AugmentedSystem {
   AugmentedSystem& operator=(const AugmentedSystem&) = delete;
 
   /// Factors K⁰ (symmetric, both triangles stored, positive definite on the free DOFs) and
-  /// resets all changes, constraints and forces. Returns the factorization status; on failure
-  /// solve() reports kNoFactor. Throws UsageError for a non-square or non-symmetric pattern.
+  /// resets all changes, constraints and forces. Returns the factorization status; any status
+  /// but kOk — kTinyPivot included: the solves need R⁻¹ itself — leaves no factor, and solve()
+  /// reports kNoFactor with factorization_message(). Throws UsageError for a non-square or
+  /// non-symmetric pattern.
   [[nodiscard]] FactorStatus initialize(const SparseMatrix& k0);
+  /// CholmodFactor's message of the last initialize() (empty when it succeeded).
+  const std::string& factorization_message() const;
 
   /// Current number of DOFs n = n₀ + added DOFs.
   int num_dofs() const { return n_; }

@@ -44,6 +44,10 @@ struct CholmodOptions {
   /// flags pivots ≤ 0, and an exactly singular matrix usually yields a positive pivot of
   /// round-off size (e.g. a floating component after a cut). 0 disables the check.
   double min_pivot_ratio = 1e-14;
+  /// CHOLMOD's dbound: pivots D_jj of a simplicial LDLᵀ with |D_jj| < pivot_bound are replaced
+  /// by ±pivot_bound, and the factorization reports kTinyPivot (CHOLMOD_DSMALL); CHOLMOD's
+  /// supernodal factorization ignores it. 0 (default) leaves every pivot as computed. ≥ 0.
+  double pivot_bound = 0.0;
 };
 
 /// Outcome of analyze/factorize/solve, in the spirit of Eigen's `info()`.
@@ -53,7 +57,12 @@ enum class FactorStatus {
   kNotPositiveDefinite,  ///< a pivot ≤ 0: matrix is singular or indefinite; `minor()` says where
   kOutOfMemory,          ///< CHOLMOD could not allocate
   kInvalidInput,         ///< matrix not square, sizes differ from the analysis, NaN entries
-  kCholmodError          ///< any other CHOLMOD failure (message in `message()`)
+  kCholmodError,         ///< any other CHOLMOD failure, or a CHOLMOD warning code incise does
+                         ///< not know (the factor is then not used; code in `message()`)
+  /// CHOLMOD_DSMALL: pivots below CholmodOptions::pivot_bound were replaced by ±pivot_bound.
+  /// The factor exists and solve() works, but it is the factor of a perturbed matrix A + E
+  /// (diagonal E, |E_jj| ≤ pivot_bound); callers that need A⁻¹ itself must not accept it.
+  kTinyPivot
 };
 
 /// Human-readable name of a FactorStatus.
@@ -84,9 +93,11 @@ struct LdlFactorData {
 /// factorize(A) per numerical values, then solve(b). The symbolic analysis is cached by the
 /// caller-supplied pattern version: analyze() with the same version and the same size and
 /// nonzero count is a no-op. Failures are returned as FactorStatus, never thrown; misuse
-/// (non-square input) also reports kInvalidInput.
+/// (non-square input) also reports kInvalidInput. A CHOLMOD warning is never kOk: a factor
+/// exists (solve() and extract_ldl() work) after kOk or kTinyPivot only.
 class CholmodFactor {
  public:
+  /// Throws ParameterError for a negative options.pivot_bound.
   explicit CholmodFactor(CholmodOptions options = {});
   ~CholmodFactor();
   CholmodFactor(const CholmodFactor&) = delete;
@@ -101,7 +112,9 @@ class CholmodFactor {
 
   /// Numerical factorization of `a` (same pattern as analyzed). kNotPositiveDefinite when a
   /// pivot is not positive (minor() is then the failing column, in the permuted order) or the
-  /// pivot ratio is below min_pivot_ratio; kInvalidInput for a NaN/Inf entry.
+  /// pivot ratio is below min_pivot_ratio; kTinyPivot when pivot_bound replaced pivots (the
+  /// message says how many; the pivot-ratio check is then skipped: the bound sets the ratio);
+  /// kInvalidInput for a NaN/Inf entry.
   [[nodiscard]] FactorStatus factorize(const SparseMatrix& a);
 
   /// analyze(a, version) followed by factorize(a).
@@ -131,8 +144,8 @@ class CholmodFactor {
   int analyses_performed() const { return analyses_; }
 
   /// Copy of the factor as unit-lower LDLᵀ arrays (converts a copy of a supernodal LLᵀ
-  /// factor to simplicial LDLᵀ; the stored factor is not modified). Precondition: info()==kOk
-  /// after factorize; otherwise returns nullptr.
+  /// factor to simplicial LDLᵀ; the stored factor is not modified). Precondition: the last
+  /// factorize gave kOk or kTinyPivot; otherwise returns nullptr.
   std::shared_ptr<const LdlFactorData> extract_ldl();
 
  private:

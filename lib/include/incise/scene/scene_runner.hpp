@@ -63,7 +63,10 @@ struct CutStepRow {
   int m = 0;                        ///< replaced columns |𝓛| after the step (Yeung et al. §3)
   int dirichlet = 0;                ///< |𝓓|: constrained DOFs among them
   int gmres_iterations = 0;         ///< GMRES iterations on the Schur system (eq. 17)
-  double gmres_relative_residual = 0;    ///< its relative residual at exit
+  double gmres_relative_residual = 0;  ///< its relative residual at exit
+  /// GMRES ran unpreconditioned: the preconditioner's LU was numerically singular
+  /// (linalg::AugmentedReport::preconditioner_dropped)
+  bool preconditioner_dropped = false;
   std::int64_t nnz_l = 0;                ///< |L| of the factor in use (changes at a swap)
   bool refactorization_started = false;  ///< §3.6 job started after this solve (refactor_at_m)
   bool refactorization_swapped = false;  ///< this solve swapped in a finished job (m dropped)

@@ -36,7 +36,10 @@ struct EigenOptions {
 EigenEstimate largest_eigenvalue(Problem& problem, const VecX& u, const EigenOptions& options = {});
 
 /// Smallest eigenvalue λ₁ of M⁻¹K at u by inverse iteration, each step solving K y = M x on the
-/// free DOFs with projected_cg(). The Rayleigh quotient is an upper bound of λ₁.
+/// free DOFs with projected_cg(), Jacobi-preconditioned when Problem::hessian_diagonal() is
+/// available (plain CG otherwise). The Rayleigh quotient is an upper bound of λ₁. A diagonal
+/// with a free K_ii ≤ 0 (kIndefinite) or a non-finite one (kNonFinite) stops it before the
+/// first step, with jacobi_inverse_diagonal()'s message.
 EigenEstimate smallest_eigenvalue(Problem& problem, const VecX& u,
                                   const EigenOptions& options = {});
 

@@ -16,8 +16,9 @@ namespace incise::solver {
 /// Preconditioner of the CG iterations.
 enum class Preconditioner {
   kNone,   ///< plain CG (the thesis' choice)
-  kJacobi  ///< diagonal scaling by diag K(u) (Problem::hessian_diagonal); falls back to kNone
-           ///< when the problem provides no diagonal or a diagonal entry is ≤ 0
+  kJacobi  ///< diagonal scaling by diag K(u) (Problem::hessian_diagonal); a diagonal that is
+           ///< unavailable, non-finite or ≤ 0 at a free DOF stops the solver with the status of
+           ///< jacobi_inverse_diagonal() (never a silent switch to kNone)
 };
 
 /// Names of the preconditioners (scene key `preconditioner`, docs/scenes.md).
@@ -60,7 +61,9 @@ struct LinearCgOptions : RelaxationOptions {
 /// unprojected product, so the rule (6.9) costs no extra evaluations. Energy history is exact
 /// for a quadratic Π: Π_{k+1} = Π_k − ½ α_k (r_k, z_k).
 /// Stops with kIndefinite when dᵀK d ≤ 0 (u is left at the last iterate), kNonFinite or
-/// kInverted when an evaluation fails; never writes NaN into u.
+/// kInverted when an evaluation fails; never writes NaN into u. With kJacobi, a diagonal that
+/// jacobi_inverse_diagonal() rejects ends the run before the first step with its status and
+/// message (u unchanged).
 SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options);
 
 /// Linear operator out = A·in used by projected_cg(); returns the evaluation status.
@@ -83,8 +86,19 @@ InnerCgResult projected_cg(const LinearOperator& apply, const Problem& problem,
                            const VecX& inverse_diagonal, const VecX& b, VecX& x, double tolerance,
                            long max_iterations, CostMeter& meter);
 
-/// Jacobi preconditioner D⁻¹ = 1/diag K(u) at free DOFs, 0 at fixed DOFs. Returns an empty
-/// vector when the problem has no diagonal or some free diagonal entry is not positive/finite.
-VecX jacobi_inverse_diagonal(Problem& problem, const VecX& u);
+/// Outcome of jacobi_inverse_diagonal(); ok(): `inverse` holds D⁻¹, otherwise it is empty and
+/// the message names the first offending DOF and its value.
+struct [[nodiscard]] JacobiDiagonal
+    : Outcome<StopReason, StopReason::kConverged, StopReason::kPreconditionerUnavailable> {
+  VecX inverse;  ///< 1/K_ii at free DOFs, 0 at fixed DOFs (size n when ok(), else empty)
+};
+
+/// Jacobi preconditioner D⁻¹ = 1/diag K(u) (the E Eᵀ = diag K of §2.4.1) at free DOFs, 0 at
+/// fixed DOFs, whose diagonal is never read (they are projected out, §3.1). Status:
+/// kPreconditionerUnavailable when Problem::hessian_diagonal() returns false or a vector of the
+/// wrong size; kNonFinite when a free K_ii is NaN/∞; kIndefinite when a free K_ii ≤ 0, since
+/// then e_iᵀ K e_i ≤ 0 and K is not positive definite (a free DOF without stiffness has
+/// K_ii = 0: fix it). Non-finite entries are reported before non-positive ones.
+JacobiDiagonal jacobi_inverse_diagonal(Problem& problem, const VecX& u);
 
 }  // namespace incise::solver

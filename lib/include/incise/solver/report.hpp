@@ -28,7 +28,10 @@ enum class StopReason {
   kIndefinite,        ///< non-positive curvature dᵀK d ≤ 0 where a minimizer needs it positive
   kLineSearchFailed,  ///< the line search could not find an admissible step length
   kStagnated,         ///< no further progress (zero step, or residual no longer decreasing)
-  kUnstable           ///< explicit dynamics blew up (‖u‖ > blow-up bound, §4.4.1)
+  kUnstable,          ///< explicit dynamics blew up (‖u‖ > blow-up bound, §4.4.1)
+  /// Jacobi preconditioning was requested but Problem::hessian_diagonal() returned false (the
+  /// problem has no diagonal, or could not evaluate its tangent at u); the solver did not run
+  kPreconditionerUnavailable
 };
 
 /// Human-readable name ("converged", "max_iterations", ...).

@@ -26,7 +26,9 @@ struct TruncatedNewtonOptions : RelaxationOptions {
 /// α = 1 and is halved while Π(u + αp) = +∞ (inverted elements: never accepted) or while neither
 /// the energy decreases (Armijo, c = 1e-4) nor — once energies agree to round-off — the
 /// residual decreases. Reports kIndefinite if the steepest-descent fallback has no scale,
-/// kLineSearchFailed if halving is exhausted.
+/// kLineSearchFailed if halving is exhausted. With kJacobi (the default) the diagonal is taken
+/// at every Newton step; one that jacobi_inverse_diagonal() rejects (a free K_ii ≤ 0: kIndefinite,
+/// non-finite, unavailable) ends the run there with its status and message naming the step.
 SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOptions& options);
 
 }  // namespace incise::solver
