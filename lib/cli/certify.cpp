@@ -1,6 +1,7 @@
 // `incise certify [--quick] [--out DIR] [--filter RE] [--data DIR]`: runs the verification
-// catalogue (lib/scene certify.hpp) against reference_data/certify/tolerances.json, writes
-// DIR/index.html and DIR/summary.json, and exits non-zero when any check fails.
+// catalogue (certify/certify.hpp, docs/certify.md) against the bands in
+// reference_data/certify/tolerances.json, writes DIR/index.html and DIR/summary.json, and exits
+// non-zero when any check fails.
 
 #include <incise/certify/certify.hpp>
 #include <incise/core/error.hpp>
@@ -44,10 +45,22 @@ int run_certify_command(const Args& args, std::ostream& out, std::ostream& err) 
       data_dir, quick, filter,
       [&out](const std::string& id) { out << "  running " << id << " ..." << std::endl; });
   for (const auto& r : s.results) {
-    out << (r.passed ? "  PASS  " : "  FAIL  ") << r.id << "  value "
-        << certify::format_number(r.value) << " (tolerance " << certify::format_number(r.tolerance)
-        << "), " << certify::format_number(r.seconds) << " s\n";
-    if (!r.passed) out << "        " << r.detail << "\n";
+    const int n = static_cast<int>(r.comparisons.size());
+    out << (r.passed ? "  PASS  " : "  FAIL  ") << r.id << "  " << (n - r.failed_comparisons())
+        << "/" << n << " in band";
+    if (const certify::JudgedComparison* h = r.headline())
+      out << (h->passed ? "; nearest an end: " : "; ") << h->quantity << " = "
+          << certify::format_number(h->value) << (h->passed ? " in [" : " not in [")
+          << certify::format_number(h->bounds.min) << ", " << certify::format_number(h->bounds.max)
+          << "]";
+    out << ", " << certify::format_number(r.seconds) << " s\n";
+    if (r.passed) continue;
+    for (const auto& c : r.comparisons)
+      if (!c.passed && &c != r.headline())
+        out << "        " << c.quantity << " = " << certify::format_number(c.value) << " not in ["
+            << certify::format_number(c.bounds.min) << ", " << certify::format_number(c.bounds.max)
+            << "]\n";
+    out << "        " << r.detail << "\n";
   }
   write_file_atomic(out_dir + "/index.html", certify::certify_html(s, commit));
   write_file_atomic(out_dir + "/summary.json", certify::certify_json(s, commit).dump(2) + "\n");

@@ -1,19 +1,20 @@
 #pragma once
-// The measurements behind `incise certify` (private to the scene module).
+// The measurements behind `incise certify` (private to the certify module).
 //
 // The public side is lib/include/incise/certify/certify.hpp: certify.cpp holds the check table
-// (certify_catalogue) and run_certify, which judges each measurement against its bound in
-// reference_data/certify/tolerances.json; certify_report.cpp renders the HTML page and the JSON
-// summary. The measurements themselves are grouped by area, one file each:
+// (certify_catalogue) and run_certify, which judges each comparison a measurement returns against
+// its band [min, max] in reference_data/certify/tolerances.json; certify_report.cpp renders the
+// HTML page and the JSON summary. The measurements themselves are grouped by area, one file each:
 //
 //   certify_mesh.cpp         generators, the liver mesh's invariants (7.1)-(7.5), shipped scenes
 //   certify_fem.cpp          patch test, matrix-free K.d, flops per element (thesis Table 4.3)
 //   certify_solvers.cpp      cantilever (Table 3.1), CG == CHOLMOD, nonlinear CG / SS22 == Newton,
 //                            augmented interactive cut == cut first (Yeung et al. 2016)
-//   certify_performance.cpp  cost per iteration against thesis Table 4.5 (measured in-process)
+//   certify_performance.cpp  cost per iteration against thesis Table 4.5, rate as a fraction of
+//                            the vector-add baseline measured interleaved in the same process
 //
-// A measurement returns the compared value and its evidence (tables, plots); it never judges
-// itself.
+// A measurement returns its comparisons (quantity, band name, value) and the evidence (tables,
+// plots); it never judges itself.
 
 #include <incise/certify/certify.hpp>
 #include <incise/certify/svg_plot.hpp>

@@ -13,8 +13,20 @@
 
 namespace incise {
 
+/// One timed stretch of the baseline kernel.
+struct VectorAddSample {
+  double flops = 0.0;    ///< element adds executed (one flop each)
+  double seconds = 0.0;  ///< thread CPU seconds they took
+  /// flops / seconds / 1e6.
+  double mflops() const { return flops / seconds / 1e6; }
+};
+
+/// Repeats a ← a + b on 1024-double vectors, 1000 repetitions at a time, until at least
+/// `cpu_seconds` (> 0) of the calling thread's CPU time have passed. Not cached.
+VectorAddSample vector_add_sample(double cpu_seconds);
+
 /// Measured vector-add baseline in MFLOP/s (one flop per element add): best of 25 trials of
-/// about 20 ms thread CPU time each (the thesis used the best sustained rate; why the best and
+/// vector_add_sample(0.02) (the thesis used the best sustained rate; why the best and
 /// not the mean: baseline.cpp). Computed on the first call and cached for the life of the
 /// process; thread-safe.
 double vector_add_mflops();
