@@ -18,6 +18,7 @@
 
 #include <incise/certify/certify.hpp>
 #include <incise/certify/svg_plot.hpp>
+#include <incise/scene/scene_builder.hpp>
 #include <incise/scene/scene_spec.hpp>
 
 #include <string>
@@ -41,6 +42,11 @@ inline scene::MaterialSpec table_4_1_material(const std::string& model) {
   m.parameters.density = 1000;
   return m;
 }
+
+/// ‖P ∇Π(u)‖ / ‖f_ext‖ of scene `b`'s (final) problem at `u`, recomputed from the forces — the
+/// residual a solver's stopping rule is about, independent of what the solver reports; NaN when
+/// the forces cannot be evaluated (inverted element). Defined in certify_solvers.cpp.
+double recomputed_relative_residual(scene::BuiltScene& b, const VecX& u);
 
 // certify_mesh.cpp
 Measurement measure_box_volume(const CertifyContext& ctx);

@@ -2,11 +2,11 @@
 // cost per iteration of linear CG, nonlinear CG (Newton and secant line searches) and SS22
 // dynamic relaxation on the §4.2 cylinder, against thesis Table 4.5 (§4.5.2). Two comparisons
 // per row: the counted MFLOP per iteration over the thesis' (deterministic), and the rate as a
-// fraction of the vector-add baseline (core/baseline.hpp, the thesis' machine measure): thread
-// CPU time of the row's run and of an equally long vector-add stretch, interleaved round by
-// round, the median of the per-round ratios. The ratio is not a wall-clock assertion: both
-// halves of a round see the same machine state, the median drops rounds that a change of state
-// split (docs/certify.md, "performance_table_4_5").
+// fraction of the vector-add baseline (core/baseline.hpp, the thesis' machine measure): rounds
+// that time the row's run and an equally long vector-add stretch in thread CPU time, one after
+// the other, and the ratio of the best rate of each over the rounds. Not a wall-clock
+// assertion: load only slows a kernel down, so the best of interleaved rounds is each kernel's
+// rate in the same quiet stretches of the machine (docs/certify.md, "performance_table_4_5").
 
 #include <incise/core/baseline.hpp>
 #include <incise/core/timer.hpp>
@@ -99,16 +99,16 @@ solver::SolverReport run_table_4_5_method(fem::ElasticProblem& p, const Table45R
 
 Measurement measure_table_4_5(const CertifyContext& ctx) {
   Measurement r;
-  // Interleaved rounds per row (odd, for the median): the row's run, then a vector-add stretch
-  // of the same thread CPU time (reversed order on odd rounds, so a slow drift cancels).
-  const int rounds = ctx.quick ? 5 : 25;
+  // Interleaved rounds per row: the row's run, then a vector-add stretch of the same thread CPU
+  // time (reversed order on odd rounds).
+  const int rounds = ctx.quick ? 9 : 25;
   ReportTable t{
       "Per iteration, from u = 0 (ours measured in this process, thread CPU time; thesis Table "
       "4.5 on a 1 GHz Pentium III, baseline 246 MFLOP/s)",
       {"material", "method", "line search", "mesh", "MFLOP/iter (ours, counted)",
        "MFLOP/iter (thesis)", "iter/s (ours)", "iter/s (thesis)", "MFLOP/s (ours)",
-       "vector add MFLOP/s (interleaved)", "fraction of baseline (ours, median of rounds)",
-       "its spread over rounds (min - max)", "% peak (thesis)"},
+       "vector add MFLOP/s (interleaved)", "fraction of baseline (ours: best / best)",
+       "per-round ratios (min - max)", "% peak (thesis)"},
       {}};
   Series ours{"incise (counted)", {}, {}, {}, false}, ref{"thesis Table 4.5", {}, {}, {}, true};
   Series frac{"incise: fraction of the vector add", {}, {}, {}, false},
@@ -127,6 +127,7 @@ Measurement measure_table_4_5(const CertifyContext& ctx) {
     // flops per iteration (deterministic) are those of the first round's run.
     std::vector<double> ratios;
     double iters = 0, flops = 0, seconds = 0, add_flops = 0, add_seconds = 0, last = 0;
+    double best_run = 0, best_add = 0;
     solver::SolverReport first;
     for (int round = 0; round < rounds; ++round) {
       // Odd rounds time the add first, as long as the previous round's run took.
@@ -138,6 +139,8 @@ Measurement measure_table_4_5(const CertifyContext& ctx) {
       last = thread_cpu_seconds() - start;
       if (!add_first) add = vector_add_sample(last);
       ratios.push_back(static_cast<double>(rep.flops) / last / (add.flops / add.seconds));
+      best_run = std::max(best_run, static_cast<double>(rep.flops) / last);
+      best_add = std::max(best_add, add.flops / add.seconds);
       iters += static_cast<double>(rep.iterations), flops += static_cast<double>(rep.flops);
       seconds += last, add_flops += add.flops, add_seconds += add.seconds;
       if (round == 0) first = std::move(rep);
@@ -150,7 +153,7 @@ Measurement measure_table_4_5(const CertifyContext& ctx) {
     const double mflop_iter =
         static_cast<double>(first.flops) / 1e6 / std::max<long>(1, first.iterations);
     std::sort(ratios.begin(), ratios.end());
-    const double fraction = ratios[ratios.size() / 2];
+    const double fraction = best_run / best_add;
     r.comparisons.push_back({std::string(row.material) + " " + row.method +
                                  (row.line_search[0] ? std::string(" ") + row.line_search : "") +
                                  (row.large ? " (large)" : "") + ": MFLOP/iteration / thesis",
@@ -195,7 +198,8 @@ Measurement measure_table_4_5(const CertifyContext& ctx) {
       "baseline (a <- a + b on 1024 doubles, core/baseline.hpp) measured in the same rounds: " +
       std::to_string(rounds) +
       " rounds per row, each the row's run and a vector-add stretch of the same thread CPU "
-      "time, the median of the per-round ratios. The thesis' kernels ran at 48-90 % of its "
+      "time; compared: the best rate of the run over the best rate of the add. The thesis' kernels "
+      "ran at 48-90 % of its "
       "baseline; the add is bound by loads and stores, the element kernels by arithmetic, so a "
       "modern core can exceed 100 %.";
   r.tables.push_back(t);

@@ -3,11 +3,13 @@
 /// The thesis' machine baseline (Nienhuys 2003, §4.5.2, Table 4.5): the MFLOP/s rate of a
 /// repeated double vector add a ← a + b on 1024-double vectors, against which the thesis states
 /// its solvers' speed ("% peak"). One implementation, used by `incise certify` (Table 4.5
-/// comparison) and by the benchmark binaries' context (benchmarks/support).
+/// comparison: vector_add_sample interleaved with the solvers) and by the benchmark binaries'
+/// context (benchmarks/support).
 ///
 /// Timings are CPU time of the calling thread (CLOCK_THREAD_CPUTIME_ID), so that a loaded
-/// machine does not inflate every "% of baseline" figure; they are measurements, never used in
-/// assertions.
+/// machine does not inflate every "% of baseline" figure. No absolute rate is asserted anywhere;
+/// `incise certify` asserts only the ratio of a solver's rate to this one, measured in the same
+/// rounds (docs/certify.md).
 
 #include <incise/core/timer.hpp>
 

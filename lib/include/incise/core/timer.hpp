@@ -1,7 +1,8 @@
 #pragma once
 /// \file timer.hpp
 /// Monotonic wall-clock stopwatch and the calling thread's CPU clock, used by solver reports,
-/// the CLI and the benchmarks. Never used in assertions.
+/// the CLI and the benchmarks. No duration is asserted; `incise certify` asserts only a ratio of
+/// two thread-CPU-time rates measured in the same rounds (docs/certify.md).
 
 #include <chrono>
 #include <ctime>
