@@ -1,8 +1,9 @@
 /// \file augmented_reports_test.cpp
 /// What an augmented solve (Yeung, Crouch & Pothen 2016 §3) reports besides its status, on
 /// small systems built to trigger each condition: a preconditioner of eq. 17 whose LU is
-/// numerically singular (dropped: GMRES unpreconditioned, §3.5), and a factor of K⁰ or of a
-/// background snapshot (§3.6) with CHOLMOD's tiny-pivot warning (never used).
+/// numerically singular (dropped: GMRES unpreconditioned, §3.5), an amplified solution (the
+/// accuracy warning and the singularity guard), and a factor of K⁰ or of a background snapshot
+/// (§3.6) with CHOLMOD's tiny-pivot warning (never used).
 
 #include <incise/core/error.hpp>
 #include <incise/linalg/augmented_system.hpp>
@@ -112,6 +113,42 @@ TEST(AugmentedReports, DroppedPreconditionerIsNamedInAFailureMessage) {
   EXPECT_FALSE(rep.ok());
   EXPECT_TRUE(rep.preconditioner_dropped) << "rcond " << rep.preconditioner_rcond;
   EXPECT_NE(rep.message.find("GMRES ran unpreconditioned"), std::string::npos) << rep.message;
+}
+
+// The amplification A = max|K_ii|·‖a‖/‖f̂‖ of K = diag(1, s) under the load e_2 is 1/s: below
+// warn_amplification nothing is flagged, between the two bounds the solve is ok with the
+// accuracy warning, above max_amplification (1e12) it is a singular system, outputs zeroed.
+TEST(AugmentedReports, AmplifiedSolutionsAreWarnedOrRejected) {
+  struct Case {
+    double s;
+    bool ok, warning;
+  };
+  for (const Case& c :
+       {Case{1e-3, true, false}, Case{1e-10, true, true}, Case{1e-13, false, true}}) {
+    SCOPED_TRACE(c.s);
+    Eigen::MatrixXd k = Eigen::MatrixXd::Identity(2, 2);
+    k(1, 1) = c.s;  // pivot ratio ≥ 1e-13 passes CholmodOptions::min_pivot_ratio = 1e-14
+    AugmentedSystem aug;
+    ASSERT_EQ(aug.initialize(sparse(k)), FactorStatus::kOk);
+    aug.set_force(Eigen::Vector2d(0, 1));
+    Eigen::VectorXd a, r;
+    const AugmentedReport rep = aug.solve(a, r);
+    // A = 1/s up to the rounding of one division.
+    EXPECT_NEAR(rep.amplification, 1 / c.s, 1e-14 / c.s);
+    EXPECT_EQ(rep.ok(), c.ok) << rep.brief();
+    EXPECT_EQ(rep.amplification_warning, c.warning);
+    if (!c.ok) {
+      EXPECT_EQ(rep.status, AugmentedStatus::kSingularModifiedSystem);
+      EXPECT_NE(rep.message.find("max_amplification 1e+12"), std::string::npos) << rep.message;
+      EXPECT_EQ(a, Eigen::Vector2d::Zero());
+    } else {
+      EXPECT_TRUE(rep.message.empty());
+      EXPECT_EQ(a(1), 1 / c.s);  // a diagonal solve: exact up to one rounding, as 1/s
+    }
+  }
+  AugmentedOptions bad;
+  bad.warn_amplification = 0;
+  EXPECT_THROW(AugmentedSystem{bad}, ParameterError);
 }
 
 // CHOLMOD's tiny-pivot warning (CholmodOptions::pivot_bound replaced a pivot) is not a usable

@@ -151,15 +151,22 @@ TEST(SceneOutputs, InteractiveCutRunWritesOneRowAndOneFramePerSolve) {
   const std::vector<std::string> rows = lines_of(read(spec.outputs.csv));
   ASSERT_EQ(rows.size(), solves + 1);
   EXPECT_EQ(rows[0].rfind("step,tool,status,", 0), 0u) << rows[0];
-  // Each solve carries whether GMRES ran unpreconditioned (a dropped singular preconditioner):
-  // the column after the timings, and the summary's cut_steps.
-  EXPECT_NE(rows[0].find(",update_cpu_seconds,preconditioner_dropped"), std::string::npos)
+  // Each solve carries whether GMRES ran unpreconditioned (a dropped singular preconditioner)
+  // and the amplification of its solution: the columns after the timings, and the summary's
+  // cut_steps (with the amplification warning).
+  EXPECT_NE(rows[0].find(",update_cpu_seconds,preconditioner_dropped,amplification"),
+            std::string::npos)
       << rows[0];
   const Json summary = Json::parse(scene::summary_json(built, res, 0.0, written));
   ASSERT_EQ(summary["cut_steps"].size(), solves);
-  for (std::size_t k = 0; k < solves; ++k)
-    EXPECT_EQ(summary["cut_steps"][k]["preconditioner_dropped"],
-              res.cut_steps[k].preconditioner_dropped);
+  for (std::size_t k = 0; k < solves; ++k) {
+    const Json& c = summary["cut_steps"][k];
+    EXPECT_EQ(c["preconditioner_dropped"], res.cut_steps[k].preconditioner_dropped);
+    EXPECT_EQ(c["amplification"], res.cut_steps[k].amplification);
+    EXPECT_EQ(c["amplification_warning"], res.cut_steps[k].amplification_warning);
+  }
+  EXPECT_GT(res.cut_steps[0].amplification, 0.0);  // the loaded initial solve (steps that
+                                                   // change nothing are not solved: 0)
   for (std::size_t k = 0; k < solves; ++k)
     EXPECT_TRUE(fs::is_regular_file(spec.outputs.vtu + "_" + std::to_string(k) + ".vtu")) << k;
   // The final state is on the final cut mesh (the run replaced built.mesh by it).

@@ -166,6 +166,8 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
 
 AugmentedSystem::AugmentedSystem(AugmentedOptions options) : options_(options) {
   INCISE_CHECK_PARAM(options_.solve_threads >= 1, "AugmentedOptions::solve_threads must be >= 1");
+  INCISE_CHECK_PARAM(options_.max_amplification > 0 && options_.warn_amplification > 0,
+                     "AugmentedOptions::max_amplification and warn_amplification must be > 0");
 }
 
 AugmentedSystem::~AugmentedSystem() {
@@ -845,13 +847,16 @@ void AugmentedSystem::conclude(const Augmentation& aug, Eigen::VectorXd& displac
   for (const auto& kv : dirichlet_) abar2 += kv.second * kv.second;
   const double denom = aug.fhat.norm() + diag_scale_ * std::sqrt(abar2);
   report.amplification = denom > 0 ? diag_scale_ * displacement.norm() / denom : 0.0;
+  report.amplification_warning = report.amplification > options_.warn_amplification;
   if (report.status == AugmentedStatus::kOk &&
       !(report.amplification <= options_.max_amplification)) {
     report.status = AugmentedStatus::kSingularModifiedSystem;
-    report.message =
-        "the solution is amplified " + std::to_string(report.amplification) +
-        "x relative to the load: the modified stiffness is numerically singular (a cut may "
-        "have freed a component); constrain the free part or remove its elements";
+    std::ostringstream os;
+    os << "the solution is amplified " << report.amplification
+       << "x relative to the load (max_amplification " << options_.max_amplification
+       << "): the modified stiffness is numerically singular (a cut may have freed a "
+          "component); constrain the free part or remove its elements";
+    report.message = os.str();
     displacement.setZero();
     reaction.setZero();
   }

@@ -50,7 +50,7 @@ std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
   if (!res.cut_steps.empty()) {
     csv << "step,tool,status,degenerate_sweep,faces_dissected,nodes_snapped,new_nodes,nodes,"
            "tetrahedra,m,dirichlet,gmres_iterations,gmres_relative_residual,nnz_l,cut_seconds,"
-           "update_seconds,update_cpu_seconds,preconditioner_dropped";
+           "update_seconds,update_cpu_seconds,preconditioner_dropped,amplification";
     probe_columns(csv, scene);
     for (const auto& c : res.cut_steps) {
       std::string status = c.status;  // CSV field: no commas or quotes
@@ -60,7 +60,8 @@ std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
           << c.faces_dissected << "," << c.nodes_snapped << "," << c.new_nodes << "," << c.nodes
           << "," << c.tetrahedra << "," << c.m << "," << c.dirichlet << "," << c.gmres_iterations
           << "," << c.gmres_relative_residual << "," << c.nnz_l << "," << c.seconds_cut << ","
-          << c.seconds_update << "," << c.cpu_seconds_update << "," << c.preconditioner_dropped;
+          << c.seconds_update << "," << c.cpu_seconds_update << "," << c.preconditioner_dropped
+          << "," << c.amplification;
       probe_values(csv, c.probes);
     }
   } else {
@@ -170,6 +171,8 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
                {"gmres_iterations", c.gmres_iterations},
                {"gmres_relative_residual", c.gmres_relative_residual},
                {"preconditioner_dropped", c.preconditioner_dropped},
+               {"amplification", c.amplification},
+               {"amplification_warning", c.amplification_warning},
                {"nnz_l", c.nnz_l},
                {"refactorization_started", c.refactorization_started},
                {"refactorization_swapped", c.refactorization_swapped},

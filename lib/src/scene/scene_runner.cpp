@@ -146,6 +146,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   long gmres_total = 0;
   int refactorizations = 0;  // §3.6 background factorizations swapped in
   int dropped = 0;           // solves whose preconditioner was dropped (GMRES unpreconditioned)
+  int amplified = 0;         // solves with an amplification warning (digits may be lost)
   double cut_seconds = 0;
   cut::CutTotals totals;
   auto add_row = [&](int step, int tool, const interactive::AugmentedCutStepReport& r) {
@@ -166,6 +167,9 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
       row.gmres_relative_residual = r.solve.gmres.relative_residual;
       row.preconditioner_dropped = r.solve.preconditioner_dropped;
       dropped += r.solve.preconditioner_dropped ? 1 : 0;
+      row.amplification = r.solve.amplification;
+      row.amplification_warning = r.solve.amplification_warning;
+      amplified += r.solve.amplification_warning ? 1 : 0;
       row.nnz_l = r.solve.nnz_l;
       row.refactorization_started = r.refactorization_started;
       row.refactorization_swapped = r.refactorization_swapped;
@@ -264,6 +268,9 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
          << (dropped > 0 ? "; preconditioner dropped (singular LU, GMRES unpreconditioned) in " +
                                std::to_string(dropped) + " solves"
                          : std::string())
+         << (amplified > 0 ? "; amplification warning (digits may be lost) in " +
+                                 std::to_string(amplified) + " solves"
+                           : std::string())
          << (failed ? "; first failure at " + failure_text : std::string());
   scene.mesh = std::move(final_mesh);
   scene.fixed_nodes = std::move(held);

@@ -86,13 +86,17 @@ struct AugmentedOptions {
   /// to its column of R (e.g. an element removed and added back with exactly representable
   /// sums); skipped while a background refactorization snapshot is pending (§3.6 bookkeeping).
   bool prune_unchanged_columns = true;
-  /// Numerical-singularity guard: a solution with amplification
-  /// max|K_ii|·‖a‖₂ / (‖f̂‖₂ + max|K_ii|·‖ā‖₂) above this is reported as
-  /// kSingularModifiedSystem (GMRES can "converge" on a numerically singular eq. 17, e.g. after
-  /// a cut frees a component, and return a huge, meaningless a). The amplification is bounded
-  /// by κ(K) for a nonsingular K, so this must exceed the condition number of legitimate
-  /// systems (the paper's longest beam: κ ≈ 3.3e12).
-  double max_amplification = 1e14;
+  /// Numerical-singularity guard on the amplification A = max|K_ii|·‖a‖₂ / (‖f̂‖₂ +
+  /// max|K_ii|·‖ā‖₂) (A ≤ κ(K) for a nonsingular K): a solution with A above this is reported
+  /// as kSingularModifiedSystem and zeroed (GMRES can "converge" on a numerically singular
+  /// eq. 17, e.g. after a cut frees a component, and return a huge, meaningless a). > 0.
+  /// 1e12 = 1/(default gmres.tolerance): beyond it the error bound κ·tolerance ≥ A·tolerance
+  /// exceeds 1, so not one digit of a is certified.
+  double max_amplification = 1e12;
+  /// Accuracy warning: A above this (the solve still ok() when A ≤ max_amplification) sets
+  /// AugmentedReport::amplification_warning. > 0. 1e8: κ ≥ A, so the solution may have lost
+  /// half of double precision's 16 digits (ε·A > 2e-8).
+  double warn_amplification = 1e8;
   /// Threads of step 3's full backward substitution (ClosureLdlSolver): 1 = serial, ≥ 1. The
   /// pass streams all of L and is memory-bound, so extra threads help as far as a core adds
   /// memory bandwidth (docs/augmented.md). The result is bit-identical for any value. Leave at
@@ -141,6 +145,8 @@ struct [[nodiscard]] AugmentedReport
   double seconds_step3 = 0;
   double seconds_total = 0;
   double amplification = 0;  ///< see AugmentedOptions::max_amplification
+  /// amplification > AugmentedOptions::warn_amplification: digits may be lost, even when ok()
+  bool amplification_warning = false;
   /// The preconditioner of eq. 17 (H S J, or the explicit H R⁻¹ J with kDirectCached) was
   /// built but its LU is numerically singular (rcond ≤ kMinPreconditionerRcond), so GMRES ran
   /// unpreconditioned; the message says so when the solve failed.

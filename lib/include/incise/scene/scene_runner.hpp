@@ -67,6 +67,11 @@ struct CutStepRow {
   /// GMRES ran unpreconditioned: the preconditioner's LU was numerically singular
   /// (linalg::AugmentedReport::preconditioner_dropped)
   bool preconditioner_dropped = false;
+  /// amplification of the solution (linalg::AugmentedReport::amplification, ≤ κ(K)); 0 when
+  /// the step did not solve
+  double amplification = 0;
+  /// amplification above linalg::AugmentedOptions::warn_amplification: digits may be lost
+  bool amplification_warning = false;
   std::int64_t nnz_l = 0;                ///< |L| of the factor in use (changes at a swap)
   bool refactorization_started = false;  ///< §3.6 job started after this solve (refactor_at_m)
   bool refactorization_swapped = false;  ///< this solve swapped in a finished job (m dropped)
