@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The test command: install what is missing, check formatting, build Release and run every
-# non-slow test, then build the asan preset and run the property tests under sanitizers.
-# Exits non-zero on any failure. Ends with one line "tests: N passed, M failed".
+# The test command: install what is missing, check formatting and the module order, build
+# Release and run every non-slow test, then (with INCISE_WITH_SLOW=1) the `slow` label, then
+# build the asan preset and run the property tests under sanitizers. Prints each stage's
+# duration. Exits non-zero on any failure. Ends with one line "tests: N passed, M failed".
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc 2>/dev/null || echo 2)
@@ -23,6 +24,7 @@ count() {
     awk '{ t = $1; f = $2 } END { if (t == "") { t = 0; f = 0 }; print t - f, f }'
 }
 
+t0=$SECONDS
 echo "== release build"
 cmake --preset release >/dev/null
 cmake --build --preset release -j"$jobs"
@@ -30,6 +32,17 @@ echo "== release tests (excluding label 'slow')"
 status=0
 ctest --preset release 2>&1 | tee "$logdir/release.log" || status=1
 read -r p1 f1 < <(count "$logdir/release.log")
+echo "== stage time: build + non-slow tests $((SECONDS - t0)) s"
+
+p3=0 f3=0
+if [ "${INCISE_WITH_SLOW:-0}" = "1" ]; then
+  t1=$SECONDS
+  echo "== release tests, label 'slow'"
+  ctest --test-dir build/release -L slow -j"$jobs" --output-on-failure 2>&1 |
+    tee "$logdir/slow.log" || status=1
+  read -r p3 f3 < <(count "$logdir/slow.log")
+  echo "== stage time: slow label $((SECONDS - t1)) s"
+fi
 
 p2=0 f2=0
 if [ "${INCISE_SKIP_ASAN:-0}" != "1" ]; then
@@ -41,5 +54,6 @@ if [ "${INCISE_SKIP_ASAN:-0}" != "1" ]; then
     ctest --preset asan-property 2>&1 | tee "$logdir/asan.log" || status=1
   read -r p2 f2 < <(count "$logdir/asan.log")
 fi
-echo "tests: $((p1 + p2)) passed, $((f1 + f2)) failed"
+echo "== total time $SECONDS s"
+echo "tests: $((p1 + p2 + p3)) passed, $((f1 + f2 + f3)) failed"
 exit $status
