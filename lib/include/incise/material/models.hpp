@@ -43,7 +43,7 @@
 /// Forces inlining of the kernel building blocks. The element kernels are instantiated for
 /// several scalar types and models in one translation unit; without it GCC keeps helpers such as
 /// the 3×3 product out of line, and returning 3×3 Lanes4 matrices through memory costs as much
-/// as the arithmetic (measured: ElasticProblem::internal_forces 1.5× slower). No effect on
+/// as the arithmetic (the measurement: docs/fem_performance.md). No effect on
 /// results. Not applied in sanitizer builds: instrumenting the fully inlined element loops takes
 /// minutes and gigabytes per translation unit, and speed does not matter there.
 #if defined(__has_feature)
