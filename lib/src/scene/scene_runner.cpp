@@ -294,6 +294,7 @@ std::string estimate_failure(const std::string& what, const solver::EigenEstimat
 
 DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
                                      const solver::EigenOptions& eigen) {
+  INCISE_CHECK(scene.problem != nullptr, "dynamic_parameters needs a built problem");
   const SolverSpec& s = scene.spec.solver;
   fem::ElasticProblem& p = *scene.problem;
   DynamicParameters dp;

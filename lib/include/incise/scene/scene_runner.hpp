@@ -125,7 +125,8 @@ struct [[nodiscard]] DynamicParameters : Outcome<solver::StopReason, solver::Sto
 /// 8192 undamped steps at Δt. An estimate that did not converge is never used: an eigenvalue
 /// estimate with any status but kConverged (iterations exhausted, indefinite or non-finite K),
 /// an undamped run that did not complete (its status: unstable, inverted, non-finite) or
-/// found no oscillation (kStagnated). Each estimate is recorded in scene.steps.
+/// found no oscillation (kStagnated). Each estimate is recorded in scene.steps. Throws
+/// UsageError for a scene whose problem was not built or has no lumped mass (not dynamic).
 DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
                                      const solver::EigenOptions& eigen = {});
 
