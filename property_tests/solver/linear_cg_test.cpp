@@ -164,8 +164,9 @@ TEST(LinearCg, JacobiReportsAFreeDofWithoutStiffnessAsIndefinite) {
   VecX u = VecX::Zero(20);
   SolverReport rep = linear_cg(free_zero, u, o);
   EXPECT_EQ(rep.status, StopReason::kIndefinite);
-  EXPECT_NE(rep.message.find("free DOF i = 7"), std::string::npos) << rep.message;
-  EXPECT_NE(rep.message.find("K_ii = 0 "), std::string::npos) << rep.message;
+  EXPECT_NE(rep.message.find("free DOF 7 has diagonal entry K_ii = 0, not positive"),
+            std::string::npos)
+      << rep.message;
   EXPECT_EQ(rep.iterations, 0);
   EXPECT_EQ(u, VecX::Zero(20));
   o.preconditioner = Preconditioner::kNone;
@@ -195,8 +196,9 @@ TEST(LinearCg, JacobiReportsNegativeNonFiniteAndMissingDiagonals) {
     StopReason status;
     const char* names;
   };
-  for (const Case& c : {Case{negative, StopReason::kIndefinite, "K_ii = -2.5 at free DOF i = 4"},
-                        Case{nan, StopReason::kNonFinite, "at free DOF i = 9"},
+  for (const Case& c : {Case{negative, StopReason::kIndefinite,
+                             "free DOF 4 has diagonal entry K_ii = -2.5, not positive"},
+                        Case{nan, StopReason::kNonFinite, "free DOF 9 has diagonal entry"},
                         Case{VecX(), StopReason::kPreconditionerUnavailable, "hessian_diagonal"}}) {
     test::DiagonalOverride p(spd, c.diagonal);
     VecX u = VecX::Zero(12);

@@ -199,8 +199,9 @@ TEST(TruncatedNewton, JacobiReportsAFreeDofWithoutStiffness) {
   VecX u = VecX::Zero(16);
   SolverReport rep = truncated_newton(free_zero, u, to);
   EXPECT_EQ(rep.status, StopReason::kIndefinite);
-  EXPECT_NE(rep.message.find("Newton step 1: diagonal entry K_ii = 0 at free DOF i = 11"),
-            std::string::npos)
+  EXPECT_NE(
+      rep.message.find("Newton step 1: free DOF 11 has diagonal entry K_ii = 0, not positive"),
+      std::string::npos)
       << rep.message;
   EXPECT_EQ(rep.iterations, 0);
   to.preconditioner = Preconditioner::kNone;

@@ -179,9 +179,12 @@ FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
     status_ = FactorStatus::kNotPositiveDefinite;
     message_ = "matrix not positive definite";
   }
-  const bool usable = status_ == FactorStatus::kOk || status_ == FactorStatus::kTinyPivot;
+  // Whether a factor exists (kOk, or a tiny-pivot factor of the perturbed matrix).
+  auto has_factor = [this] {
+    return status_ == FactorStatus::kOk || status_ == FactorStatus::kTinyPivot;
+  };
   const cholmod_factor* l = impl_->factor;
-  if (usable && l->is_super == 0 && l->is_ll == 0) {
+  if (has_factor() && l->is_super == 0 && l->is_ll == 0) {
     // A simplicial LDLᵀ factorization also succeeds on an indefinite matrix (CHOLMOD flags only
     // zero pivots there): every pivot D_jj — the first entry of column j — must be positive.
     const int* lp = static_cast<const int*>(l->p);
@@ -195,8 +198,7 @@ FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
       }
     }
   }
-  const bool factored = status_ == FactorStatus::kOk || status_ == FactorStatus::kTinyPivot;
-  rcond_ = factored ? cholmod_rcond(impl_->factor, &impl_->common) : 0.0;
+  rcond_ = has_factor() ? cholmod_rcond(impl_->factor, &impl_->common) : 0.0;
   if (status_ == FactorStatus::kOk && options_.min_pivot_ratio > 0 &&
       !(rcond_ >= options_.min_pivot_ratio)) {
     status_ = FactorStatus::kNotPositiveDefinite;
@@ -208,7 +210,7 @@ FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
                     : std::string();
     message_ += " (" + where + "singular or indefinite — check constraints and inverted elements)";
   }
-  factorized_ = status_ == FactorStatus::kOk || status_ == FactorStatus::kTinyPivot;
+  factorized_ = has_factor();
   return status_;
 }
 

@@ -129,6 +129,7 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
   j["method"] = to_string(spec.solver.method);
   j["method_detail"] = result.method_detail;
   j["result"] = solver::to_string(rep.status);
+  j["message"] = rep.message;
   j["converged"] = rep.ok();
   j["iterations"] = rep.iterations;
   j["inner_iterations"] = rep.inner_iterations;

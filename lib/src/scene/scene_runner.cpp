@@ -278,7 +278,101 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   scene.problem = std::move(check);
 }
 
+/// "the power iteration for lambda_max stopped with max_iterations after 2000 iterations
+/// (relative change 3e-05, tolerance 1e-06)" and the estimate's own message.
+std::string estimate_failure(const std::string& what, const solver::EigenEstimate& e,
+                             const solver::EigenOptions& o) {
+  std::ostringstream os;
+  os << what << " stopped with " << solver::to_string(e.status) << " after " << e.iterations
+     << " iterations (relative change " << e.relative_change << ", tolerance " << o.tolerance
+     << ")";
+  if (!e.message.empty()) os << ": " << e.message;
+  return os.str();
+}
+
 }  // namespace
+
+DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
+                                     const solver::EigenOptions& eigen) {
+  INCISE_CHECK(scene.problem != nullptr, "dynamic_parameters needs a built problem");
+  const SolverSpec& s = scene.spec.solver;
+  fem::ElasticProblem& p = *scene.problem;
+  DynamicParameters dp;
+  dp.status = solver::StopReason::kConverged;
+  dp.time_step = s.time_step;
+  dp.time_step_origin = "given";
+  if (s.time_step <= 0) {
+    Timer t;
+    const solver::EigenEstimate e = solver::largest_eigenvalue(p, u, eigen);
+    scene.record("largest eigenvalue of M^-1 K by power iteration (" +
+                     std::to_string(e.iterations) + " iterations, " + solver::to_string(e.status) +
+                     ")",
+                 t.seconds(), 3 * static_cast<std::size_t>(p.size()) * sizeof(double),
+                 static_cast<std::int64_t>(e.flops));
+    if (!e.ok()) {
+      dp.status = e.status;
+      dp.message = "time step not estimated: " +
+                   estimate_failure("the power iteration for lambda_max", e, eigen) +
+                   "; give solver.time_step in the scene";
+      return dp;
+    }
+    dp.time_step = kTimeStepSafety * solver::critical_time_step(e.value);
+    dp.time_step_origin =
+        "0.9 x critical 2/sqrt(lambda_max), lambda_max = " + std::to_string(e.value);
+  }
+  dp.damping = s.damping;
+  dp.damping_origin = "given";
+  if (s.damping >= 0) return dp;
+  if (s.spectral_tuning) {
+    Timer t;
+    const solver::SpectralDamping sd =
+        solver::damping_from_spectrum(p, u, dp.time_step, kSpectralSteps);
+    scene.record("FFTW plan and spectrum of " + std::to_string(sd.steps) +
+                     " undamped steps (dominant frequency " + std::to_string(sd.frequency) + " Hz)",
+                 t.seconds(), 2 * static_cast<std::size_t>(kSpectralSteps) * sizeof(double),
+                 static_cast<std::int64_t>(sd.flops));
+    // The undamped run completes all its steps (kMaxIterations) unless it blew up, inverted
+    // or turned non-finite; kConverged means u is already in equilibrium (η does not matter).
+    if (sd.status == solver::StopReason::kConverged) {
+      dp.damping = 0;
+      dp.damping_origin = "spectral: already in equilibrium";
+      return dp;
+    }
+    if (sd.status != solver::StopReason::kMaxIterations || !(sd.damping > 0)) {
+      const bool completed = sd.status == solver::StopReason::kMaxIterations;
+      dp.status = completed ? solver::StopReason::kStagnated : sd.status;
+      std::ostringstream os;
+      os << "damping not estimated: the undamped run for its spectrum "
+         << (completed ? "showed no oscillation (dominant frequency 0) in "
+                       : "stopped with " + std::string(solver::to_string(sd.status)) + " after ")
+         << sd.steps << " steps at dt = " << dp.time_step
+         << " s; give solver.damping in the scene, or a smaller solver.time_step";
+      dp.message = os.str();
+      return dp;
+    }
+    dp.damping = sd.damping;
+    dp.damping_origin = "spectral: 4 pi f, f = " + std::to_string(sd.frequency) + " Hz";
+    return dp;
+  }
+  Timer t;
+  const solver::EigenEstimate e = solver::smallest_eigenvalue(p, u, eigen);
+  scene.record("smallest eigenvalue of M^-1 K by inverse iteration (" +
+                   std::to_string(e.iterations) + " iterations, " +
+                   std::to_string(e.inner_iterations) + " inner CG steps, " +
+                   solver::to_string(e.status) + ")",
+               t.seconds(), 5 * static_cast<std::size_t>(p.size()) * sizeof(double),
+               static_cast<std::int64_t>(e.flops));
+  if (!e.ok()) {
+    dp.status = e.status;
+    dp.message = "damping not estimated: " +
+                 estimate_failure("the inverse iteration for lambda_1", e, eigen) +
+                 "; give solver.damping in the scene";
+    return dp;
+  }
+  dp.damping = solver::critical_damping(e.value);
+  dp.damping_origin = "critical 2 sqrt(lambda_1), lambda_1 = " + std::to_string(e.value);
+  return dp;
+}
 
 SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
                          const CutStepObserver& cut_observer) {
@@ -352,50 +446,22 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
       break;
     }
     case SolverSpec::Method::kDynamicSS22: {
+      const DynamicParameters dp = dynamic_parameters(scene, res.u);
+      if (!dp.ok()) {  // not run: u = 0, its residual and energy
+        res.report.status = dp.status;
+        res.report.message = dp.message;
+        res.report.residual_norm = res.external_force_norm;
+        res.report.threshold = s.tolerance * res.external_force_norm;
+        res.report.energy = 0;
+        detail << "dynamic relaxation SS22 not run: " << dp.message;
+        break;
+      }
       solver::DynamicRelaxationOptions o;
       static_cast<solver::RelaxationOptions&>(o) = common;
-      double dt = s.time_step;
-      std::string dt_origin = "given";
-      if (dt <= 0) {
-        Timer t;
-        const solver::EigenEstimate e = solver::largest_eigenvalue(p, res.u);
-        scene.record("largest eigenvalue of M^-1 K by power iteration (" +
-                         std::to_string(e.iterations) + " iterations, " +
-                         solver::to_string(e.status) + ")",
-                     t.seconds(), 3 * static_cast<std::size_t>(p.size()) * sizeof(double),
-                     static_cast<std::int64_t>(e.flops));
-        dt = kTimeStepSafety * solver::critical_time_step(e.value);
-        dt_origin = "0.9 x critical 2/sqrt(lambda_max), lambda_max = " + std::to_string(e.value);
-      }
-      double eta = s.damping;
-      std::string eta_origin = "given";
-      if (eta < 0 && s.spectral_tuning) {
-        Timer t;
-        const solver::SpectralDamping sd =
-            solver::damping_from_spectrum(p, res.u, dt, kSpectralSteps);
-        scene.record("FFTW plan and spectrum of " + std::to_string(sd.steps) +
-                         " undamped steps (dominant frequency " + std::to_string(sd.frequency) +
-                         " Hz)",
-                     t.seconds(), 2 * static_cast<std::size_t>(kSpectralSteps) * sizeof(double),
-                     static_cast<std::int64_t>(sd.flops));
-        eta = sd.damping;
-        eta_origin = "spectral: 4 pi f, f = " + std::to_string(sd.frequency) + " Hz";
-      } else if (eta < 0) {
-        Timer t;
-        const solver::EigenEstimate e = solver::smallest_eigenvalue(p, res.u);
-        scene.record("smallest eigenvalue of M^-1 K by inverse iteration (" +
-                         std::to_string(e.iterations) + " iterations, " +
-                         std::to_string(e.inner_iterations) + " inner CG steps, " +
-                         solver::to_string(e.status) + ")",
-                     t.seconds(), 5 * static_cast<std::size_t>(p.size()) * sizeof(double),
-                     static_cast<std::int64_t>(e.flops));
-        eta = solver::critical_damping(e.value);
-        eta_origin = "critical 2 sqrt(lambda_1), lambda_1 = " + std::to_string(e.value);
-      }
-      o.time_step = dt;
-      o.damping = eta;
-      detail << "dynamic relaxation SS22, dt = " << dt << " s (" << dt_origin << "), eta = " << eta
-             << " 1/s (" << eta_origin << ")";
+      o.time_step = dp.time_step;
+      o.damping = dp.damping;
+      detail << "dynamic relaxation SS22, dt = " << dp.time_step << " s (" << dp.time_step_origin
+             << "), eta = " << dp.damping << " 1/s (" << dp.damping_origin << ")";
       res.report = solver::dynamic_relaxation(p, res.u, o);
       break;
     }

@@ -40,14 +40,15 @@ JacobiDiagonal jacobi_inverse_diagonal(Problem& problem, const VecX& u) {
   const Eigen::Index bad = non_finite >= 0 ? non_finite : non_positive;
   if (bad >= 0) {
     std::ostringstream os;
-    os << "diagonal entry K_ii = " << diag[bad] << " at free DOF i = " << bad;
+    os << "free DOF " << bad << " has diagonal entry K_ii = " << diag[bad];
     if (non_finite >= 0) {
       out.status = StopReason::kNonFinite;
       os << ": the tangent is not finite there";
     } else {
       out.status = StopReason::kIndefinite;
-      os << " <= 0: the tangent is not positive definite (e_i^T K e_i <= 0); a DOF without "
-            "stiffness must be fixed, an indefinite K needs a start closer to a minimum";
+      os << ", not positive, so K is not positive definite (e_i^T K e_i <= 0): fix a DOF "
+            "without stiffness (K_ii = 0); where K is indefinite away from the solution, "
+            "truncated Newton with Preconditioner::kNone truncates at negative curvature";
     }
     out.message = os.str();
     return out;

@@ -56,8 +56,8 @@ std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunRe
                                        const OutputOptions& options = {});
 
 /// The run summary as JSON text (docs/scenes.md, `incise run --summary-json`): scene file, name,
-/// method, result, iterations, residual, energy, flops, times, mesh size, probes, built and
-/// not-built parts, the cut steps of an interactive cutting run, and `outputs` = `written`.
+/// method, result and message, iterations, residual, energy, flops, times, mesh size, probes, built
+/// and not-built parts, the cut steps of an interactive cutting run, and `outputs` = `written`.
 std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
                          double total_seconds, const std::vector<std::string>& written);
 

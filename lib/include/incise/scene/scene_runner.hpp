@@ -6,7 +6,8 @@
 /// "nonlinear-cg" → nonlinear_cg (§2.4.2, secant line search, Polak–Ribière); "newton" →
 /// truncated_newton (§2.4.3); "dynamic-ss22" → dynamic_relaxation (§2.5) with Δt and η given
 /// or estimated (§4.1: Δt = 0.9·2/√λ_max, η = 2√λ₁, or η from the FFT of an undamped run when
-/// spectral_tuning is set); "augmented" → CHOLMOD factorization of the assembled K (fixed DOFs
+/// spectral_tuning is set; dynamic_parameters(), never from an unconverged estimate);
+/// "augmented" → CHOLMOD factorization of the assembled K (fixed DOFs
 /// as identity rows) and one direct solve, the initial system of the augmented method
 /// (Yeung et al. 2016 §3). "augmented" with tools → an interactive cutting run
 /// (interactive::AugmentedCutSession): K⁰ of the uncut body is factored once, then every sweep
@@ -16,7 +17,9 @@
 /// SceneRunResult::cut_steps. Parts built on the way (eigenvalue estimates, FFT, factorization) are
 /// recorded in BuiltScene::steps with their cost.
 
+#include <incise/core/outcome.hpp>
 #include <incise/scene/scene_builder.hpp>
+#include <incise/solver/eigen_estimates.hpp>
 #include <incise/solver/report.hpp>
 
 #include <functional>
@@ -104,8 +107,33 @@ using RunObserver = std::function<void(const solver::IterationInfo&)>;
 using CutStepObserver = std::function<void(const CutStepRow&, std::size_t total_steps,
                                            const interactive::AugmentedCutSession& session)>;
 
-/// Runs the scene's solver from u = 0. Numerical failure is reported in result.report.status,
-/// never thrown. Throws UsageError only for a scene whose problem was not built.
+/// Δt and η of a "dynamic-ss22" run (thesis §4.1) and where each came from. ok(): both are
+/// usable; otherwise status is that of the estimate that failed, the message names it and
+/// what the scene can do, and neither value may be used.
+struct [[nodiscard]] DynamicParameters : Outcome<solver::StopReason, solver::StopReason::kConverged,
+                                                 solver::StopReason::kMaxIterations> {
+  double time_step = 0;          ///< Δt (s)
+  double damping = 0;            ///< η (1/s)
+  std::string time_step_origin;  ///< "given", or the estimate and its value
+  std::string damping_origin;    ///< "given", or the estimate and its value
+};
+
+/// Δt and η of scene.spec.solver at u: given values (time_step > 0, damping ≥ 0) as they
+/// are; otherwise estimated from K(u) and the lumped M (§4.1): Δt = 0.9·2/√λ_max (power
+/// iteration, solver::largest_eigenvalue with `eigen`), η = 2√λ₁ (inverse iteration,
+/// solver::smallest_eigenvalue with `eigen`) or, with spectral_tuning, η = 4πf from the FFT of
+/// 8192 undamped steps at Δt. An estimate that did not converge is never used: an eigenvalue
+/// estimate with any status but kConverged (iterations exhausted, indefinite or non-finite K),
+/// an undamped run that did not complete (its status: unstable, inverted, non-finite) or
+/// found no oscillation (kStagnated). Each estimate is recorded in scene.steps. Throws
+/// UsageError for a scene whose problem was not built or has no lumped mass (not dynamic).
+DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
+                                     const solver::EigenOptions& eigen = {});
+
+/// Runs the scene's solver from u = 0. Numerical failure is reported in result.report.status
+/// and message, never thrown; a "dynamic-ss22" run whose Δt or η cannot be estimated
+/// (dynamic_parameters() not ok) is not run: the report has that status and message, u = 0.
+/// Throws UsageError only for a scene whose problem was not built.
 /// An interactive cutting run replaces scene.mesh, scene.fixed_nodes and scene.problem by the
 /// final cut mesh, its held nodes (fixed from the start, fixed by the cutter, unused) and an
 /// elastic problem on it carrying the same nodal forces (used to verify the residual).
