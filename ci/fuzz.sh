@@ -30,8 +30,11 @@ for t in "${targets[@]}"; do
   [ -d "reference_data/fuzz/$t" ] || { echo "fuzz: no seed folder reference_data/fuzz/$t"; exit 2; }
   mkdir -p "build/fuzz-corpus/$t"
   log=build/fuzz-logs/$t.log
+  dict=()
+  [ -f "fuzz/fuzz_$t.dict" ] && dict=(-dict="fuzz/fuzz_$t.dict")
   start=$SECONDS
-  if ! "build/fuzz/fuzz/fuzz_$t" "${limit[@]}" -rss_limit_mb=2048 -timeout=20 -print_final_stats=1 \
+  if ! "build/fuzz/fuzz/fuzz_$t" "${limit[@]}" "${dict[@]}" -rss_limit_mb=2048 -timeout=20 \
+      -print_final_stats=1 \
       -artifact_prefix="build/fuzz-corpus/$t-" "build/fuzz-corpus/$t" "reference_data/fuzz/$t" \
       >"$log" 2>&1; then
     echo "fuzz_$t: FINDING (log $log)"
