@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include "incise_test/seed.hpp"
+
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -91,8 +93,14 @@ TEST(SceneLimits, OversizedTextAndFileAreRefusedWithTheLimit) {
         << err.what();
   }
   std::remove(path.c_str());
-  // An endless file is read no further than the limit.
+  // An endless file is read no further than the limit; a directory opens but cannot be read.
   EXPECT_THROW((void)incise::scene::load_scene("/dev/zero"), ParseError);
+  try {
+    (void)incise::scene::load_scene(::testing::TempDir());
+    ADD_FAILURE() << "accepted a directory";
+  } catch (const ParseError& err) {
+    EXPECT_EQ(err.message(), "error while reading scene file");
+  }
 }
 
 TEST(SceneLimits, NumberBeyondTheDoublesNamesItsLineAndPath) {
@@ -119,6 +127,23 @@ TEST(SceneLimits, DuplicateKeyNamesTheLineOfTheRepeat) {
   EXPECT_EQ(error_of("{\"fixed\": [{},\n {\"a/b\": 1,\n  \"a/b\": 2}]}"),
             "scene.json:3: /fixed/1/a~1b: duplicate key \"a/b\" (each key may appear once per "
             "object)");
+}
+
+// Fuzzer finding (fuzz_scene): nlohmann takes a NUL byte for the end of the text and dropped
+// the rest; the line index then met a second root value and failed a UsageError check. The
+// crash input is kept in property_tests/scene/data/.
+TEST(SceneLimits, NulByteIsRefusedWithItsLineAndColumn) {
+  EXPECT_EQ(error_of(std::string("{\"version\": 1}\n  \0{\"mesh\": 1}", 28)),
+            "scene.json:2: invalid JSON at column 3: NUL byte (expected JSON text)");
+  const std::string crash =
+      incise::test::source_path("property_tests/scene/data/fuzz_crash_nul_after_root.json");
+  try {
+    (void)incise::scene::load_scene(crash);
+    ADD_FAILURE() << "accepted";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.line(), 2);
+    EXPECT_EQ(e.message(), "invalid JSON at column 86: NUL byte (expected JSON text)");
+  }
 }
 
 TEST(SceneLimits, LineIndexIsLinearInTheTextSize) {

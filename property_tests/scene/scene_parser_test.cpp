@@ -285,6 +285,16 @@ TEST(SceneParserBad, GravityWithoutDensity) {
   EXPECT_NE(e.find("gravity load at /loads/1"), std::string::npos) << e;
 }
 
+TEST(SceneParserBad, DynamicWithoutDensity) {
+  Json j = valid_scene();
+  j["solver"] = {{"method", "dynamic-ss22"}};
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/material: missing required key \"rho\" (expected a number > 0, density in "
+                   "kg/m^3): the \"dynamic-ss22\" solver needs a density for the lumped mass"),
+            std::string::npos)
+      << e;
+}
+
 TEST(SceneParserBad, LinearCgWithNonlinearMaterial) {
   Json j = valid_scene();
   j["material"]["model"] = "neohookean";

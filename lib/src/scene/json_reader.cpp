@@ -250,15 +250,21 @@ std::string mib(std::size_t bytes) {
 }
 
 // Refuses arrays and objects nested deeper than kMaxSceneDepth, at the line of the first
-// bracket beyond it. Counts the brackets outside strings only (any text: it runs before the
-// JSON parser has checked the syntax).
-void check_depth(const std::string& text, const std::string& file) {
+// bracket beyond it, counting the brackets outside strings only; and NUL bytes, which nlohmann
+// takes for the end of the text (the rest would be dropped silently). Runs on any text, before
+// the JSON parser has checked the syntax.
+void prescan(const std::string& text, const std::string& file) {
   int depth = 0;
   long line = 1;
+  std::size_t line_start = 0;
   bool in_string = false;
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
-    if (c == '\n') ++line;
+    if (c == '\n') ++line, line_start = i + 1;
+    if (c == '\0')
+      throw ParseError(file, line,
+                       "invalid JSON at column " + std::to_string(i - line_start + 1) +
+                           ": NUL byte (expected JSON text)");
     if (in_string) {
       if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n')
         ++i;
@@ -323,6 +329,7 @@ LineIndex index_lines(const std::string& text, const std::string& file) {
       st.push_back(std::move(l));
     } else if (c == '}' || c == ']') {
       if (!st.empty()) st.pop_back();
+      if (st.empty()) break;  // the end of the root value (nothing but blanks follows)
     } else if (c == ',') {
       if (!st.empty() && !st.back().is_array) st.back().want_key = true;
     } else if (c == '"') {
@@ -371,7 +378,7 @@ ParsedJson parse_strict(const std::string& text, const std::string& file) {
                      "scene text of " + std::to_string(text.size()) +
                          " bytes is larger than the limit of " + mib(kMaxSceneBytes) + " (" +
                          std::to_string(kMaxSceneBytes) + " bytes; docs/scenes.md, Limits)");
-  check_depth(text, file);
+  prescan(text, file);
   ParsedJson out;
   try {
     out.value = Json::parse(text, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/false);

@@ -21,7 +21,9 @@ using detail::Json;
 using detail::JsonObject;
 using detail::Range;
 
-constexpr int kMaxCells = 1000;  // per-axis bound for generated meshes (1000³ cubes is 6e9 tets)
+// Per-axis bound for generated meshes; their size is bounded by the builder's memory budget
+// (1000³ cubes are 6e9 tets, refused under any budget below 1.1 TB).
+constexpr int kMaxCells = 1000;
 constexpr int kMaxIterations = 100000000;
 
 const std::vector<std::string> kMeshExtensions = {".mesh", ".msh", ".node", ".off"};

@@ -57,8 +57,12 @@ struct BuiltScene {
 
 /// Builds `spec` (mesh, fixed nodes, loads, the elastic problem, and the optional parts). Throws
 /// ParseError naming the JSON path when a region selects no node (or no boundary face for a surface
-/// load) or a probe location lies outside the mesh's bounding box; throws the mesh reader's errors
-/// for bad mesh files. Nothing is written anywhere.
+/// load) or a probe location lies outside the mesh's bounding box; when a mesh generator refuses a
+/// parameter (mesh::GeneratorError, at /mesh/<parameter>); and when the estimated bytes of the
+/// mesh arrays and the elastic problem exceed the memory budget (spec.limits, default
+/// incise::default_memory_budget_bytes()), checked before a generated mesh is allocated and
+/// before a read mesh gets its problem. Throws the mesh reader's errors for bad mesh files.
+/// Nothing is written anywhere.
 BuiltScene build_scene(const SceneSpec& spec);
 
 /// Nodes of `mesh` in `region`, sorted. Plane tolerance 0 means 1e-9 × bounding-box diagonal.

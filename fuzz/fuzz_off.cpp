@@ -1,0 +1,13 @@
+// libFuzzer harness: io::read_off on arbitrary bytes (a .off file). Expected: a ParseError, or a
+// mesh that builds a valid connectivity (fuzz_support.hpp); anything else is a finding.
+
+#include <incise/io/read_mesh.hpp>
+
+#include "fuzz_support.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  static const std::string path = incise::fuzz::scratch_path("input.off");
+  incise::fuzz::write_file(path, data, size);
+  incise::fuzz::read_and_check(path, [](const std::string& p) { return incise::io::read_off(p); });
+  return 0;
+}
