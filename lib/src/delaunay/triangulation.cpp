@@ -1,0 +1,203 @@
+#include <incise/delaunay/predicates.hpp>
+#include <incise/delaunay/triangulation.hpp>
+
+#include <incise/core/error.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace incise::delaunay {
+namespace {
+
+using mesh::ElementHandle;
+using mesh::Simplex;
+
+/// The vertices of triangle s in counter-clockwise order (positive orientation, §7.2: the
+/// sorted sequence for sign +1, one swap for −1).
+std::array<Index, 3> ccw(const Simplex& s) {
+  if (s.sign() > 0) return {s.vertex(0), s.vertex(1), s.vertex(2)};
+  return {s.vertex(0), s.vertex(2), s.vertex(1)};
+}
+
+double angle_at(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 u = a - p, w = b - p;
+  return std::atan2(std::abs(u.x() * w.y() - u.y() * w.x()), u.dot(w));
+}
+
+}  // namespace
+
+Triangulation::Triangulation(const mesh::MeshData& mesh)
+    : conn_(2), points_(mesh.points) {
+  INCISE_CHECK_PARAM(mesh.dimension == 2, "Triangulation: the mesh must be 2D (triangles)");
+  for (Index v = 0; v < mesh.num_points(); ++v)
+    INCISE_CHECK_PARAM(mesh.points.col(v).allFinite(),
+                       "Triangulation: point " + std::to_string(v) + " is not finite");
+  points_.row(2).setZero();
+  for (Index c = 0; c < mesh.num_cells(); ++c) {
+    const auto t = mesh.cells.col(c);
+    for (int i = 0; i < 3; ++i)
+      INCISE_CHECK_PARAM(t(i) >= 0 && t(i) < mesh.num_points(),
+                         "Triangulation: triangle " + std::to_string(c) + " has vertex " +
+                             std::to_string(t(i)) + " outside [0, " +
+                             std::to_string(mesh.num_points()) + ")");
+    INCISE_CHECK_PARAM(
+        orient2d(points_.col(t(0)).head<2>(), points_.col(t(1)).head<2>(),
+                 points_.col(t(2)).head<2>()) > 0,
+        "Triangulation: triangle " + std::to_string(c) + " is not strictly counter-clockwise");
+  }
+  conn_ = mesh::Connectivity::from_mesh_data(mesh);
+}
+
+std::vector<ElementHandle> Triangulation::incident(Index p, Index q) const {
+  std::vector<ElementHandle> out;
+  if (p < 0 || p >= conn_.num_vertices()) return out;
+  for (const ElementHandle e : conn_.star(p))
+    if (conn_.simplex(e).contains(q)) out.push_back(e);
+  return out;
+}
+
+bool Triangulation::is_interior_vertex(Index v) const {
+  if (v < 0 || v >= conn_.num_vertices() || conn_.star_size(v) == 0) return false;
+  for (const ElementHandle e : conn_.star(v))
+    for (const Index w : ccw(conn_.simplex(e)))
+      if (w != v && incident(v, w).size() != 2) return false;
+  return true;
+}
+
+void Triangulation::set_constrained(Index p, Index q, bool constrained) {
+  if (constrained)
+    constrained_.insert(make_edge(p, q));
+  else
+    constrained_.erase(make_edge(p, q));
+}
+
+ElementHandle Triangulation::left_of(Index p, Index q) const {
+  for (const ElementHandle e : incident(p, q)) {
+    const auto t = ccw(conn_.simplex(e));
+    for (int i = 0; i < 3; ++i)
+      if (t[static_cast<size_t>(i)] == p && t[static_cast<size_t>((i + 1) % 3)] == q) return e;
+  }
+  return {};
+}
+
+Index Triangulation::third(ElementHandle e, Index p, Index q) const {
+  for (const Index w : ccw(conn_.simplex(e)))
+    if (w != p && w != q) return w;
+  return -1;
+}
+
+bool Triangulation::is_locally_delaunay(Index p, Index q) const {
+  if (is_constrained(p, q)) return true;
+  const ElementHandle l = left_of(p, q), r = left_of(q, p);
+  if (!l.valid() || !r.valid()) return true;
+  const Index c = third(l, p, q), d = third(r, q, p);
+  return incircle(point(p), point(q), point(c), point(d)) <= 0;
+}
+
+bool Triangulation::flip(Index p, Index q) {
+  if (is_constrained(p, q)) return false;
+  const ElementHandle l = left_of(p, q), r = left_of(q, p);
+  if (!l.valid() || !r.valid()) return false;
+  const Index c = third(l, p, q), d = third(r, q, p);
+  // New triangles (c, d, q) and (d, c, p): strictly counter-clockwise iff the quadrilateral
+  // p d q c is strictly convex at p and q.
+  if (orient2d(point(c), point(d), point(q)) <= 0 || orient2d(point(d), point(c), point(p)) <= 0)
+    return false;
+  if (!incident(c, d).empty()) return false;  // {c, d} already an edge (non-planar link)
+  conn_.replace_elements({l, r}, {Simplex({c, d, q}), Simplex({d, c, p})});
+  ++flips_;
+  return true;
+}
+
+long Triangulation::legalize(std::vector<Edge> edges) {
+  long made = 0;
+  while (!edges.empty()) {
+    const Edge e = edges.back();
+    edges.pop_back();
+    if (is_locally_delaunay(e.first, e.second)) continue;
+    const ElementHandle l = left_of(e.first, e.second), r = left_of(e.second, e.first);
+    const Index c = third(l, e.first, e.second), d = third(r, e.second, e.first);
+    // An illegal interior edge always bounds a strictly convex quadrilateral (d inside the
+    // circumcircle of p q c, on the other side of pq), so the flip succeeds.
+    if (!flip(e.first, e.second)) continue;
+    ++made;
+    for (const Edge& o : {make_edge(e.first, c), make_edge(c, e.second), make_edge(e.second, d),
+                          make_edge(d, e.first)})
+      edges.push_back(o);
+  }
+  return made;
+}
+
+std::vector<Edge> Triangulation::edges() const {
+  std::vector<Edge> out;
+  for (const ElementHandle e : conn_.elements()) {
+    const auto t = ccw(conn_.simplex(e));
+    for (int i = 0; i < 3; ++i)
+      out.push_back(make_edge(t[static_cast<size_t>(i)], t[static_cast<size_t>((i + 1) % 3)]));
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+bool Triangulation::remove_vertex(Index v) {
+  if (!is_interior_vertex(v)) return false;
+  for (const ElementHandle e : conn_.star(v))
+    for (const Index w : ccw(conn_.simplex(e)))
+      if (w != v && is_constrained(v, w)) return false;
+  std::vector<Edge> link;  // edges of the link polygon, legalized at the end
+  // Fig. 5.10: flip ears until degree 3. Each flip lowers the degree by one; the loop is
+  // bounded by the initial degree (a pass without a flip ends it: reported as false below).
+  while (conn_.star_size(v) > 3) {
+    bool flipped = false;
+    for (const ElementHandle e : conn_.star(v)) {
+      const auto t = ccw(conn_.simplex(e));
+      const int i = static_cast<int>(std::find(t.begin(), t.end(), v) - t.begin());
+      const Index w = t[static_cast<size_t>((i + 1) % 3)];
+      const ElementHandle r = left_of(w, v);
+      if (!r.valid()) continue;
+      const Index prev = third(r, w, v), next = t[static_cast<size_t>((i + 2) % 3)];
+      link.push_back(make_edge(prev, w));
+      link.push_back(make_edge(w, next));
+      if (flip(v, w)) {
+        flipped = true;
+        break;
+      }
+    }
+    if (!flipped) return false;  // not star-shaped from v: cannot happen for a valid mesh
+  }
+  const std::vector<ElementHandle> star = conn_.star(v);
+  std::array<Index, 3> outer{};
+  {
+    // The link triangle, counter-clockwise: the successor of v in each star triangle.
+    const auto t = ccw(conn_.simplex(star[0]));
+    const int i = static_cast<int>(std::find(t.begin(), t.end(), v) - t.begin());
+    outer[0] = t[static_cast<size_t>((i + 1) % 3)];
+    outer[1] = t[static_cast<size_t>((i + 2) % 3)];
+    outer[2] = third(left_of(v, outer[1]), v, outer[1]);
+  }
+  conn_.replace_elements(star, {Simplex({outer[0], outer[1], outer[2]})});
+  for (int i = 0; i < 3; ++i)
+    link.push_back(
+        make_edge(outer[static_cast<size_t>(i)], outer[static_cast<size_t>((i + 1) % 3)]));
+  legalize(link);
+  return true;
+}
+
+std::pair<double, double> Triangulation::angle_range() const {
+  double lo = 4, hi = 0;
+  for (const ElementHandle e : conn_.elements()) {
+    const auto t = ccw(conn_.simplex(e));
+    for (int i = 0; i < 3; ++i) {
+      const double a = angle_at(point(t[static_cast<size_t>(i)]),
+                                point(t[static_cast<size_t>((i + 1) % 3)]),
+                                point(t[static_cast<size_t>((i + 2) % 3)]));
+      lo = std::min(lo, a);
+      hi = std::max(hi, a);
+    }
+  }
+  return {lo, hi};
+}
+
+}  // namespace incise::delaunay
