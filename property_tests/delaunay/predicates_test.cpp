@@ -16,7 +16,9 @@ namespace {
 
 using I128 = __int128;
 
-int sign(I128 v) { return v > 0 ? 1 : (v < 0 ? -1 : 0); }
+int sign(I128 v) {
+  return v > 0 ? 1 : (v < 0 ? -1 : 0);
+}
 
 /// orient2d on integer coordinates (|x| < 2⁵², so differences < 2⁵³, products < 2¹⁰⁶).
 int orient_ref(const std::array<long long, 2>& a, const std::array<long long, 2>& b,

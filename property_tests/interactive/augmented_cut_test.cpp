@@ -21,8 +21,8 @@
 namespace incise::interactive {
 namespace {
 using incise::test::admissible;
-using incise::test::reference_solution;
 using incise::test::Reference;
+using incise::test::reference_solution;
 using incise::test::relative_difference;
 using incise::test::tolerance;
 using namespace incise::cut;  // the session drives the ch. 3 cutter: its types read unqualified

@@ -124,9 +124,9 @@ TEST(Soak, TenThousandSweepTrianglesOnTheLiverStayValidAndFinite) {
   EXPECT_GT(dissecting, triangles / 6);
   EXPECT_GT(solved, triangles * 9 / 10);
   EXPECT_GE(swaps, 1);
-  std::cout << "liver soak: " << done << " sweep triangles, " << dissecting
-            << " dissected faces, " << solved << " solved, " << statuses
-            << " reported statuses, " << swaps << " background refactorizations swapped in, "
+  std::cout << "liver soak: " << done << " sweep triangles, " << dissecting << " dissected faces, "
+            << solved << " solved, " << statuses << " reported statuses, " << swaps
+            << " background refactorizations swapped in, "
             << "max energy " << max_energy << " J; wall s: cut " << seconds_cut
             << ", update + solve " << seconds_solve << ", validate " << seconds_validate << "\n";
 }

@@ -27,8 +27,7 @@ double angle_at(const Vec2& p, const Vec2& a, const Vec2& b) {
 
 }  // namespace
 
-Triangulation::Triangulation(const mesh::MeshData& mesh)
-    : conn_(2), points_(mesh.points) {
+Triangulation::Triangulation(const mesh::MeshData& mesh) : conn_(2), points_(mesh.points) {
   INCISE_CHECK_PARAM(mesh.dimension == 2, "Triangulation: the mesh must be 2D (triangles)");
   for (Index v = 0; v < mesh.num_points(); ++v)
     INCISE_CHECK_PARAM(mesh.points.col(v).allFinite(),
@@ -146,7 +145,7 @@ bool Triangulation::remove_vertex(Index v) {
   for (const ElementHandle e : conn_.star(v))
     for (const Index w : ccw(conn_.simplex(e)))
       if (w != v && is_constrained(v, w)) return false;
-  std::vector<Edge> link;  // edges of the link polygon, legalized at the end
+  std::vector<Edge> link;  // link polygon edges and ear diagonals, legalized at the end
   // Fig. 5.10: flip ears until degree 3. Each flip lowers the degree by one; the loop is
   // bounded by the initial degree (a pass without a flip ends it: reported as false below).
   while (conn_.star_size(v) > 3) {
@@ -161,6 +160,7 @@ bool Triangulation::remove_vertex(Index v) {
       link.push_back(make_edge(prev, w));
       link.push_back(make_edge(w, next));
       if (flip(v, w)) {
+        link.push_back(make_edge(prev, next));  // the ear's diagonal
         flipped = true;
         break;
       }
@@ -190,9 +190,9 @@ std::pair<double, double> Triangulation::angle_range() const {
   for (const ElementHandle e : conn_.elements()) {
     const auto t = ccw(conn_.simplex(e));
     for (int i = 0; i < 3; ++i) {
-      const double a = angle_at(point(t[static_cast<size_t>(i)]),
-                                point(t[static_cast<size_t>((i + 1) % 3)]),
-                                point(t[static_cast<size_t>((i + 2) % 3)]));
+      const double a =
+          angle_at(point(t[static_cast<size_t>(i)]), point(t[static_cast<size_t>((i + 1) % 3)]),
+                   point(t[static_cast<size_t>((i + 2) % 3)]));
       lo = std::min(lo, a);
       hi = std::max(hi, a);
     }

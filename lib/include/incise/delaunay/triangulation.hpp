@@ -26,7 +26,9 @@ namespace incise::delaunay {
 /// An undirected edge (p, q) with p < q.
 using Edge = std::pair<Index, Index>;
 /// The edge {p, q} in canonical order.
-inline Edge make_edge(Index p, Index q) { return p < q ? Edge{p, q} : Edge{q, p}; }
+inline Edge make_edge(Index p, Index q) {
+  return p < q ? Edge{p, q} : Edge{q, p};
+}
 
 /// Planar triangulation with positions and constrained edges (see file comment).
 class Triangulation {
