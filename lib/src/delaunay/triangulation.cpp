@@ -185,6 +185,74 @@ bool Triangulation::remove_vertex(Index v) {
   return true;
 }
 
+std::array<Index, 3> Triangulation::triangle(ElementHandle e) const {
+  return ccw(conn_.simplex(e));
+}
+
+std::vector<Index> Triangulation::neighbours(Index v) const {
+  std::vector<Index> out;
+  if (v < 0 || v >= conn_.num_vertices()) return out;
+  for (const ElementHandle e : conn_.star(v))
+    for (const Index w : ccw(conn_.simplex(e)))
+      if (w != v) out.push_back(w);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+Index Triangulation::add_vertex(const Vec2& x) {
+  INCISE_CHECK_PARAM(x.allFinite(), "Triangulation::add_vertex: non-finite position");
+  const Index v = conn_.add_vertex();
+  if (points_.cols() <= v) points_.conservativeResize(Eigen::NoChange, v + 1);
+  points_.col(v) << x.x(), x.y(), 0.0;
+  return v;
+}
+
+bool Triangulation::move_vertex(Index v, const Vec2& x) {
+  INCISE_CHECK_PARAM(x.allFinite(), "Triangulation::move_vertex: non-finite position");
+  for (const ElementHandle e : conn_.star(v)) {
+    std::array<Vec2, 3> p;
+    const auto t = ccw(conn_.simplex(e));
+    for (int i = 0; i < 3; ++i)
+      p[static_cast<size_t>(i)] =
+          t[static_cast<size_t>(i)] == v ? x : point(t[static_cast<size_t>(i)]);
+    if (orient2d(p[0], p[1], p[2]) <= 0) return false;
+  }
+  points_(0, v) = x.x();
+  points_(1, v) = x.y();
+  return true;
+}
+
+bool Triangulation::replace(const std::vector<ElementHandle>& remove,
+                            const std::vector<std::array<Index, 3>>& add) {
+  std::vector<Simplex> simplices;
+  for (const auto& t : add) {
+    for (const Index v : t)
+      if (v < 0 || v >= points_.cols()) return false;
+    if (orient2d(point(t[0]), point(t[1]), point(t[2])) <= 0) return false;
+    simplices.emplace_back(Simplex({t[0], t[1], t[2]}));
+  }
+  conn_.replace_elements(remove, simplices);
+  return true;
+}
+
+Index Triangulation::split_boundary_edge(Index p, Index q, const Vec2& x) {
+  const std::vector<ElementHandle> inc = incident(p, q);
+  if (inc.size() != 1) return -1;
+  const auto t = ccw(conn_.simplex(inc[0]));
+  // Rotate so that the triangle reads (a, b, r) with {a, b} = {p, q}.
+  int i = 0;
+  while (t[static_cast<size_t>(i)] == p || t[static_cast<size_t>(i)] == q) ++i;
+  const Index r = t[static_cast<size_t>(i)], a = t[static_cast<size_t>((i + 1) % 3)],
+              b = t[static_cast<size_t>((i + 2) % 3)];
+  if (!x.allFinite() || orient2d(point(a), x, point(r)) <= 0 ||
+      orient2d(x, point(b), point(r)) <= 0)
+    return -1;
+  const Index n = add_vertex(x);
+  replace(inc, {{a, n, r}, {n, b, r}});
+  return n;
+}
+
 std::pair<double, double> Triangulation::angle_range() const {
   double lo = 4, hi = 0;
   for (const ElementHandle e : conn_.elements()) {

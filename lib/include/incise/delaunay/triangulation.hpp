@@ -88,6 +88,30 @@ class Triangulation {
   /// unchanged) when v is not interior, or an edge at v is constrained. Post: v has no triangle.
   bool remove_vertex(Index v);
 
+  /// The vertices of live triangle e, counter-clockwise.
+  std::array<Index, 3> triangle(mesh::ElementHandle e) const;
+  /// The triangle containing the directed edge p→q (its third vertex is left of p→q), or an
+  /// invalid handle.
+  mesh::ElementHandle left_of(Index p, Index q) const;
+  /// The vertices sharing an edge with v, in no particular order.
+  std::vector<Index> neighbours(Index v) const;
+
+  /// A new vertex at x without triangles; returns its number.
+  Index add_vertex(const Vec2& x);
+  /// Moves vertex v to x when every triangle of its star stays strictly counter-clockwise;
+  /// returns false (v unchanged) otherwise. Throws ParameterError for a non-finite x.
+  bool move_vertex(Index v, const Vec2& x);
+  /// Replaces the triangles `remove` by `add` (vertex triples, counter-clockwise) in one
+  /// replace_elements call when every new triangle is strictly counter-clockwise; returns false
+  /// (unchanged) otherwise. The caller keeps the union of the triangles a valid mesh (validate()
+  /// checks it in tests).
+  bool replace(const std::vector<mesh::ElementHandle>& remove,
+               const std::vector<std::array<Index, 3>>& add);
+  /// Inserts a vertex at x on the boundary edge {p, q} (its triangle (p, q, r) becomes
+  /// (p, x, r) and (x, q, r)); returns it, or −1 (unchanged) when {p, q} is not a boundary edge
+  /// or a new triangle would not be strictly counter-clockwise.
+  Index split_boundary_edge(Index p, Index q, const Vec2& x);
+
   /// Flips made by flip(), legalize() and remove_vertex() so far.
   long num_flips() const { return flips_; }
 
@@ -95,8 +119,6 @@ class Triangulation {
   std::pair<double, double> angle_range() const;
 
  private:
-  /// The triangle of the star of p that contains the directed edge p→q, or an invalid handle.
-  mesh::ElementHandle left_of(Index p, Index q) const;
   /// The vertex of triangle e other than p and q.
   Index third(mesh::ElementHandle e, Index p, Index q) const;
 

@@ -1,0 +1,490 @@
+#include <incise/delaunay/cutter2d.hpp>
+#include <incise/delaunay/predicates.hpp>
+
+#include <incise/core/error.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace incise::delaunay {
+namespace {
+
+using mesh::ElementHandle;
+
+double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+/// Parameters (t, s) of the intersection of segments p0→p1 and q0→q1 (double precision, for
+/// placing points; the topology is decided by orient2d). False when parallel or not meeting.
+bool segment_intersection(const Vec2& p0, const Vec2& p1, const Vec2& q0, const Vec2& q1,
+                          double& t, double& s) {
+  const Vec2 r = p1 - p0, d = q1 - q0;
+  const double den = cross(r, d);
+  if (den == 0) return false;
+  t = cross(q0 - p0, d) / den;
+  s = cross(q0 - p0, r) / den;
+  return t >= 0 && t <= 1 && s >= 0 && s <= 1;
+}
+
+/// The directed boundary edges (interior on the left).
+std::vector<std::array<Index, 2>> boundary_edges(const Triangulation& m) {
+  std::vector<std::array<Index, 2>> out;
+  for (const mesh::FaceHandle f : m.connectivity().boundary()) {
+    const mesh::Simplex& s = m.connectivity().simplex(f);
+    if (s.sign() > 0)
+      out.push_back({s.vertex(0), s.vertex(1)});
+    else
+      out.push_back({s.vertex(1), s.vertex(0)});
+  }
+  return out;
+}
+
+/// Rotates a counter-clockwise triple so that v comes first.
+std::array<Index, 3> starting_at(std::array<Index, 3> t, Index v) {
+  while (t[0] != v) std::rotate(t.begin(), t.begin() + 1, t.end());
+  return t;
+}
+
+}  // namespace
+
+const char* to_string(CutMoveStatus status) {
+  return status == CutMoveStatus::kOk ? "ok" : "blocked";
+}
+
+Cutter2D::Cutter2D(Triangulation& mesh, Cutter2DOptions options) : mesh_(mesh), options_(options) {
+  auto positive = [](double x) { return std::isfinite(x) && x > 0; };
+  INCISE_CHECK_PARAM(positive(options.edge) && positive(options.entry) && positive(options.exit),
+                     "Cutter2D: thresholds edge, entry and exit must be finite and > 0");
+  INCISE_CHECK_PARAM(positive(options.dilation) && options.dilation <= 0.1,
+                     "Cutter2D: dilation must be in (0, 0.1] (a fraction of the mean edge)");
+  INCISE_CHECK_PARAM(options.max_substeps >= 1, "Cutter2D: max_substeps must be >= 1");
+  const std::vector<Edge> edges = mesh.edges();
+  INCISE_CHECK_PARAM(!edges.empty(), "Cutter2D: the mesh has no edges");
+  double sum = 0;
+  for (const Edge& e : edges) sum += (mesh.point(e.first) - mesh.point(e.second)).norm();
+  h_ = sum / static_cast<double>(edges.size());
+  eps_edge_ = options.edge * h_;
+  eps_entry_ = options.entry * h_;
+  eps_exit_ = options.exit * h_;
+  delta_ = options.dilation * h_;
+}
+
+bool Cutter2D::is_incision_node(Index v) const {
+  for (const auto& side : sides_)
+    if (std::find(side.begin(), side.end(), v) != side.end()) return true;
+  return false;
+}
+
+bool Cutter2D::boundary_hit(const Vec2& from, const Vec2& to, Index& p, Index& q,
+                            double& t) const {
+  bool found = false;
+  t = std::numeric_limits<double>::infinity();
+  for (const auto& e : boundary_edges(mesh_)) {
+    if (e[0] == active_ || e[1] == active_) continue;
+    if (std::find(forbidden_.begin(), forbidden_.end(), make_edge(e[0], e[1])) != forbidden_.end())
+      continue;
+    const Vec2 a = mesh_.point(e[0]), b = mesh_.point(e[1]);
+    // Straddle tests by exact orientation; the parameter in double.
+    const int sf = orient2d(a, b, from), st = orient2d(a, b, to);
+    const int sa = orient2d(from, to, a), sb = orient2d(from, to, b);
+    if (sf == st && sf != 0) continue;
+    if (sa == sb && sa != 0) continue;
+    if (sf == 0 && st == 0) continue;  // collinear: not a crossing
+    double tt, ss;
+    if (!segment_intersection(from, to, a, b, tt, ss)) {
+      tt = std::clamp(tt, 0.0, 1.0);  // touching within rounding
+    }
+    if (tt < t) {
+      t = tt;
+      p = e[0];
+      q = e[1];
+      found = true;
+    }
+  }
+  return found;
+}
+
+bool Cutter2D::locate_entry(const Vec2& from, const Vec2& to, Index& p, Index& q,
+                            double& t) const {
+  // Entering crossings only: from strictly outside (right of p→q), to inside or on it.
+  bool found = false;
+  t = std::numeric_limits<double>::infinity();
+  for (const auto& e : boundary_edges(mesh_)) {
+    if (std::find(forbidden_.begin(), forbidden_.end(), make_edge(e[0], e[1])) != forbidden_.end())
+      continue;
+    const Vec2 a = mesh_.point(e[0]), b = mesh_.point(e[1]);
+    if (orient2d(a, b, from) >= 0 || orient2d(a, b, to) < 0) continue;
+    if (orient2d(from, to, a) * orient2d(from, to, b) > 0) continue;
+    double tt, ss;
+    if (!segment_intersection(from, to, a, b, tt, ss)) continue;
+    if (tt < t) {
+      t = tt;
+      p = e[0];
+      q = e[1];
+      found = true;
+    }
+  }
+  return found;
+}
+
+void Cutter2D::legalize_around(Index v, CutMove2DReport& r) {
+  std::vector<Edge> edges;
+  for (const ElementHandle e : mesh_.connectivity().star(v)) {
+    const auto t = mesh_.triangle(e);
+    for (int i = 0; i < 3; ++i)
+      edges.push_back(make_edge(t[static_cast<size_t>(i)], t[static_cast<size_t>((i + 1) % 3)]));
+  }
+  r.flips += mesh_.legalize(edges);
+}
+
+void Cutter2D::remove_close_nodes(CutMove2DReport& r) {
+  for (bool again = true; again;) {
+    again = false;
+    const Vec2 a = mesh_.point(active_);
+    for (const Index v : mesh_.neighbours(active_)) {
+      if ((mesh_.point(v) - a).norm() >= eps_edge_ || is_incision_node(v) ||
+          !mesh_.is_interior_vertex(v))
+        continue;
+      if (mesh_.remove_vertex(v)) {
+        ++r.removals;
+        again = true;
+        break;
+      }
+    }
+  }
+}
+
+void Cutter2D::move_active(const Vec2& target, CutMove2DReport& r) {
+  int stalled = 0;  // consecutive half-steps towards a flat triangle without a mesh change
+  for (int step = 0; step < options_.max_substeps; ++step) {
+    const Vec2 a = mesh_.point(active_);
+    const Vec2 d = target - a;
+    if (d.norm() <= 1e-12 * h_) return;
+    // First time at which a triangle (a, u, w) of the star becomes flat: its orientation is
+    // f0 − t·cross(d, w − u) along a + t d.
+    double tmin = 1;
+    for (const ElementHandle e : mesh_.connectivity().star(active_)) {
+      const auto t = starting_at(mesh_.triangle(e), active_);
+      const Vec2 u = mesh_.point(t[1]), w = mesh_.point(t[2]);
+      const double f0 = cross(u - a, w - a), rate = cross(d, w - u);
+      if (rate > 0) tmin = std::min(tmin, f0 / rate);
+    }
+    const double s = tmin >= 1 ? 1.0 : 0.5 * tmin;
+    ++r.substeps;
+    if (!mesh_.move_vertex(active_, a + s * d) && !mesh_.move_vertex(active_, a + 0.25 * s * d)) {
+      r.status = CutMoveStatus::kBlocked;
+      r.message = "the active node cannot move without inverting a triangle";
+      return;
+    }
+    const long changes = mesh_.num_flips() + r.removals + r.splits;
+    legalize_around(active_, r);
+    remove_close_nodes(r);
+    legalize_around(active_, r);
+    if (phase_ == CutPhase::kCutting) {
+      path_.push_back(mesh_.point(active_));
+      split_incision(r);
+    }
+    const bool changed = mesh_.num_flips() + r.removals + r.splits != changes;
+    stalled = (s < 1 && !changed) ? stalled + 1 : 0;
+    // Ten halvings without a flip, removal or split: the triangle ahead has lost 2¹⁰ of its
+    // height against an edge that cannot be flipped (boundary or incision). Stop before it is
+    // flat (a sliver is worse than a movement that lags).
+    if (stalled >= 10) {
+      r.status = CutMoveStatus::kBlocked;
+      r.message = "the active node stopped " +
+                  std::to_string((mesh_.point(active_) - target).norm() / h_) +
+                  " mean edge lengths short of the scalpel: a triangle ahead would flatten "
+                  "against an edge that cannot be flipped";
+      return;
+    }
+  }
+  if ((mesh_.point(active_) - target).norm() > 1e-12 * h_) {
+    r.status = CutMoveStatus::kBlocked;
+    r.message = "the active node stopped " +
+                std::to_string((mesh_.point(active_) - target).norm() / h_) +
+                " mean edge lengths short of the scalpel after max_substeps sub-steps";
+  }
+}
+
+void Cutter2D::fix_up(CutMove2DReport& r) {
+  // Boundary neighbours of a: bl → a → br (interior on the left).
+  Index bl = -1, br = -1;
+  for (const ElementHandle e : mesh_.connectivity().star(active_)) {
+    const auto t = starting_at(mesh_.triangle(e), active_);
+    if (mesh_.is_boundary_edge(active_, t[1])) br = t[1];
+    if (mesh_.is_boundary_edge(t[2], active_)) bl = t[2];
+  }
+  if (bl < 0 || br < 0 || bl == br) {
+    ++r.refused;
+    return;
+  }
+  const Vec2 e = entry_;
+  auto toward = [&](Index v) {
+    const Vec2 d = mesh_.point(v) - e;
+    return Vec2(e + delta_ * d / d.norm());
+  };
+  const Index cl = mesh_.add_vertex(toward(bl)), cr = mesh_.add_vertex(toward(br));
+  if (!mesh_.replace({}, {{bl, cl, active_}, {active_, cr, br}})) {
+    ++r.refused;  // the new vertices stay unused
+    return;
+  }
+  r.fixed_up = true;
+  side_l_ = cl;
+  side_r_ = cr;
+  sides_.push_back({cl});
+  sides_.push_back({cr});
+  path_ = {entry_, mesh_.point(active_)};
+  phase_ = CutPhase::kCutting;
+  for (const Index v : {cl, cr, active_}) legalize_around(v, r);
+}
+
+void Cutter2D::split_incision(CutMove2DReport& r) {
+  for (int k = 0; k < 16; ++k) {
+    const ElementHandle tl = mesh_.left_of(side_l_, active_), tr = mesh_.left_of(active_, side_r_);
+    if (!tl.valid() || !tr.valid()) return;
+    const Index ol = starting_at(mesh_.triangle(tl), side_l_)[2];
+    const Index orr = starting_at(mesh_.triangle(tr), active_)[2];
+    if (ol == orr) return;
+    const Vec2 a = mesh_.point(active_), c = 0.5 * (mesh_.point(side_l_) + mesh_.point(side_r_));
+    const Vec2 pl = mesh_.point(ol), pr = mesh_.point(orr);
+    // Fig. 5.5: the incision as the edge c–a in the quadrilateral c, o_r, a, o_l.
+    if (orient2d(c, a, pl) <= 0 || orient2d(a, c, pr) <= 0) return;
+    if (incircle(c, a, pl, pr) <= 0) return;
+    // Where o_l o_r meets the path, or (a curved path that passes beside it) the path point
+    // closest to it (§5.3.1: "where the path is closest to the line connecting the nodes
+    // opposite the cut edges").
+    double best = std::numeric_limits<double>::infinity();
+    Vec2 x = Vec2::Zero();
+    size_t seg = 0;
+    for (size_t i = 0; i + 1 < path_.size(); ++i) {
+      const Vec2 p0 = path_[i], p1 = path_[i + 1];
+      double t, s2;
+      if (segment_intersection(p0, p1, pl, pr, t, s2)) {
+        best = 0;
+        x = p0 + t * (p1 - p0);
+        seg = i;
+        continue;  // the last crossing (nearest the tip) wins
+      }
+      if (best == 0) continue;
+      // Closest point of segment p0p1 to segment pl pr: the ends against the other segment.
+      auto closest_on = [](const Vec2& q0, const Vec2& q1, const Vec2& y) {
+        const Vec2 d = q1 - q0;
+        const double l2 = d.squaredNorm();
+        const double t = l2 > 0 ? std::clamp((y - q0).dot(d) / l2, 0.0, 1.0) : 0.0;
+        return Vec2(q0 + t * d);
+      };
+      for (const Vec2& cand : {p0, p1, closest_on(p0, p1, pl), closest_on(p0, p1, pr)}) {
+        const double dist = (closest_on(pl, pr, cand) - cand).norm();
+        if (dist < best) {
+          best = dist;
+          x = cand;
+          seg = i;
+        }
+      }
+    }
+    if (!std::isfinite(best)) return;
+    const Vec2 xl = x + delta_ * (pl - x).normalized(), xr = x + delta_ * (pr - x).normalized();
+    const Index nl = mesh_.add_vertex(xl), nr = mesh_.add_vertex(xr);
+    if (!mesh_.replace({tl, tr}, {{side_l_, nl, ol},
+                                  {nl, active_, ol},
+                                  {active_, nr, orr},
+                                  {nr, side_r_, orr}})) {
+      ++r.refused;
+      return;
+    }
+    ++r.splits;
+    side_l_ = nl;
+    side_r_ = nr;
+    sides_[sides_.size() - 2].push_back(nl);
+    sides_.back().push_back(nr);
+    path_.erase(path_.begin(), path_.begin() + static_cast<std::ptrdiff_t>(seg) + 1);
+    path_.insert(path_.begin(), x);
+    legalize_around(nl, r);
+    legalize_around(nr, r);
+  }
+}
+
+bool Cutter2D::exit_at(Index p, Index q, const Vec2& x, CutMove2DReport& r) {
+  // The exit node: an end of the edge within ε_exit of x, else a new node at x.
+  Index n = -1;
+  if ((mesh_.point(p) - x).norm() < eps_exit_)
+    n = p;
+  else if ((mesh_.point(q) - x).norm() < eps_exit_)
+    n = q;
+  else
+    n = mesh_.split_boundary_edge(p, q, x);
+  if (n < 0) {
+    ++r.refused;
+    return false;
+  }
+  // Make the edge a–n by flipping the edges that segment a→n crosses.
+  for (int k = 0; k < 32 && mesh_.incident(active_, n).empty(); ++k) {
+    const Vec2 a = mesh_.point(active_), xn = mesh_.point(n);
+    bool flipped = false;
+    for (const ElementHandle e : mesh_.connectivity().star(active_)) {
+      const auto t = starting_at(mesh_.triangle(e), active_);
+      if (orient2d(a, mesh_.point(t[1]), xn) >= 0 && orient2d(a, xn, mesh_.point(t[2])) >= 0) {
+        flipped = mesh_.flip(t[1], t[2]);
+        if (flipped) ++r.flips;
+        break;
+      }
+    }
+    if (!flipped) break;
+  }
+  const ElementHandle t1 = mesh_.left_of(active_, n), t2 = mesh_.left_of(n, active_);
+  if (!t1.valid() || !t2.valid()) {
+    ++r.refused;  // n stays a boundary node; the incision goes on
+    return false;
+  }
+  // Fans around a (from its outgoing boundary edge, counter-clockwise) and around n.
+  auto fan = [&](Index v) {
+    std::vector<ElementHandle> out;
+    ElementHandle start;
+    for (const ElementHandle e : mesh_.connectivity().star(v)) {
+      const auto t = starting_at(mesh_.triangle(e), v);
+      if (mesh_.is_boundary_edge(v, t[1])) start = e;
+    }
+    for (ElementHandle e = start; e.valid() && out.size() <= mesh_.connectivity().star(v).size();) {
+      out.push_back(e);
+      const auto t = starting_at(mesh_.triangle(e), v);
+      e = mesh_.left_of(v, t[2]);
+    }
+    return out;
+  };
+  const std::vector<ElementHandle> fa = fan(active_), fn = fan(n);
+  const auto ia1 = std::find(fa.begin(), fa.end(), t1), ia2 = std::find(fa.begin(), fa.end(), t2);
+  const auto in1 = std::find(fn.begin(), fn.end(), t1), in2 = std::find(fn.begin(), fn.end(), t2);
+  if (ia1 == fa.end() || ia2 == fa.end() || in1 == fn.end() || in2 == fn.end()) {
+    ++r.refused;
+    return false;
+  }
+  const Index n2 = mesh_.add_vertex(mesh_.point(n));
+  std::vector<ElementHandle> remove;
+  std::vector<std::array<Index, 3>> add;
+  auto substituted = [&](ElementHandle e, Index from, Index to) {
+    auto t = mesh_.triangle(e);
+    for (Index& v : t)
+      if (v == from) v = to;
+    return t;
+  };
+  for (auto it = fa.begin(); it != fa.end(); ++it) {
+    remove.push_back(*it);
+    if (*it == t1 || *it == t2) continue;
+    // Before t2 (counter-clockwise from the outgoing edge a → c_r): the c_r side, copy n2.
+    add.push_back(substituted(*it, active_, it < ia2 ? n2 : n));
+  }
+  for (auto it = in2 + 1; it != fn.end(); ++it) {  // n's fan after t2: the c_r side
+    remove.push_back(*it);
+    add.push_back(substituted(*it, n, n2));
+  }
+  if (!mesh_.replace(remove, add)) {
+    ++r.refused;
+    return false;
+  }
+  r.exited = true;
+  if (sides_.size() >= 2) {
+    sides_[sides_.size() - 2].push_back(n);
+    sides_.back().push_back(n2);
+  }
+  forbidden_.clear();
+  for (const Index v : {n, n2})
+    for (const Index w : mesh_.neighbours(v))
+      if (mesh_.is_boundary_edge(v, w)) forbidden_.push_back(make_edge(v, w));
+  forbidden_near_ = x;
+  phase_ = CutPhase::kOutside;
+  active_ = -1;
+  for (const Index v : {n, n2}) legalize_around(v, r);
+  return true;
+}
+
+CutMove2DReport Cutter2D::move_to(const Vec2& x) {
+  INCISE_CHECK_PARAM(x.allFinite(), "Cutter2D::move_to: non-finite scalpel position");
+  CutMove2DReport r;
+  const long flips_before = mesh_.num_flips();
+  if (!placed_) {
+    placed_ = true;
+    scalpel_ = x;
+    r.phase = phase_;
+    return r;
+  }
+  const Vec2 from = scalpel_;
+  scalpel_ = x;
+  if (!forbidden_.empty() && (x - forbidden_near_).norm() > 2 * eps_exit_) forbidden_.clear();
+
+  if (phase_ == CutPhase::kOutside) {
+    Index p, q;
+    double t;
+    if (!locate_entry(from, x, p, q, t)) {
+      r.phase = phase_;
+      return r;
+    }
+    const Vec2 e = from + t * (x - from);
+    Index a = -1;
+    // Near an end of the edge the scalpel takes that node (never a new node within ε_entry of
+    // one: it would make a sliver).
+    if ((mesh_.point(p) - e).norm() < eps_entry_)
+      a = p;
+    else if ((mesh_.point(q) - e).norm() < eps_entry_)
+      a = q;
+    else
+      a = mesh_.split_boundary_edge(p, q, e);
+    if (a < 0) {
+      ++r.refused;
+      r.phase = phase_;
+      return r;
+    }
+    r.entered = true;
+    active_ = a;
+    entry_ = mesh_.point(a);
+    dent_left_ = p;
+    dent_right_ = q;
+    phase_ = CutPhase::kDent;
+  }
+
+  const Vec2 before = mesh_.point(active_);
+  // Leaving through the dent's mouth before the fix-up: the dent stays (§5.2.2).
+  if (phase_ == CutPhase::kDent && dent_left_ != active_ && dent_right_ != active_ &&
+      orient2d(mesh_.point(dent_left_), mesh_.point(dent_right_), x) < 0) {
+    phase_ = CutPhase::kOutside;
+    active_ = -1;
+    r.phase = phase_;
+    return r;
+  }
+  Index hp = -1, hq = -1;
+  double ht = 0;
+  const bool hit = boundary_hit(before, x, hp, hq, ht);
+  const Vec2 goal = hit ? Vec2(before + ht * (x - before)) : x;
+  if (hit) {
+    // Stop ε_exit short of the boundary and finish the cut there (or, in a dent, leave).
+    const double len = (goal - before).norm();
+    const Vec2 stop = len > eps_exit_ ? Vec2(goal - eps_exit_ * (goal - before) / len) : before;
+    move_active(stop, r);
+  } else {
+    move_active(goal, r);
+  }
+  if (phase_ == CutPhase::kDent && (mesh_.point(active_) - entry_).norm() > eps_entry_)
+    fix_up(r);
+  if (phase_ == CutPhase::kCutting) {
+    split_incision(r);
+    if (hit) {
+      exit_at(hp, hq, goal, r);
+    } else {
+      // Exit prediction (Fig. 5.7): the movement extrapolated by ε_exit.
+      const Vec2 d = mesh_.point(active_) - before;
+      Index pp, qq;
+      double tt;
+      if (d.norm() > 0 &&
+          boundary_hit(mesh_.point(active_), mesh_.point(active_) + eps_exit_ * d.normalized(), pp,
+                       qq, tt))
+        exit_at(pp, qq, mesh_.point(active_) + tt * eps_exit_ * d.normalized(), r);
+    }
+  } else if (phase_ == CutPhase::kDent && hit) {
+    phase_ = CutPhase::kOutside;  // through the mesh before the fix-up: the dent stays
+    active_ = -1;
+  }
+  r.flips = mesh_.num_flips() - flips_before;
+  r.phase = phase_;
+  return r;
+}
+
+}  // namespace incise::delaunay
