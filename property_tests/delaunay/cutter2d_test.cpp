@@ -147,6 +147,7 @@ TEST(DelaunayCutter2D, RandomScalpelPathsKeepTheMeshValid) {
     const Index start = t.num_triangles();
     Cutter2DOptions o;
     o.edge = u(rng) < 0.5 ? 1.0 / 3.0 : 1.0 / 8.0;
+    if (u(rng) < 1.0 / 3.0) o.short_edge = ShortEdgeRule::kAngle;  // §5.5's scale-free rule
     Cutter2D cutter(t, o);
     const std::vector<Vec2> path = random_path(n, rng);
     double length = 0;

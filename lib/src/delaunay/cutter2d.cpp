@@ -58,6 +58,9 @@ Cutter2D::Cutter2D(Triangulation& mesh, Cutter2DOptions options) : mesh_(mesh), 
   INCISE_CHECK_PARAM(positive(options.dilation) && options.dilation <= 0.1,
                      "Cutter2D: dilation must be in (0, 0.1] (a fraction of the mean edge)");
   INCISE_CHECK_PARAM(options.max_substeps >= 1, "Cutter2D: max_substeps must be >= 1");
+  INCISE_CHECK_PARAM(std::isfinite(options.min_angle) && options.min_angle > 0 &&
+                         options.min_angle < M_PI / 3,
+                     "Cutter2D: min_angle must be in (0, pi/3) rad");
   const std::vector<Edge> edges = mesh.edges();
   INCISE_CHECK_PARAM(!edges.empty(), "Cutter2D: the mesh has no edges");
   double sum = 0;
@@ -137,14 +140,27 @@ void Cutter2D::legalize_around(Index v, CutMove2DReport& r) {
   r.flips += mesh_.legalize(edges);
 }
 
+bool Cutter2D::too_short(Index v) const {
+  const Vec2 a = mesh_.point(active_), pv = mesh_.point(v);
+  if (options_.short_edge == ShortEdgeRule::kDistance) return (pv - a).norm() < eps_edge_;
+  // §5.5: the angles opposite the edge a–v in its two triangles.
+  for (const ElementHandle e : mesh_.incident(active_, v)) {
+    const auto t = mesh_.triangle(e);
+    Index o = -1;
+    for (const Index w : t)
+      if (w != v && w != active_) o = w;
+    const Vec2 po = mesh_.point(o), x = a - po, y = pv - po;
+    if (std::atan2(std::abs(cross(x, y)), x.dot(y)) < options_.min_angle) return true;
+  }
+  return false;
+}
+
 void Cutter2D::remove_close_nodes(CutMove2DReport& r) {
   for (bool again = true; again;) {
     again = false;
     const Vec2 a = mesh_.point(active_);
     for (const Index v : mesh_.neighbours(active_)) {
-      if ((mesh_.point(v) - a).norm() >= eps_edge_ || is_incision_node(v) ||
-          !mesh_.is_interior_vertex(v))
-        continue;
+      if (is_incision_node(v) || !mesh_.is_interior_vertex(v) || !too_short(v)) continue;
       if (mesh_.remove_vertex(v)) {
         ++r.removals;
         again = true;

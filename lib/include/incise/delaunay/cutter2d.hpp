@@ -38,9 +38,17 @@
 
 namespace incise::delaunay {
 
+/// When an interior node next to the active node is "too close" and removed.
+enum class ShortEdgeRule {
+  kDistance,  ///< §5.2.2/§5.4: closer than ε_edge = edge · h̄
+  kAngle,     ///< §5.5 in retrospect, scale-free: an angle opposite the edge a–v is below min_angle
+};
+
 /// Options of a Cutter2D; thresholds are fractions of the starting mesh's mean edge length.
 struct Cutter2DOptions {
+  ShortEdgeRule short_edge = ShortEdgeRule::kDistance;  ///< which rule removes close nodes
   double edge = 1.0 / 3.0;   ///< ε_edge / h̄: interior nodes nearer to the active node are removed
+  double min_angle = 0.35;   ///< rad (≈ 20°), kAngle: the smallest admissible angle opposite a–v
   double entry = 1.0 / 6.0;  ///< ε_entry / h̄: snap-to-node distance and fix-up distance at entry
   double exit = 1.0 / 6.0;   ///< ε_exit / h̄: distance of a predicted exit
   double dilation = 1e-3;    ///< δ / h̄: how far new incision nodes are moved off the path
@@ -80,7 +88,8 @@ struct [[nodiscard]] CutMove2DReport : Outcome<CutMoveStatus, CutMoveStatus::kOk
 class Cutter2D {
  public:
   /// Takes the mesh to cut; thresholds from `options` times its mean edge length. Throws
-  /// ParameterError for thresholds ≤ 0 or non-finite, dilation outside (0, 0.1], max_substeps < 1.
+  /// ParameterError for thresholds ≤ 0 or non-finite, min_angle outside (0, π/3), dilation
+  /// outside (0, 0.1], max_substeps < 1.
   explicit Cutter2D(Triangulation& mesh, Cutter2DOptions options = {});
 
   /// Moves the scalpel to x (m). The first call only places it.
@@ -105,6 +114,7 @@ class Cutter2D {
   bool exit_at(Index p, Index q, const Vec2& x, CutMove2DReport& r);
   bool boundary_hit(const Vec2& from, const Vec2& to, Index& p, Index& q, double& t) const;
   bool is_incision_node(Index v) const;
+  bool too_short(Index v) const;
 
   Triangulation& mesh_;
   Cutter2DOptions options_;
