@@ -3,6 +3,7 @@
 // straight cuts across separate the mesh, and the growth per cut stays small.
 #include <incise/delaunay/cutter2d.hpp>
 #include <incise/delaunay/predicates.hpp>
+#include <incise/delaunay/subdivision.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/mesh/validate.hpp>
 #include <incise_test/seed.hpp>
@@ -189,6 +190,35 @@ TEST(DelaunayCutter2D, RandomScalpelPathsKeepTheMeshValid) {
             << " exits, " << splits << " splits, " << removals << " removals, " << blocked
             << " blocked, " << refused << " refused; largest angle " << worst_angle * 180 / M_PI
             << " deg, growth per h of path " << growth_per_length << " triangles\n";
+}
+
+TEST(DelaunaySubdivision, StraightCutSlicesEveryCrossedTriangleIntoThreeAndSeparates) {
+  // Fig. 5.16 top: the subdivision cutter on the 50-triangle grid. A path from outside to
+  // outside that meets no vertex crosses I interior and 2 boundary edges; each interior crossing
+  // adds two triangles (both sides split), each boundary crossing one.
+  Triangulation t(mesh::make_rectangle(5, 5, 5, 5));
+  const SubdivisionReport r = subdivision_cut(t, {Vec2(-0.5, 2.3), Vec2(5.5, 2.6)});
+  EXPECT_TRUE(valid(t));
+  EXPECT_EQ(components(t), 2);
+  ASSERT_GE(r.crossings, 2);
+  EXPECT_EQ(r.triangles_after - r.triangles_before, 2 * (r.crossings - 2) + 2);
+  EXPECT_EQ(r.dissected, r.crossings);  // every chain node is split (both ends on the boundary)
+}
+
+TEST(DelaunaySubdivision, RandomPathsKeepTheMeshValid) {
+  INCISE_SEEDED_RNG(rng, 5202);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int separated = 0;
+  for (int i = 0; i < incise::test::scaled(300); ++i) {
+    const int n = 3 + static_cast<int>(u(rng) * 6);
+    Triangulation t(mesh::make_rectangle(n, n, n, n));
+    const std::vector<Vec2> path = random_path(n, rng);
+    const SubdivisionReport r = subdivision_cut(t, path);
+    ASSERT_TRUE(valid(t)) << "path " << i;
+    EXPECT_GE(r.triangles_after, r.triangles_before);
+    separated += components(t) > 1;
+  }
+  EXPECT_GT(separated, 0);
 }
 
 }  // namespace

@@ -253,6 +253,51 @@ Index Triangulation::split_boundary_edge(Index p, Index q, const Vec2& x) {
   return n;
 }
 
+Index Triangulation::split_edge(Index p, Index q, const Vec2& x) {
+  const std::vector<ElementHandle> inc = incident(p, q);
+  if (inc.empty() || !x.allFinite()) return -1;
+  const Index n = conn_.num_vertices();
+  std::vector<std::array<Index, 3>> add;
+  for (const ElementHandle e : inc) {
+    auto t = ccw(conn_.simplex(e));
+    while (t[0] == p || t[0] == q) std::rotate(t.begin(), t.begin() + 1, t.end());
+    // t = (r, a, b) with {a, b} = {p, q}: (a, n, r) and (n, b, r).
+    add.push_back({t[1], n, t[0]});
+    add.push_back({n, t[2], t[0]});
+  }
+  for (const auto& t : add) {
+    std::array<Vec2, 3> pts;
+    for (int i = 0; i < 3; ++i)
+      pts[static_cast<size_t>(i)] = t[static_cast<size_t>(i)] == n ? x : point(t[static_cast<size_t>(i)]);
+    if (orient2d(pts[0], pts[1], pts[2]) <= 0) return -1;
+  }
+  add_vertex(x);
+  replace(inc, add);
+  return n;
+}
+
+Index Triangulation::split_triangle(ElementHandle e, const Vec2& x) {
+  if (!conn_.is_alive(e) || !x.allFinite()) return -1;
+  const auto t = ccw(conn_.simplex(e));
+  for (int i = 0; i < 3; ++i)
+    if (orient2d(point(t[static_cast<size_t>(i)]), point(t[static_cast<size_t>((i + 1) % 3)]), x) <= 0)
+      return -1;
+  const Index n = add_vertex(x);
+  replace({e}, {{t[0], t[1], n}, {t[1], t[2], n}, {t[2], t[0], n}});
+  return n;
+}
+
+ElementHandle Triangulation::locate(const Vec2& x) const {
+  for (const ElementHandle e : conn_.elements()) {
+    const auto t = ccw(conn_.simplex(e));
+    bool in = true;
+    for (int i = 0; i < 3 && in; ++i)
+      in = orient2d(point(t[static_cast<size_t>(i)]), point(t[static_cast<size_t>((i + 1) % 3)]), x) >= 0;
+    if (in) return e;
+  }
+  return {};
+}
+
 std::pair<double, double> Triangulation::angle_range() const {
   double lo = 4, hi = 0;
   for (const ElementHandle e : conn_.elements()) {

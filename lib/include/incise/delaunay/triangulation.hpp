@@ -112,6 +112,16 @@ class Triangulation {
   /// or a new triangle would not be strictly counter-clockwise.
   Index split_boundary_edge(Index p, Index q, const Vec2& x);
 
+  /// Inserts a vertex at x on the edge {p, q} (boundary or interior): each incident triangle
+  /// (p, q, r) becomes (p, x, r) and (x, q, r). Returns it, or −1 (unchanged) when {p, q} is not
+  /// an edge or a new triangle would not be strictly counter-clockwise.
+  Index split_edge(Index p, Index q, const Vec2& x);
+  /// Inserts a vertex at x inside live triangle e: (a, b, c) becomes (a, b, x), (b, c, x),
+  /// (c, a, x). Returns it, or −1 (unchanged) when x is not strictly inside.
+  Index split_triangle(mesh::ElementHandle e, const Vec2& x);
+  /// The live triangle containing x (closed), by a scan; invalid when none.
+  mesh::ElementHandle locate(const Vec2& x) const;
+
   /// Flips made by flip(), legalize() and remove_vertex() so far.
   long num_flips() const { return flips_; }
 
