@@ -6,6 +6,7 @@
 #include <incise/delaunay/subdivision.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/mesh/validate.hpp>
+#include <incise_test/delaunay_support.hpp>
 #include <incise_test/seed.hpp>
 
 #include <gtest/gtest.h>
@@ -18,54 +19,9 @@
 namespace incise::delaunay {
 namespace {
 
-::testing::AssertionResult valid(const Triangulation& t) {
-  mesh::ValidateOptions o;
-  o.positions = &t.points();
-  const auto r = mesh::validate(t.connectivity(), o);
-  if (r.ok()) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << r.violations.front().invariant << ": "
-                                       << r.violations.front().message;
-}
-
-/// Face-connected components of the live triangles.
-int components(const Triangulation& t) {
-  const auto& c = t.connectivity();
-  std::vector<mesh::ElementHandle> all = c.elements();
-  std::map<std::pair<Index, int>, int> seen;
-  int n = 0;
-  for (const auto& s : all) {
-    if (seen.count({s.index, s.generation})) continue;
-    ++n;
-    std::vector<mesh::ElementHandle> stack{s};
-    seen[{s.index, s.generation}] = 1;
-    while (!stack.empty()) {
-      const auto e = stack.back();
-      stack.pop_back();
-      for (const auto& nb : c.neighbours(e))
-        if (nb.valid() && !seen.count({nb.index, nb.generation})) {
-          seen[{nb.index, nb.generation}] = 1;
-          stack.push_back(nb);
-        }
-    }
-  }
-  return n;
-}
-
-/// Moves the scalpel along the polyline `path` in steps of at most `step` (m); validates after
-/// every movement. Returns the reports.
-std::vector<CutMove2DReport> cut_along(Cutter2D& cutter, Triangulation& t,
-                                       const std::vector<Vec2>& path, double step) {
-  std::vector<CutMove2DReport> out;
-  out.push_back(cutter.move_to(path[0]));
-  for (size_t i = 1; i < path.size(); ++i) {
-    const Vec2 a = path[i - 1], b = path[i];
-    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step)));
-    for (int k = 1; k <= n; ++k) {
-      out.push_back(cutter.move_to(a + (b - a) * (static_cast<double>(k) / n)));
-    }
-  }
-  return out;
-}
+using incise::test::components;
+using incise::test::cut_along;
+using incise::test::valid;
 
 TEST(DelaunayCutter2D, StraightCutAcrossTheFig5_16MeshSeparatesIt) {
   // Fig. 5.16's start: 50 triangles (a 5 × 5 grid of unit squares); a horizontal cut.
@@ -136,8 +92,8 @@ TEST(DelaunayCutter2D, RandomScalpelPathsKeepTheMeshValid) {
   std::vector<double> angles;
   for (int i = 0; i < paths; ++i) {
     const int n = 4 + static_cast<int>(u(rng) * 7);
-    mesh::MeshData m = mesh::make_rectangle(n, n, n, n, u(rng) < 0.5 ? mesh::GridDiagonal::kForward
-                                                                      : mesh::GridDiagonal::kAlternating);
+    mesh::MeshData m = mesh::make_rectangle(
+        n, n, n, n, u(rng) < 0.5 ? mesh::GridDiagonal::kForward : mesh::GridDiagonal::kAlternating);
     if (u(rng) < 0.5) {  // jittered interior nodes, then made Delaunay
       for (Index v = 0; v < m.num_points(); ++v)
         if (m.points(0, v) > 0 && m.points(0, v) < n && m.points(1, v) > 0 && m.points(1, v) < n)
@@ -166,8 +122,8 @@ TEST(DelaunayCutter2D, RandomScalpelPathsKeepTheMeshValid) {
     }
     worst_angle = std::max(worst_angle, t.angle_range().second);
     angles.push_back(t.angle_range().second * 180 / M_PI);
-    growth_per_length = std::max(
-        growth_per_length, static_cast<double>(t.num_triangles() - start) * cutter.mean_edge() / length);
+    growth_per_length = std::max(growth_per_length, static_cast<double>(t.num_triangles() - start) *
+                                                        cutter.mean_edge() / length);
   }
   std::sort(angles.begin(), angles.end());
   std::cout << "largest angle per path: median " << angles[angles.size() / 2] << ", 90% "

@@ -7,6 +7,7 @@
 #include <incise/delaunay/triangulation.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/mesh/validate.hpp>
+#include <incise_test/delaunay_support.hpp>
 #include <incise_test/seed.hpp>
 
 #include <gtest/gtest.h>
@@ -15,6 +16,8 @@
 
 namespace incise::delaunay {
 namespace {
+
+using incise::test::valid;
 
 /// A rectangle grid nx × ny (unit cells, forward diagonals) with interior nodes jittered by up
 /// to `jitter` cells in each direction (|jitter| < 0.5 keeps every triangle counter-clockwise
@@ -30,14 +33,6 @@ mesh::MeshData jittered_grid(int nx, int ny, double jitter, std::mt19937_64& rng
     }
   }
   return m;
-}
-
-::testing::AssertionResult valid(const Triangulation& t) {
-  mesh::ValidateOptions o;
-  o.positions = &t.points();
-  const auto r = mesh::validate(t.connectivity(), o);
-  if (r.ok()) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << r.violations.front().message;
 }
 
 ::testing::AssertionResult all_delaunay(const Triangulation& t) {

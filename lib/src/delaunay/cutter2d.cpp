@@ -12,12 +12,14 @@ namespace {
 
 using mesh::ElementHandle;
 
-double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+double cross(const Vec2& a, const Vec2& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
 
 /// Parameters (t, s) of the intersection of segments p0→p1 and q0→q1 (double precision, for
 /// placing points; the topology is decided by orient2d). False when parallel or not meeting.
-bool segment_intersection(const Vec2& p0, const Vec2& p1, const Vec2& q0, const Vec2& q1,
-                          double& t, double& s) {
+bool segment_intersection(const Vec2& p0, const Vec2& p1, const Vec2& q0, const Vec2& q1, double& t,
+                          double& s) {
   const Vec2 r = p1 - p0, d = q1 - q0;
   const double den = cross(r, d);
   if (den == 0) return false;
@@ -58,9 +60,9 @@ Cutter2D::Cutter2D(Triangulation& mesh, Cutter2DOptions options) : mesh_(mesh), 
   INCISE_CHECK_PARAM(positive(options.dilation) && options.dilation <= 0.1,
                      "Cutter2D: dilation must be in (0, 0.1] (a fraction of the mean edge)");
   INCISE_CHECK_PARAM(options.max_substeps >= 1, "Cutter2D: max_substeps must be >= 1");
-  INCISE_CHECK_PARAM(std::isfinite(options.min_angle) && options.min_angle > 0 &&
-                         options.min_angle < M_PI / 3,
-                     "Cutter2D: min_angle must be in (0, pi/3) rad");
+  INCISE_CHECK_PARAM(
+      std::isfinite(options.min_angle) && options.min_angle > 0 && options.min_angle < M_PI / 3,
+      "Cutter2D: min_angle must be in (0, pi/3) rad");
   const std::vector<Edge> edges = mesh.edges();
   INCISE_CHECK_PARAM(!edges.empty(), "Cutter2D: the mesh has no edges");
   double sum = 0;
@@ -78,8 +80,7 @@ bool Cutter2D::is_incision_node(Index v) const {
   return false;
 }
 
-bool Cutter2D::boundary_hit(const Vec2& from, const Vec2& to, Index& p, Index& q,
-                            double& t) const {
+bool Cutter2D::boundary_hit(const Vec2& from, const Vec2& to, Index& p, Index& q, double& t) const {
   bool found = false;
   t = std::numeric_limits<double>::infinity();
   for (const auto& e : boundary_edges(mesh_)) {
@@ -107,8 +108,7 @@ bool Cutter2D::boundary_hit(const Vec2& from, const Vec2& to, Index& p, Index& q
   return found;
 }
 
-bool Cutter2D::locate_entry(const Vec2& from, const Vec2& to, Index& p, Index& q,
-                            double& t) const {
+bool Cutter2D::locate_entry(const Vec2& from, const Vec2& to, Index& p, Index& q, double& t) const {
   // Entering crossings only: from strictly outside (right of p→q), to inside or on it.
   bool found = false;
   t = std::numeric_limits<double>::infinity();
@@ -301,10 +301,9 @@ void Cutter2D::split_incision(CutMove2DReport& r) {
     if (!std::isfinite(best)) return;
     const Vec2 xl = x + delta_ * (pl - x).normalized(), xr = x + delta_ * (pr - x).normalized();
     const Index nl = mesh_.add_vertex(xl), nr = mesh_.add_vertex(xr);
-    if (!mesh_.replace({tl, tr}, {{side_l_, nl, ol},
-                                  {nl, active_, ol},
-                                  {active_, nr, orr},
-                                  {nr, side_r_, orr}})) {
+    if (!mesh_.replace(
+            {tl, tr},
+            {{side_l_, nl, ol}, {nl, active_, ol}, {active_, nr, orr}, {nr, side_r_, orr}})) {
       ++r.refused;
       return;
     }
@@ -478,8 +477,7 @@ CutMove2DReport Cutter2D::move_to(const Vec2& x) {
   } else {
     move_active(goal, r);
   }
-  if (phase_ == CutPhase::kDent && (mesh_.point(active_) - entry_).norm() > eps_entry_)
-    fix_up(r);
+  if (phase_ == CutPhase::kDent && (mesh_.point(active_) - entry_).norm() > eps_entry_) fix_up(r);
   if (phase_ == CutPhase::kCutting) {
     split_incision(r);
     if (hit) {

@@ -13,7 +13,9 @@ namespace {
 
 using mesh::ElementHandle;
 
-double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+double cross(const Vec2& a, const Vec2& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
 
 /// A node at x: a vertex within snap of x, else a new node on the edge or in the triangle that
 /// contains x; −1 when x is outside the mesh.
@@ -24,7 +26,8 @@ Index node_at(Triangulation& m, const Vec2& x, double snap) {
   for (const Index v : t)
     if ((m.point(v) - x).norm() < snap) return v;
   for (int i = 0; i < 3; ++i)
-    if (orient2d(m.point(t[static_cast<size_t>(i)]), m.point(t[static_cast<size_t>((i + 1) % 3)]), x) == 0)
+    if (orient2d(m.point(t[static_cast<size_t>(i)]), m.point(t[static_cast<size_t>((i + 1) % 3)]),
+                 x) == 0)
       return m.split_edge(t[static_cast<size_t>(i)], t[static_cast<size_t>((i + 1) % 3)], x);
   return m.split_triangle(e, x);
 }
@@ -43,7 +46,8 @@ SubdivisionReport subdivision_cut(Triangulation& m, const std::vector<Vec2>& pat
   const std::vector<Edge> start_edges = m.edges();
   double sum = 0;
   for (const Edge& e : start_edges) sum += (m.point(e.first) - m.point(e.second)).norm();
-  const double snap = options.snap * sum / static_cast<double>(std::max<size_t>(1, start_edges.size()));
+  const double snap =
+      options.snap * sum / static_cast<double>(std::max<size_t>(1, start_edges.size()));
 
   auto add_chain = [&](Index v) {
     if (v >= 0 && (r.chain.empty() || r.chain.back() != v)) r.chain.push_back(v);

@@ -268,7 +268,8 @@ Index Triangulation::split_edge(Index p, Index q, const Vec2& x) {
   for (const auto& t : add) {
     std::array<Vec2, 3> pts;
     for (int i = 0; i < 3; ++i)
-      pts[static_cast<size_t>(i)] = t[static_cast<size_t>(i)] == n ? x : point(t[static_cast<size_t>(i)]);
+      pts[static_cast<size_t>(i)] =
+          t[static_cast<size_t>(i)] == n ? x : point(t[static_cast<size_t>(i)]);
     if (orient2d(pts[0], pts[1], pts[2]) <= 0) return -1;
   }
   add_vertex(x);
@@ -280,7 +281,8 @@ Index Triangulation::split_triangle(ElementHandle e, const Vec2& x) {
   if (!conn_.is_alive(e) || !x.allFinite()) return -1;
   const auto t = ccw(conn_.simplex(e));
   for (int i = 0; i < 3; ++i)
-    if (orient2d(point(t[static_cast<size_t>(i)]), point(t[static_cast<size_t>((i + 1) % 3)]), x) <= 0)
+    if (orient2d(point(t[static_cast<size_t>(i)]), point(t[static_cast<size_t>((i + 1) % 3)]), x) <=
+        0)
       return -1;
   const Index n = add_vertex(x);
   replace({e}, {{t[0], t[1], n}, {t[1], t[2], n}, {t[2], t[0], n}});
@@ -292,7 +294,8 @@ ElementHandle Triangulation::locate(const Vec2& x) const {
     const auto t = ccw(conn_.simplex(e));
     bool in = true;
     for (int i = 0; i < 3 && in; ++i)
-      in = orient2d(point(t[static_cast<size_t>(i)]), point(t[static_cast<size_t>((i + 1) % 3)]), x) >= 0;
+      in = orient2d(point(t[static_cast<size_t>(i)]), point(t[static_cast<size_t>((i + 1) % 3)]),
+                    x) >= 0;
     if (in) return e;
   }
   return {};

@@ -41,14 +41,14 @@ namespace incise::delaunay {
 /// When an interior node next to the active node is "too close" and removed.
 enum class ShortEdgeRule {
   kDistance,  ///< §5.2.2/§5.4: closer than ε_edge = edge · h̄
-  kAngle,     ///< §5.5 in retrospect, scale-free: an angle opposite the edge a–v is below min_angle
+  kAngle,  ///< §5.5 in retrospect, scale-free: an angle opposite the edge a–v is below min_angle
 };
 
 /// Options of a Cutter2D; thresholds are fractions of the starting mesh's mean edge length.
 struct Cutter2DOptions {
   ShortEdgeRule short_edge = ShortEdgeRule::kDistance;  ///< which rule removes close nodes
-  double edge = 1.0 / 3.0;   ///< ε_edge / h̄: interior nodes nearer to the active node are removed
-  double min_angle = 0.35;   ///< rad (≈ 20°), kAngle: the smallest admissible angle opposite a–v
+  double edge = 1.0 / 3.0;  ///< ε_edge / h̄: interior nodes nearer to the active node are removed
+  double min_angle = 0.35;  ///< rad (≈ 20°), kAngle: the smallest admissible angle opposite a–v
   double entry = 1.0 / 6.0;  ///< ε_entry / h̄: snap-to-node distance and fix-up distance at entry
   double exit = 1.0 / 6.0;   ///< ε_exit / h̄: distance of a predicted exit
   double dilation = 1e-3;    ///< δ / h̄: how far new incision nodes are moved off the path
@@ -72,7 +72,8 @@ enum class CutPhase {
 };
 
 /// Report of one movement (counts of this movement).
-struct [[nodiscard]] CutMove2DReport : Outcome<CutMoveStatus, CutMoveStatus::kOk, CutMoveStatus::kOk> {
+struct [[nodiscard]] CutMove2DReport
+    : Outcome<CutMoveStatus, CutMoveStatus::kOk, CutMoveStatus::kOk> {
   CutPhase phase = CutPhase::kOutside;  ///< the phase after the movement
   bool entered = false;                 ///< the scalpel entered the mesh
   bool fixed_up = false;                ///< the entry fix-up was made
