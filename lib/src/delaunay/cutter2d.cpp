@@ -1,5 +1,7 @@
 #include <incise/delaunay/cutter2d.hpp>
+
 #include <incise/delaunay/predicates.hpp>
+#include "boundary_grid.hpp"
 
 #include <incise/core/error.hpp>
 
@@ -26,19 +28,6 @@ bool segment_intersection(const Vec2& p0, const Vec2& p1, const Vec2& q0, const 
   t = cross(q0 - p0, d) / den;
   s = cross(q0 - p0, r) / den;
   return t >= 0 && t <= 1 && s >= 0 && s <= 1;
-}
-
-/// The directed boundary edges (interior on the left).
-std::vector<std::array<Index, 2>> boundary_edges(const Triangulation& m) {
-  std::vector<std::array<Index, 2>> out;
-  for (const mesh::FaceHandle f : m.connectivity().boundary()) {
-    const mesh::Simplex& s = m.connectivity().simplex(f);
-    if (s.sign() > 0)
-      out.push_back({s.vertex(0), s.vertex(1)});
-    else
-      out.push_back({s.vertex(1), s.vertex(0)});
-  }
-  return out;
 }
 
 /// Rotates a counter-clockwise triple so that v comes first.
@@ -72,6 +61,12 @@ Cutter2D::Cutter2D(Triangulation& mesh, Cutter2DOptions options) : mesh_(mesh), 
   eps_entry_ = options.entry * h_;
   eps_exit_ = options.exit * h_;
   delta_ = options.dilation * h_;
+  grid_ = std::make_unique<detail::BoundaryGrid>(mesh, h_);
+  mesh_.add_watcher(grid_.get());  // calls init: every current boundary edge
+}
+
+Cutter2D::~Cutter2D() {
+  mesh_.remove_watcher(grid_.get());
 }
 
 bool Cutter2D::is_incision_node(Index v) const {
@@ -83,7 +78,7 @@ bool Cutter2D::is_incision_node(Index v) const {
 bool Cutter2D::boundary_hit(const Vec2& from, const Vec2& to, Index& p, Index& q, double& t) const {
   bool found = false;
   t = std::numeric_limits<double>::infinity();
-  for (const auto& e : boundary_edges(mesh_)) {
+  for (const auto& e : grid_->near(from, to, 1e-9 * h_)) {
     if (e[0] == active_ || e[1] == active_) continue;
     if (std::find(forbidden_.begin(), forbidden_.end(), make_edge(e[0], e[1])) != forbidden_.end())
       continue;
@@ -112,7 +107,7 @@ bool Cutter2D::locate_entry(const Vec2& from, const Vec2& to, Index& p, Index& q
   // Entering crossings only: from strictly outside (right of p→q), to inside or on it.
   bool found = false;
   t = std::numeric_limits<double>::infinity();
-  for (const auto& e : boundary_edges(mesh_)) {
+  for (const auto& e : grid_->near(from, to, 1e-9 * h_)) {
     if (std::find(forbidden_.begin(), forbidden_.end(), make_edge(e[0], e[1])) != forbidden_.end())
       continue;
     const Vec2 a = mesh_.point(e[0]), b = mesh_.point(e[1]);
@@ -457,11 +452,13 @@ CutMove2DReport Cutter2D::move_to(const Vec2& x) {
   }
 
   const Vec2 before = mesh_.point(active_);
+  const Index moved = active_;
   // Leaving through the dent's mouth before the fix-up: the dent stays (§5.2.2).
   if (phase_ == CutPhase::kDent && dent_left_ != active_ && dent_right_ != active_ &&
       orient2d(mesh_.point(dent_left_), mesh_.point(dent_right_), x) < 0) {
     phase_ = CutPhase::kOutside;
     active_ = -1;
+    grid_->refresh(moved);
     r.phase = phase_;
     return r;
   }
@@ -496,6 +493,8 @@ CutMove2DReport Cutter2D::move_to(const Vec2& x) {
     phase_ = CutPhase::kOutside;  // through the mesh before the fix-up: the dent stays
     active_ = -1;
   }
+  // The node that moved keeps its boundary edges registered where they are now.
+  if (moved >= 0) grid_->refresh(moved);
   r.flips = mesh_.num_flips() - flips_before;
   r.phase = phase_;
   return r;

@@ -203,7 +203,9 @@ std::vector<Index> Triangulation::neighbours(Index v) const {
 Index Triangulation::add_vertex(const Vec2& x) {
   INCISE_CHECK_PARAM(x.allFinite(), "Triangulation::add_vertex: non-finite position");
   const Index v = conn_.add_vertex();
-  if (points_.cols() <= v) points_.conservativeResize(Eigen::NoChange, v + 1);
+  // Capacity doubles (a resize per vertex would copy all positions: O(n) per insertion).
+  if (points_.cols() <= v)
+    points_.conservativeResize(Eigen::NoChange, std::max<Eigen::Index>(v + 1, 2 * points_.cols()));
   points_.col(v) << x.x(), x.y(), 0.0;
   return v;
 }

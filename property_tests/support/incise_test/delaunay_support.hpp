@@ -19,8 +19,8 @@ inline ::testing::AssertionResult valid(const delaunay::Triangulation& t) {
   o.positions = &t.points();
   const auto r = mesh::validate(t.connectivity(), o);
   if (r.ok()) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << r.violations.front().invariant << ": "
-                                       << r.violations.front().message;
+  return ::testing::AssertionFailure()
+         << r.violations.front().invariant << ": " << r.violations.front().message;
 }
 
 /// Face-connected components of the live triangles.
@@ -51,7 +51,8 @@ inline int components(const delaunay::Triangulation& t) {
 /// every movement. Returns the reports.
 inline std::vector<delaunay::CutMove2DReport> cut_along(delaunay::Cutter2D& cutter,
                                                         delaunay::Triangulation& t,
-                                       const std::vector<Vec2>& path, double step) {
+                                                        const std::vector<Vec2>& path,
+                                                        double step) {
   std::vector<delaunay::CutMove2DReport> out;
   out.push_back(cutter.move_to(path[0]));
   for (size_t i = 1; i < path.size(); ++i) {

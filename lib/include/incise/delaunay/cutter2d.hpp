@@ -24,6 +24,8 @@
 /// a dent until it is ε_entry from the entry point; then the dent is filled with two triangles
 /// and the incision starts (fix-up). A scalpel that leaves before the fix-up leaves the dent.
 ///
+/// Boundary edges are found through a uniform grid of cell h̄ kept current by watching the
+/// connectivity, so a movement's cost does not grow with the mesh (benchmarks/delaunay).
 /// Thresholds are fractions of the mean edge length h̄ of the starting mesh (§5.4 defaults:
 /// ε_edge = h̄/3, ε_entry = ε_exit = h̄/6). Every change goes through Triangulation (one
 /// replace_elements each, §7.3); triangles stay strictly counter-clockwise by exact predicates.
@@ -33,10 +35,14 @@
 #include <incise/core/outcome.hpp>
 #include <incise/delaunay/triangulation.hpp>
 
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace incise::delaunay {
+namespace detail {
+class BoundaryGrid;
+}
 
 /// When an interior node next to the active node is "too close" and removed.
 enum class ShortEdgeRule {
@@ -92,6 +98,9 @@ class Cutter2D {
   /// ParameterError for thresholds ≤ 0 or non-finite, min_angle outside (0, π/3), dilation
   /// outside (0, 0.1], max_substeps < 1.
   explicit Cutter2D(Triangulation& mesh, Cutter2DOptions options = {});
+  ~Cutter2D();
+  Cutter2D(const Cutter2D&) = delete;
+  Cutter2D& operator=(const Cutter2D&) = delete;
 
   /// Moves the scalpel to x (m). The first call only places it.
   CutMove2DReport move_to(const Vec2& x);
@@ -119,6 +128,7 @@ class Cutter2D {
 
   Triangulation& mesh_;
   Cutter2DOptions options_;
+  std::unique_ptr<detail::BoundaryGrid> grid_;  // boundary edges by cell (watches the mesh)
   double h_ = 0, eps_edge_ = 0, eps_entry_ = 0, eps_exit_ = 0, delta_ = 0;
   CutPhase phase_ = CutPhase::kOutside;
   bool placed_ = false;

@@ -43,11 +43,14 @@ class Triangulation {
   const mesh::Connectivity& connectivity() const { return conn_; }
   /// Position of vertex v (m).
   Vec2 point(Index v) const { return points_.col(v).head<2>(); }
-  /// Positions, 3 × num_vertices, z = 0 (vertices without triangles keep their last position).
+  /// Positions, 3 × (at least num_vertices), z = 0 (vertices without triangles keep their last
+  /// position; columns past num_vertices are spare capacity).
   const Eigen::Matrix3Xd& points() const { return points_; }
   /// The current mesh as arrays (cells in Connectivity slot order; removed vertices stay as
   /// unused points, so indices are stable).
-  mesh::MeshData to_mesh_data() const { return conn_.to_mesh_data(points_); }
+  mesh::MeshData to_mesh_data() const {
+    return conn_.to_mesh_data(points_.leftCols(conn_.num_vertices()));
+  }
   /// Live triangles.
   Index num_triangles() const { return conn_.num_elements(); }
 
@@ -121,6 +124,11 @@ class Triangulation {
   Index split_triangle(mesh::ElementHandle e, const Vec2& x);
   /// The live triangle containing x (closed), by a scan; invalid when none.
   mesh::ElementHandle locate(const Vec2& x) const;
+
+  /// Registers / unregisters an observer of the connectivity's changes (§7.4).
+  void add_watcher(mesh::ConnectivityWatcher* w) { conn_.add_watcher(w); }
+  /// See add_watcher.
+  void remove_watcher(mesh::ConnectivityWatcher* w) { conn_.remove_watcher(w); }
 
   /// Flips made by flip(), legalize() and remove_vertex() so far.
   long num_flips() const { return flips_; }
