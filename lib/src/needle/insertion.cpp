@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -84,11 +85,11 @@ Eigen::Matrix2Xd NeedleInsertion::deformed() const {
   return x;
 }
 
-std::vector<double> NeedleInsertion::dynamic_thresholds() const {
+void NeedleInsertion::update_thresholds() {
   std::vector<double> s;
   s.reserve(nodes_.size());
   for (const NeedleNode& n : nodes_) s.push_back(n.coords.s);
-  return friction_.dynamic_thresholds(s);
+  thresholds_ = friction_.dynamic_thresholds(s);
 }
 
 void NeedleInsertion::place_needle_nodes() {
@@ -108,7 +109,8 @@ void NeedleInsertion::refine_at_tip() {
     const mesh::Simplex& s = conn.simplex(e);
     const Vec2 a = x.col(s.vertex(0)), b = x.col(s.vertex(1)), c = x.col(s.vertex(2));
     const double area = cross(b - a, c - a);
-    if (!(area > 0.0)) continue;
+    // An inverted deformed triangle (area < 0) still maps barycentrically.
+    if (area == 0.0) continue;
     const double la = cross(b - tip, c - tip) / area, lb = cross(c - tip, a - tip) / area;
     const double lc = 1.0 - la - lb;
     if (la < -1e-12 || lb < -1e-12 || lc < -1e-12) continue;
@@ -119,6 +121,7 @@ void NeedleInsertion::refine_at_tip() {
     break;
   }
   if (!found) return;  // the tip is outside the body
+  refined_at_ = reference;
   const Index before = mesh_.connectivity().num_vertices();
   // Triangles congruent to the uniform h_ref slab's have legs h_ref, hypotenuse √2·h_ref.
   mesh_.refine_around(reference, std::sqrt(2.0) * options_.h_ref * (1.0 + 1e-9));
@@ -179,8 +182,7 @@ int NeedleInsertion::intercept() {
 }
 
 bool NeedleInsertion::solve(StepReport& rep) {
-  const std::vector<double> friction = dynamic_thresholds();
-  NeedleProblem np(*problem_, pose_, nodes_, friction);
+  NeedleProblem np(*problem_, pose_, nodes_, thresholds_);
   VecX ur = np.to_rotated(u_);
   solver::SolverReport sr;
   if (options_.relaxation == Relaxation::kLinearCg) {
@@ -214,7 +216,7 @@ bool NeedleInsertion::solve(StepReport& rep) {
 }
 
 int NeedleInsertion::rearrange() {
-  const std::vector<double> fd = dynamic_thresholds();
+  const std::vector<double>& fd = thresholds_;
   int changes = 0;
   for (std::size_t k = 0; k < nodes_.size(); ++k) {
     NeedleNode& n = nodes_[k];
@@ -238,12 +240,17 @@ int NeedleInsertion::rearrange() {
 
 int NeedleInsertion::release() {
   const std::size_t before = nodes_.size();
-  nodes_.erase(std::remove_if(nodes_.begin(), nodes_.end(),
-                              [&](const NeedleNode& n) {
-                                return n.coords.s < 0.0 || n.coords.s > pose_.length;
-                              }),
-               nodes_.end());
-  return static_cast<int>(before - nodes_.size());
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < nodes_.size(); ++k) {
+    const NeedleNode& n = nodes_[k];
+    if (n.coords.s < 0.0 || n.coords.s > pose_.length) continue;
+    nodes_[kept] = n;
+    thresholds_[kept] = thresholds_[k];
+    ++kept;
+  }
+  nodes_.resize(kept);
+  thresholds_.resize(kept);
+  return static_cast<int>(before - kept);
 }
 
 void NeedleInsertion::fill_counts(StepReport& rep) {
@@ -257,6 +264,7 @@ void NeedleInsertion::fill_counts(StepReport& rep) {
 
 StepReport NeedleInsertion::run(StepReport rep) {
   for (NeedleNode& n : nodes_) n.anchor = n.coords.s;
+  update_thresholds();
   for (;;) {
     if (!solve(rep)) {
       fill_counts(rep);
@@ -289,7 +297,9 @@ StepReport NeedleInsertion::step(const NeedlePose& pose) {
   place_needle_nodes();
   StepReport rep;
   const long before = mesh_.num_bisections();
+  refined_at_.setConstant(std::numeric_limits<double>::quiet_NaN());
   refine_at_tip();
+  rep.refined_at = refined_at_;
   rep.bisections = mesh_.num_bisections() - before;
   rep.intercepted = intercept();
   return run(rep);

@@ -23,9 +23,9 @@
 ///     F_d·sign·t); a slipping node re-sticks at its current s when its slip since its anchor
 ///     does not oppose the friction, sign·(s − anchor) ≤ 0 (with friction applied as a load its
 ///     tangential elastic force equals F_d at equilibrium, so the thesis' "elastic force below
-///     the dynamic threshold" is decided by this kinematic form); thresholds are recomputed
-///     from the profile at the current s; each change is followed by another solve, at most
-///     max_rearrangements times (then kRearrangementCycle);
+///     the dynamic threshold" is decided by this kinematic form); thresholds are computed
+///     from the profile once per step (dynamic_thresholds()); each change is followed by another
+///     solve, at most max_rearrangements times (then kRearrangementCycle);
 ///  6. release: needle nodes with s < 0 or s > L (slid off the tip or the base) become free.
 /// Anchors are reset to the current s at the start of every step.
 
@@ -37,6 +37,7 @@
 #include <incise/needle/needle.hpp>
 #include <incise/solver/report.hpp>
 
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -90,6 +91,9 @@ struct StepReport : Outcome<StepStatus, StepStatus::kOk, StepStatus::kNotRun> {
   /// Force the needle exerts on the material (N), Σ over needle nodes of −∇Π_el at the node,
   /// i.e. reactions plus friction; the needle feels its negative.
   Vec2 needle_force = Vec2::Zero();
+  /// Reference point refined around (the tip mapped to the reference configuration before the
+  /// solve); NaN when the tip was outside the body.
+  Vec2 refined_at = Vec2::Constant(std::numeric_limits<double>::quiet_NaN());
   solver::StopReason last_solver_status = solver::StopReason::kConverged;  ///< of the last solve
 };
 
@@ -131,8 +135,11 @@ class NeedleInsertion {
   const InsertionOptions& options() const { return options_; }
   /// The stopping rule used for every solve ((6.9), force scale E·d·H).
   const solver::StoppingRule& stopping_rule() const { return stop_; }
-  /// Dynamic friction thresholds of the needle nodes (N), entry k for needle_nodes()[k].
-  std::vector<double> dynamic_thresholds() const;
+  /// Dynamic friction thresholds F_d (N) of this step, entry k for needle_nodes()[k]: computed
+  /// from the profile at the nodes' s at the start of the step (after moving and intercepting)
+  /// and held through its rearrangements, so the solves and the tests of one step use the same
+  /// friction (the s of slipping nodes changes by at most the step's slip meanwhile).
+  const std::vector<double>& dynamic_thresholds() const { return thresholds_; }
   /// Whether vertex v is held by a fixed line.
   bool is_fixed_vertex(Index v) const;
 
@@ -146,6 +153,7 @@ class NeedleInsertion {
   int rearrange();
   StepReport run(StepReport rep);
   void fill_counts(StepReport& rep);
+  void update_thresholds();
 
   mesh::BisectionMesh mesh_;
   material::Material material_;
@@ -159,6 +167,8 @@ class NeedleInsertion {
   std::vector<NeedleNode> nodes_;
   NeedlePose pose_;
   bool has_pose_ = false;
+  std::vector<double> thresholds_;
+  Vec2 refined_at_ = Vec2::Zero();
   VecX last_gradient_;  ///< rotated gradient at the last solution (for rearrangements)
 };
 
