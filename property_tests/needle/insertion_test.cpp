@@ -270,6 +270,27 @@ TEST(NeedleInsertion, LargeNonlinearStepIsAReportedFailure) {
   EXPECT_TRUE(failed);
 }
 
+TEST(NeedleInsertion, RelocationPutsNeedleNodesOnTheShaft) {
+  // §6.8.6: intercepted nodes are projected onto the needle (d_perp = 0) and stay there.
+  InsertionOptions o;
+  o.relocate = true;
+  auto sim = make_sim(o);
+  const Vec2 dir(1.0, 0.3);
+  for (double d = -0.002; d <= 0.03; d += 0.5 * sim->options().h_ref) {
+    const NeedlePose pose = NeedlePose::make(Vec2(0.0, 0.04) + d * dir.normalized(), dir, 0.1);
+    const StepReport rep = sim->step(pose);
+    ASSERT_TRUE(rep.ok()) << rep.brief();
+    expect_valid_mesh(*sim);
+    const Eigen::Matrix2Xd x = sim->deformed();
+    for (const NeedleNode& n : sim->needle_nodes()) {
+      // Rounding of 0.1 m coordinates through u = x − X and back (≈ 1e-17 m each).
+      EXPECT_LT(std::abs(n.coords.perp), 1e-15);
+      EXPECT_LT(std::abs((x.col(n.vertex) - pose.tip).dot(pose.normal())), 1e-15);
+    }
+  }
+  EXPECT_GE(sim->needle_nodes().size(), 5u);
+}
+
 TEST(NeedleInsertion, BadInputIsRejected) {
   EXPECT_THROW(NeedlePose::make(Vec2(0, 0), Vec2(0, 0), 0.1), incise::ParameterError);
   EXPECT_THROW(NeedlePose::make(Vec2(0, 0), Vec2(1, 0), 0.0), incise::ParameterError);
