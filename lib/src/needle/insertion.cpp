@@ -198,6 +198,7 @@ bool NeedleInsertion::solve(StepReport& rep) {
   }
   ++rep.solves;
   rep.cg_iterations += sr.iterations;
+  rep.flops += sr.flops;
   rep.max_cg_iterations = std::max(rep.max_cg_iterations, sr.iterations);
   rep.last_solver_status = sr.status;
   if (!sr.ok()) {

@@ -37,6 +37,7 @@
 #include <incise/needle/needle.hpp>
 #include <incise/solver/report.hpp>
 
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -84,6 +85,7 @@ struct StepReport : Outcome<StepStatus, StepStatus::kOk, StepStatus::kNotRun> {
   int solves = 0;              ///< solves run (rearrangements + 1 when ok)
   long cg_iterations = 0;      ///< CG iterations over all solves
   long max_cg_iterations = 0;  ///< CG iterations of the longest solve
+  std::uint64_t flops = 0;     ///< counted flops of the solves (SolverReport::flops summed)
   long bisections = 0;         ///< simple bisections done by the refinement
   int intercepted = 0;         ///< nodes that became needle nodes
   int released = 0;            ///< needle nodes released (slid off)
