@@ -107,8 +107,10 @@ Solution solve(int k_start, int k_ref, bool direct, double epsilon = kEpsilon) {
 }
 
 /// Mean and max (mm) over the reference nodes of |u_ref − I u|.
-std::pair<double, double> errors(const Solution& ref, const Solution& s) {
+std::pair<double, double> errors(const Solution& ref, const Solution& s,
+                                 std::vector<double>* per_node = nullptr) {
   double sum = 0.0, mx = 0.0;
+  if (per_node) per_node->assign(static_cast<std::size_t>(ref.mesh.points().cols()), 0.0);
   const auto& pts = ref.mesh.points();
   const auto& conn = s.mesh.connectivity();
   const auto& sp = s.mesh.points();
@@ -127,8 +129,39 @@ std::pair<double, double> errors(const Solution& ref, const Solution& s) {
     const double err = (ref.u.segment<2>(2 * v) - ui).norm() * 1e3;
     sum += err;
     mx = std::max(mx, err);
+    if (per_node) (*per_node)[static_cast<std::size_t>(v)] = err;
   }
   return {sum / static_cast<double>(pts.cols()), mx};
+}
+
+/// Fig. 6.10 analogue: the error at every reference (uniform h7) node as a square of side h7,
+/// white (0) to red (`scale` mm), y up, with the coarse mesh `s` drawn over it.
+void write_error_svg(const std::string& path, const Solution& ref, const std::vector<double>& err,
+                     const Solution& s, double scale, const std::string& title) {
+  const double px = 4000.0;  // pixels per metre: 400 px for the 0.1 m slab
+  const double h = incise::mesh::thesis_slab_spacing(7) * px;
+  std::ofstream out(path);
+  out << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"420\" height=\"450\">\n"
+      << "<text x=\"10\" y=\"20\" font-size=\"13\">" << title << "</text>\n"
+      << "<g transform=\"translate(10,440) scale(1,-1)\" shape-rendering=\"crispEdges\">\n";
+  const auto& pts = ref.mesh.points();
+  for (Eigen::Index v = 0; v < pts.cols(); ++v) {
+    const double f = std::min(1.0, err[static_cast<std::size_t>(v)] / scale);
+    const int gb = static_cast<int>(std::lround(255 * (1 - f)));
+    out << "<rect x=\"" << pts(0, v) * px - h / 2 << "\" y=\"" << pts(1, v) * px - h / 2
+        << "\" width=\"" << h << "\" height=\"" << h << "\" fill=\"rgb(255," << gb << "," << gb
+        << ")\"/>\n";
+  }
+  const auto data = s.mesh.to_mesh_data();
+  out << "<g stroke=\"black\" stroke-width=\"0.3\" fill=\"none\">\n";
+  for (Index c = 0; c < data.num_cells(); ++c) {
+    out << "<polygon points=\"";
+    for (int i = 0; i < 3; ++i)
+      out << data.points(0, data.cells(i, c)) * px << "," << data.points(1, data.cells(i, c)) * px
+          << " ";
+    out << "\"/>\n";
+  }
+  out << "</g></g></svg>\n";
 }
 
 // Thesis Table 6.2 (CG iterations), rows h_start = h1..h6, columns h_ref = h3..h7 (0: empty).
@@ -160,7 +193,25 @@ TEST(Chapter6, Table6_2And6_3_MeshDensity) {
       const Solution s = solve(ks, kr, false);
       const Solution exact = solve(ks, kr, true);
       it[{ks, kr}] = s.iterations;
-      err[{ks, kr}] = errors(ref, exact);
+      std::vector<double> per_node;
+      err[{ks, kr}] = errors(ref, exact, &per_node);
+      if (kr == 6 && (ks == 6 || ks == 3)) {
+        // Fig. 6.10: top h6/h6, bottom h3/h6; each scaled to its own maximum.
+        const std::string name = "fig6_10_h" + std::to_string(ks) + "_h6.svg";
+        const double top = err[{ks, kr}].second;
+        char title[160];
+        std::snprintf(title, sizeof title,
+                      "displacement error, h_start = h%d, h_ref = h6 (white 0, red %.3f mm)", ks,
+                      top);
+        write_error_svg(std::string(INCISE_CH6_OUTPUT_DIR) + "/" + name, ref, per_node, exact, top,
+                        title);
+        Eigen::Index worst = 0;
+        for (std::size_t v = 0; v < per_node.size(); ++v)
+          if (per_node[v] > per_node[static_cast<std::size_t>(worst)])
+            worst = static_cast<Eigen::Index>(v);
+        std::printf("h%d/h6: largest error %.3f mm at (%.1f, %.1f) mm\n", ks, top,
+                    1e3 * ref.mesh.points()(0, worst), 1e3 * ref.mesh.points()(1, worst));
+      }
       cg_err[{ks, kr}] = errors(exact, s);
       const int c = kr - 3, r = ks - 1;
       csv << "h" << ks << ",h" << kr << "," << s.triangles << "," << s.iterations << ","
