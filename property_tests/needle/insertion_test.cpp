@@ -91,6 +91,47 @@ std::pair<int, int> expect_friction_inequalities(NeedleInsertion& sim) {
   return counts;
 }
 
+/// The (6.9) threshold on ‖r‖ at the current state (the rule every solve stopped by).
+double rule_threshold(NeedleInsertion& sim) {
+  incise::needle::NeedleProblem np(sim.problem(), sim.pose(), sim.needle_nodes(),
+                                   sim.dynamic_thresholds());
+  VecX gr;
+  EXPECT_EQ(np.gradient(np.to_rotated(sim.displacement()), gr), incise::EvalStatus::kOk);
+  return incise::solver::residual_threshold(sim.stopping_rule(), np.external_force_norm(),
+                                            incise::solver::fixed_norm(np, gr), np.size());
+}
+
+/// StepReport::needle_force is Σ ∇Π_el over the needle nodes (recomputed here; before release,
+/// so only when nothing was released), and the wall holds the needle's pull: the free nodes are
+/// in equilibrium to the (6.9) threshold, so the reactions at the fixed nodes balance the needle
+/// force to √m times it (m free DOFs).
+void expect_needle_force(NeedleInsertion& sim, const StepReport& rep) {
+  if (rep.released > 0) return;
+  const double threshold = rule_threshold(sim);
+  VecX g;
+  ASSERT_EQ(sim.problem().gradient(sim.displacement(), g), incise::EvalStatus::kOk);
+  Vec2 needle = Vec2::Zero(), wall = Vec2::Zero();
+  std::vector<char> is_needle(static_cast<std::size_t>(g.size() / 2), 0);
+  for (const NeedleNode& n : sim.needle_nodes()) {
+    needle += g.segment<2>(2 * n.vertex);
+    is_needle[static_cast<std::size_t>(n.vertex)] = 1;
+  }
+  double free_sq = 0.0;
+  long free = 0;
+  for (Eigen::Index v = 0; v < g.size() / 2; ++v) {
+    if (sim.problem().is_fixed(2 * v))
+      wall += g.segment<2>(2 * v);
+    else if (!is_needle[static_cast<std::size_t>(v)]) {
+      free_sq += g.segment<2>(2 * v).squaredNorm();
+      free += 2;
+    }
+  }
+  // Same gradient, summed in another order: rounding of O(1 N) sums.
+  EXPECT_LT((rep.needle_force - needle).norm(), 1e-9 * (1.0 + needle.norm()));
+  EXPECT_LE(std::sqrt(free_sq), threshold);
+  EXPECT_LE((needle + wall).norm(), std::sqrt(double(free)) * threshold + 1e-12);
+}
+
 TEST(NeedleInsertion, NeedleNodesMoveWithTheNeedleByTheirCoordinates) {
   auto sim = make_sim();
   const Vec2 dir(1.0, 0.1);
@@ -150,6 +191,7 @@ TEST(NeedleInsertion, RandomInsertionsKeepMeshValidAndFrictionInequalities) {
       const auto c = expect_friction_inequalities(*sim);
       sticking += c.first;
       slipping += c.second;
+      expect_needle_force(*sim, rep);
       rearranged += rep.rearrangements;
     }
   }

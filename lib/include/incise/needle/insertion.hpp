@@ -155,7 +155,7 @@ class NeedleInsertion {
   bool solve(StepReport& rep);
   int rearrange();
   StepReport run(StepReport rep);
-  void fill_counts(StepReport& rep);
+  void fill_counts(StepReport& rep, bool converged);
   void update_thresholds();
 
   mesh::BisectionMesh mesh_;
