@@ -230,7 +230,7 @@ int NeedleInsertion::rearrange() {
         n.anchor = n.coords.s;
         ++changes;
       }
-    } else if (n.friction_sign * (n.coords.s - n.anchor) <= 0.0) {
+    } else if (n.friction_sign * (n.coords.s - n.anchor) < 0.0) {
       n.state = NodeState::kStick;
       n.friction_sign = 0;
       n.anchor = n.coords.s;

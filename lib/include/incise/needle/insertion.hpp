@@ -20,8 +20,9 @@
 ///     force scale E·d·H (H = diagonal of the reference bounding box);
 ///  5. rearrange (§6.3.2) until no node changes state: a sticking node whose tangential reaction
 ///     |g̃_t| exceeds its static threshold slips (friction sign = sign g̃_t, friction load
-///     F_d·sign·t); a slipping node re-sticks at its current s when its slip since its anchor
-///     does not oppose the friction, sign·(s − anchor) ≤ 0 (with friction applied as a load its
+///     F_d·sign·t); a slipping node re-sticks at its current s when it slid against the
+///     friction since its anchor, sign·(s − anchor) < 0 (zero slip stays slipping: it is the
+///     same configuration as sticking with reaction F_d ≤ F_s; with friction applied as a load its
 ///     tangential elastic force equals F_d at equilibrium, so the thesis' "elastic force below
 ///     the dynamic threshold" is decided by this kinematic form); thresholds are computed
 ///     from the profile once per step (dynamic_thresholds()); each change is followed by another
