@@ -121,6 +121,9 @@ void NeedleInsertion::refine_at_tip() {
     break;
   }
   if (!found) return;  // the tip is outside the body
+  // Through an inverted deformed triangle the mapped point can leave the reference body
+  // (refine_around would throw): no refinement at this step then.
+  if (!mesh_.locate(reference).valid()) return;
   refined_at_ = reference;
   const Index before = mesh_.connectivity().num_vertices();
   // Triangles congruent to the uniform h_ref slab's have legs h_ref, hypotenuse √2·h_ref.

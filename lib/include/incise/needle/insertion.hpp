@@ -7,10 +7,12 @@
 ///  1. move needle: every needle node keeps its (s, d_perp) (needle.hpp) relative to the new
 ///     pose (the warm start of the solve; §6.7);
 ///  2. refine: the tip's reference position (the deformed triangle containing the tip, mapped
-///     back barycentrically) is refined with BisectionMesh::refine_around until the triangle
-///     there is congruent to those of the uniform h_ref slab (hypotenuse ≤ √2·h_ref); the
-///     displacement of each new vertex is the mean of its two parents' (exact for linear
-///     elements, so Π is unchanged) and a new vertex on a fixed line is fixed;
+///     back barycentrically; no refinement when the tip is outside the deformed body or maps
+///     outside the reference one through an inverted triangle) is refined with
+///     BisectionMesh::refine_around until the triangle there is congruent to those of the uniform
+///     h_ref slab (hypotenuse ≤ √2·h_ref); the displacement of each new vertex is the mean of its
+///     two parents' (exact for linear elements, so Π is unchanged) and a new vertex on a fixed line
+///     is fixed;
 ///  3. intercept (§6.4): every mesh edge crossed by the shaft segment [base, tip] in the
 ///     deformed configuration makes its endpoint closest to the crossing a needle node (sticking,
 ///     coordinates from its current position) unless it already is one, is fixed, or lies
