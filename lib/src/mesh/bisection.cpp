@@ -35,6 +35,14 @@ BisectionMesh::BisectionMesh(const MeshData& mesh)
     tree_.push_back(n);
   }
   num_roots_ = static_cast<int>(tree_.size());
+  num_start_vertices_ = conn_.num_vertices();
+}
+
+std::array<Index, 2> BisectionMesh::parents(Index v) const {
+  INCISE_CHECK(v >= 0 && v < conn_.num_vertices(),
+               "parents: vertex " + std::to_string(v) + " is out of range");
+  if (v < num_start_vertices_) return {{-1, -1}};
+  return parents_[static_cast<std::size_t>(v - num_start_vertices_)];
 }
 
 int BisectionMesh::node_of(ElementHandle e) const {
@@ -77,6 +85,8 @@ Index BisectionMesh::simple_bisect(Index p, Index q) {
   const Index n = conn_.add_vertex();
   points_.conservativeResize(Eigen::NoChange, static_cast<Eigen::Index>(n) + 1);
   points_.col(n) = 0.5 * (points_.col(p) + points_.col(q));
+  parents_.resize(static_cast<std::size_t>(n - num_start_vertices_) + 1, {{-1, -1}});
+  parents_[static_cast<std::size_t>(n - num_start_vertices_)] = {{p, q}};
   std::vector<Simplex> add;
   std::vector<int> parents;
   for (const ElementHandle e : f) {

@@ -48,6 +48,11 @@ class BisectionMesh {
   MeshData to_mesh_data() const { return conn_.to_mesh_data(points_); }
   /// Simple bisections performed so far.
   long num_bisections() const { return bisections_; }
+  /// The edge (p, q) whose midpoint vertex v is (v was made by simple_bisect(p, q)), or
+  /// {−1, −1} for a vertex of the starting mesh. Vertex numbers never change, and p, q < v, so
+  /// a nodal field of linear elements is carried to a refined mesh exactly by visiting the new
+  /// vertices in increasing order and averaging their two parents.
+  std::array<Index, 2> parents(Index v) const;
 
   /// The hypotenuse (longest edge) of live element e, as its two vertices.
   std::array<Index, 2> hypotenuse(ElementHandle e) const;
@@ -93,6 +98,9 @@ class BisectionMesh {
   std::vector<TreeNode> tree_;
   int num_roots_ = 0;
   std::vector<int> node_of_slot_;  ///< element slot → tree node of the live element there
+  std::vector<std::array<Index, 2>> parents_;  ///< per vertex made by simple_bisect, from
+                                               ///< num_start_vertices_ on
+  Index num_start_vertices_ = 0;
   long bisections_ = 0;
 };
 

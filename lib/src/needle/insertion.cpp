@@ -1,0 +1,330 @@
+#include <incise/core/error.hpp>
+#include <incise/needle/insertion.hpp>
+#include <incise/needle/needle_problem.hpp>
+#include <incise/solver/linear_cg.hpp>
+#include <incise/solver/nonlinear_cg.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+
+namespace incise::needle {
+
+namespace {
+
+double cross(const Vec2& a, const Vec2& b) {
+  return a(0) * b(1) - a(1) * b(0);
+}
+
+}  // namespace
+
+const char* to_string(StepStatus s) {
+  switch (s) {
+    case StepStatus::kOk: return "ok";
+    case StepStatus::kSolverFailed: return "solver-failed";
+    case StepStatus::kRearrangementCycle: return "rearrangement-cycle";
+    case StepStatus::kNotRun: return "not-run";
+  }
+  return "?";
+}
+
+NeedleInsertion::NeedleInsertion(const mesh::MeshData& start, const material::Material& material,
+                                 double thickness, std::vector<FixedLine> fixed,
+                                 FrictionProfile friction, InsertionOptions options)
+    : mesh_(start),
+      material_(material),
+      thickness_(thickness),
+      fixed_lines_(std::move(fixed)),
+      friction_(friction),
+      options_(options) {
+  friction_.validate();
+  INCISE_CHECK_PARAM(std::isfinite(thickness) && thickness > 0.0,
+                     "thickness must be finite and > 0, got " + std::to_string(thickness));
+  INCISE_CHECK_PARAM(std::isfinite(options_.h_ref) && options_.h_ref > 0.0,
+                     "h_ref must be finite and > 0, got " + std::to_string(options_.h_ref));
+  INCISE_CHECK_PARAM(std::isfinite(options_.epsilon) && options_.epsilon > 0.0,
+                     "epsilon must be finite and > 0, got " + std::to_string(options_.epsilon));
+  INCISE_CHECK_PARAM(std::isfinite(options_.epsilon_round) && options_.epsilon_round >= 0.0,
+                     "epsilon_round must be finite and >= 0");
+  INCISE_CHECK_PARAM(options_.max_rearrangements >= 0, "max_rearrangements must be >= 0");
+  INCISE_CHECK_PARAM(options_.max_iterations > 0, "max_iterations must be > 0");
+  for (const FixedLine& l : fixed_lines_)
+    INCISE_CHECK_PARAM((l.axis == 0 || l.axis == 1) && std::isfinite(l.value),
+                       "fixed line needs axis 0 or 1 and a finite value");
+  const Eigen::Matrix2Xd x = start.points.topRows<2>();
+  const double diameter = (x.rowwise().maxCoeff() - x.rowwise().minCoeff()).norm();
+  stop_.rule = solver::ResidualRule::kWithReactions;
+  stop_.epsilon = options_.epsilon;
+  stop_.epsilon_round = options_.epsilon_round;
+  stop_.force_scale = material_.parameters().youngs_modulus * thickness_ * diameter;  // E·d·H
+  rebuild_problem();
+  u_ = VecX::Zero(problem_->size());
+}
+
+NeedleInsertion::~NeedleInsertion() = default;
+
+bool NeedleInsertion::is_fixed_vertex(Index v) const {
+  for (const FixedLine& l : fixed_lines_)
+    if (std::abs(mesh_.points()(l.axis, v) - l.value) <= 1e-9) return true;
+  return false;
+}
+
+void NeedleInsertion::rebuild_problem() {
+  problem_ = std::make_unique<fem::PlaneStressProblem>(mesh_.to_mesh_data(), material_, thickness_);
+  std::vector<Index> fixed;
+  for (Index v = 0; v < problem_->num_nodes(); ++v)
+    if (is_fixed_vertex(v)) fixed.push_back(v);
+  problem_->fix_nodes(fixed);
+}
+
+Eigen::Matrix2Xd NeedleInsertion::deformed() const {
+  Eigen::Matrix2Xd x = mesh_.points().topRows<2>();
+  for (Eigen::Index v = 0; v < x.cols(); ++v) x.col(v) += u_.segment<2>(2 * v);
+  return x;
+}
+
+void NeedleInsertion::update_thresholds() {
+  std::vector<double> s;
+  s.reserve(nodes_.size());
+  for (const NeedleNode& n : nodes_) s.push_back(n.coords.s);
+  thresholds_ = friction_.dynamic_thresholds(s);
+}
+
+void NeedleInsertion::place_needle_nodes() {
+  for (const NeedleNode& n : nodes_) {
+    const Vec2 x = pose_.point(n.coords);
+    u_.segment<2>(2 * n.vertex) = x - mesh_.points().col(n.vertex).head<2>();
+  }
+}
+
+void NeedleInsertion::refine_at_tip() {
+  const Eigen::Matrix2Xd x = deformed();
+  const Vec2 tip = pose_.tip;
+  Vec2 reference;
+  bool found = false;
+  const mesh::Connectivity& conn = mesh_.connectivity();
+  for (const mesh::ElementHandle e : conn.elements()) {
+    const mesh::Simplex& s = conn.simplex(e);
+    const Vec2 a = x.col(s.vertex(0)), b = x.col(s.vertex(1)), c = x.col(s.vertex(2));
+    const double area = cross(b - a, c - a);
+    // An inverted deformed triangle (area < 0) still maps barycentrically.
+    if (area == 0.0) continue;
+    const double la = cross(b - tip, c - tip) / area, lb = cross(c - tip, a - tip) / area;
+    const double lc = 1.0 - la - lb;
+    if (la < -1e-12 || lb < -1e-12 || lc < -1e-12) continue;
+    reference = la * mesh_.points().col(s.vertex(0)).head<2>() +
+                lb * mesh_.points().col(s.vertex(1)).head<2>() +
+                lc * mesh_.points().col(s.vertex(2)).head<2>();
+    found = true;
+    break;
+  }
+  if (!found) return;  // the tip is outside the body
+  // Through an inverted deformed triangle the mapped point can leave the reference body
+  // (refine_around would throw): no refinement at this step then.
+  if (!mesh_.locate(reference).valid()) return;
+  refined_at_ = reference;
+  const Index before = mesh_.connectivity().num_vertices();
+  // Triangles congruent to the uniform h_ref slab's have legs h_ref, hypotenuse √2·h_ref.
+  mesh_.refine_around(reference, std::sqrt(2.0) * options_.h_ref * (1.0 + 1e-9));
+  const Index after = mesh_.connectivity().num_vertices();
+  if (after == before) return;
+  u_.conservativeResize(2 * static_cast<Eigen::Index>(after));
+  for (Index v = before; v < after; ++v) {
+    const auto p = mesh_.parents(v);
+    u_.segment<2>(2 * v) = 0.5 * (u_.segment<2>(2 * p[0]) + u_.segment<2>(2 * p[1]));
+  }
+  rebuild_problem();
+  for (Index v = before; v < after; ++v)
+    if (is_fixed_vertex(v)) u_.segment<2>(2 * v).setZero();
+}
+
+int NeedleInsertion::intercept() {
+  const Eigen::Matrix2Xd x = deformed();
+  const mesh::Connectivity& conn = mesh_.connectivity();
+  std::vector<std::pair<Index, Index>> edges;
+  for (const mesh::ElementHandle e : conn.elements()) {
+    const mesh::Simplex& s = conn.simplex(e);
+    for (int i = 0; i < 3; ++i) {
+      Index p = s.vertex(i), q = s.vertex((i + 1) % 3);
+      if (p > q) std::swap(p, q);
+      edges.emplace_back(p, q);
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  std::vector<char> is_needle(static_cast<std::size_t>(x.cols()), 0);
+  for (const NeedleNode& n : nodes_) is_needle[static_cast<std::size_t>(n.vertex)] = 1;
+  const Vec2 p0 = pose_.base(), d = pose_.tip - p0;
+  int added = 0;
+  for (const auto& [p, q] : edges) {
+    const Vec2 a = x.col(p), e = x.col(q) - a;
+    // a + α e = p0 + β d  ⇒  α = cross(p0 − a, d)/cross(e, d), β = cross(p0 − a, e)/cross(e, d).
+    const double den = cross(e, d);
+    if (den == 0.0) continue;
+    const double alpha = cross(p0 - a, d) / den, beta = cross(p0 - a, e) / den;
+    if (alpha < 0.0 || alpha > 1.0 || beta < 0.0 || beta > 1.0) continue;
+    const Index v = alpha < 0.5 ? p : q;
+    if (is_needle[static_cast<std::size_t>(v)] || is_fixed_vertex(v)) continue;
+    NeedleNode n;
+    n.vertex = v;
+    n.state = NodeState::kStick;
+    n.coords = pose_.coordinates(x.col(v));
+    if (n.coords.s < 0.0 || n.coords.s > pose_.length) continue;
+    if (options_.relocate) {
+      n.coords.perp = 0.0;
+      u_.segment<2>(2 * v) = pose_.point(n.coords) - mesh_.points().col(v).head<2>();
+    }
+    n.anchor = n.coords.s;
+    nodes_.push_back(n);
+    is_needle[static_cast<std::size_t>(v)] = 1;
+    ++added;
+  }
+  return added;
+}
+
+bool NeedleInsertion::solve(StepReport& rep) {
+  NeedleProblem np(*problem_, pose_, nodes_, thresholds_);
+  VecX ur = np.to_rotated(u_);
+  solver::SolverReport sr;
+  if (options_.relaxation == Relaxation::kLinearCg) {
+    solver::LinearCgOptions o;
+    o.stop = stop_;
+    o.budget.max_iterations = options_.max_iterations;
+    sr = solver::linear_cg(np, ur, o);
+  } else {
+    solver::NonlinearCgOptions o;
+    o.stop = stop_;
+    o.budget.max_iterations = options_.max_iterations;
+    sr = solver::nonlinear_cg(np, ur, o);
+  }
+  ++rep.solves;
+  rep.cg_iterations += sr.iterations;
+  rep.flops += sr.flops;
+  rep.max_cg_iterations = std::max(rep.max_cg_iterations, sr.iterations);
+  rep.last_solver_status = sr.status;
+  if (!sr.ok()) {
+    rep.status = StepStatus::kSolverFailed;
+    rep.message = "solve " + std::to_string(rep.solves) + ": " + sr.brief();
+    return false;
+  }
+  u_ = np.to_original(ur);
+  const Eigen::Matrix2Xd x = deformed();
+  for (NeedleNode& n : nodes_) n.coords = pose_.coordinates(x.col(n.vertex));
+  if (np.gradient(ur, last_gradient_) != EvalStatus::kOk) {
+    rep.status = StepStatus::kSolverFailed;
+    rep.message = "gradient at the solution could not be evaluated";
+    return false;
+  }
+  return true;
+}
+
+int NeedleInsertion::rearrange() {
+  const std::vector<double>& fd = thresholds_;
+  int changes = 0;
+  for (std::size_t k = 0; k < nodes_.size(); ++k) {
+    NeedleNode& n = nodes_[k];
+    if (n.state == NodeState::kStick) {
+      const double r = last_gradient_[2 * n.vertex];  // tangential reaction g̃_t
+      if (std::abs(r) > friction_.static_factor * fd[k]) {
+        n.state = NodeState::kSlip;
+        n.friction_sign = r > 0.0 ? 1 : -1;
+        n.anchor = n.coords.s;
+        ++changes;
+      }
+    } else if (n.friction_sign * (n.coords.s - n.anchor) < 0.0) {
+      n.state = NodeState::kStick;
+      n.friction_sign = 0;
+      n.anchor = n.coords.s;
+      ++changes;
+    }
+  }
+  return changes;
+}
+
+int NeedleInsertion::release() {
+  const std::size_t before = nodes_.size();
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < nodes_.size(); ++k) {
+    const NeedleNode& n = nodes_[k];
+    if (n.coords.s < 0.0 || n.coords.s > pose_.length) continue;
+    nodes_[kept] = n;
+    thresholds_[kept] = thresholds_[k];
+    ++kept;
+  }
+  nodes_.resize(kept);
+  thresholds_.resize(kept);
+  return static_cast<int>(before - kept);
+}
+
+void NeedleInsertion::fill_counts(StepReport& rep, bool converged) {
+  rep.sticking = rep.slipping = 0;
+  for (const NeedleNode& n : nodes_) (n.state == NodeState::kStick ? rep.sticking : rep.slipping)++;
+  rep.needle_force.setZero();
+  if (converged) {
+    // No state changed since the last solve: its rotated gradient g̃ = Rᵀ(∇Π_el − f_friction)
+    // gives ∇Π_el at each needle node without another sweep over the elements.
+    const Vec2 t = pose_.tangent(), n = pose_.normal();
+    for (std::size_t k = 0; k < nodes_.size(); ++k) {
+      const NeedleNode& nd = nodes_[k];
+      const Vec2 g = last_gradient_[2 * nd.vertex] * t + last_gradient_[2 * nd.vertex + 1] * n;
+      rep.needle_force +=
+          g + (nd.state == NodeState::kSlip ? nd.friction_sign * thresholds_[k] : 0.0) * t;
+    }
+    return;
+  }
+  VecX g;
+  if (problem_->gradient(u_, g) == EvalStatus::kOk)
+    for (const NeedleNode& nd : nodes_) rep.needle_force += g.segment<2>(2 * nd.vertex);
+}
+
+StepReport NeedleInsertion::run(StepReport rep) {
+  for (NeedleNode& n : nodes_) n.anchor = n.coords.s;
+  update_thresholds();
+  for (;;) {
+    if (!solve(rep)) {
+      fill_counts(rep, false);
+      return rep;
+    }
+    const int changes = rearrange();
+    if (changes == 0) break;
+    if (rep.rearrangements >= options_.max_rearrangements) {
+      rep.status = StepStatus::kRearrangementCycle;
+      rep.message = std::to_string(changes) + " needle nodes still change state after " +
+                    std::to_string(rep.rearrangements) +
+                    " rearrangements (max_rearrangements): the stick-slip iteration cycles";
+      fill_counts(rep, false);
+      return rep;
+    }
+    ++rep.rearrangements;
+  }
+  fill_counts(rep, true);
+  rep.released = release();
+  rep.status = StepStatus::kOk;
+  return rep;
+}
+
+StepReport NeedleInsertion::step(const NeedlePose& pose) {
+  pose.validate();
+  NeedlePose p = pose;
+  p.direction.normalize();
+  pose_ = p;
+  has_pose_ = true;
+  place_needle_nodes();
+  StepReport rep;
+  const long before = mesh_.num_bisections();
+  refined_at_.setConstant(std::numeric_limits<double>::quiet_NaN());
+  refine_at_tip();
+  rep.refined_at = refined_at_;
+  rep.bisections = mesh_.num_bisections() - before;
+  rep.intercepted = intercept();
+  return run(rep);
+}
+
+StepReport NeedleInsertion::settle() {
+  INCISE_CHECK(has_pose_, "settle: no step has been taken");
+  return run(StepReport{});
+}
+
+}  // namespace incise::needle

@@ -1,0 +1,201 @@
+#include <incise/core/error.hpp>
+#include <incise/linalg/cholmod_factor.hpp>
+#include <incise/needle/needle_problem.hpp>
+
+#include <string>
+#include <vector>
+
+namespace incise::needle {
+
+NeedleProblem::NeedleProblem(fem::PlaneStressProblem& base, const NeedlePose& pose,
+                             const std::vector<NeedleNode>& nodes,
+                             const std::vector<double>& friction)
+    : base_(base), t_(pose.tangent()), n_(pose.normal()) {
+  INCISE_CHECK(friction.size() == nodes.size(), "NeedleProblem: friction has the wrong size");
+  const auto n = static_cast<std::size_t>(base.size());
+  fixed_.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) fixed_[i] = base.is_fixed(static_cast<Eigen::Index>(i));
+  f_fric_ = VecX::Zero(base.size());
+  std::vector<char> seen(static_cast<std::size_t>(base.num_nodes()), 0);
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    const NeedleNode& nd = nodes[k];
+    const Index v = nd.vertex;
+    INCISE_CHECK(v >= 0 && v < base.num_nodes(),
+                 "NeedleProblem: needle vertex " + std::to_string(v) + " is out of range");
+    INCISE_CHECK(!seen[static_cast<std::size_t>(v)],
+                 "NeedleProblem: needle vertex " + std::to_string(v) + " is listed twice");
+    seen[static_cast<std::size_t>(v)] = 1;
+    INCISE_CHECK(!base.is_fixed(2 * v) && !base.is_fixed(2 * v + 1),
+                 "NeedleProblem: needle vertex " + std::to_string(v) + " is fixed in the slab");
+    needle_vertices_.push_back(v);
+    fixed_[static_cast<std::size_t>(2 * v + 1)] = 1;
+    if (nd.state == NodeState::kStick) {
+      fixed_[static_cast<std::size_t>(2 * v)] = 1;
+    } else {
+      INCISE_CHECK(
+          nd.friction_sign == 1 || nd.friction_sign == -1,
+          "NeedleProblem: slipping vertex " + std::to_string(v) + " needs friction_sign +1 or -1");
+      f_fric_.segment<2>(2 * v) = (nd.friction_sign * friction[k]) * t_;
+    }
+  }
+}
+
+void NeedleProblem::rotate(VecX& v, bool transpose) const {
+  // Rᵀ maps (x, y) to (x·t, x·n); R maps (a, b) back to a·t + b·n.
+  for (const Index i : needle_vertices_) {
+    const Vec2 x = v.segment<2>(2 * i);
+    if (transpose)
+      v.segment<2>(2 * i) = Vec2(x.dot(t_), x.dot(n_));
+    else
+      v.segment<2>(2 * i) = x(0) * t_ + x(1) * n_;
+  }
+  own_flops_ += 6 * needle_vertices_.size();
+}
+
+VecX NeedleProblem::to_rotated(const VecX& u) const {
+  INCISE_CHECK(u.size() == size(), "NeedleProblem::to_rotated: wrong size");
+  VecX r = u;
+  rotate(r, true);
+  return r;
+}
+
+VecX NeedleProblem::to_original(const VecX& rotated) const {
+  INCISE_CHECK(rotated.size() == size(), "NeedleProblem::to_original: wrong size");
+  VecX u = rotated;
+  rotate(u, false);
+  return u;
+}
+
+void NeedleProblem::project_original(VecX& v) const {
+  rotate(v, true);
+  project(v);
+  rotate(v, false);
+}
+
+Eigen::SparseMatrix<double> NeedleProblem::rotation() const {
+  std::vector<Eigen::Triplet<double>> t;
+  std::vector<char> needle(static_cast<std::size_t>(base_.num_nodes()), 0);
+  for (const Index i : needle_vertices_) {
+    needle[static_cast<std::size_t>(i)] = 1;
+    // Columns: rotated component a (along t) and b (along n) of node i.
+    t.emplace_back(2 * i, 2 * i, t_(0));
+    t.emplace_back(2 * i + 1, 2 * i, t_(1));
+    t.emplace_back(2 * i, 2 * i + 1, n_(0));
+    t.emplace_back(2 * i + 1, 2 * i + 1, n_(1));
+  }
+  for (Index i = 0; i < base_.num_nodes(); ++i)
+    if (!needle[static_cast<std::size_t>(i)]) {
+      t.emplace_back(2 * i, 2 * i, 1.0);
+      t.emplace_back(2 * i + 1, 2 * i + 1, 1.0);
+    }
+  Eigen::SparseMatrix<double> r(size(), size());
+  r.setFromTriplets(t.begin(), t.end());
+  return r;
+}
+
+EvalStatus NeedleProblem::energy(const VecX& u, double& energy) {
+  const VecX x = to_original(u);
+  const EvalStatus s = base_.energy(x, energy);
+  if (s == EvalStatus::kOk) energy -= f_fric_.dot(x);
+  own_flops_ += 2 * static_cast<std::uint64_t>(size());
+  return s;
+}
+
+EvalStatus NeedleProblem::gradient(const VecX& u, VecX& g, double* energy) {
+  const VecX x = to_original(u);
+  const EvalStatus s = base_.gradient(x, g, energy);
+  if (s != EvalStatus::kOk) return s;
+  g -= f_fric_;
+  if (energy) *energy -= f_fric_.dot(x);
+  own_flops_ += 3 * static_cast<std::uint64_t>(size());
+  rotate(g, true);
+  return s;
+}
+
+EvalStatus NeedleProblem::hessian_product(const VecX& u, const VecX& d, VecX& out) {
+  const VecX x = to_original(u);
+  const VecX dx = to_original(d);
+  const EvalStatus s = base_.hessian_product(x, dx, out);
+  if (s == EvalStatus::kOk) rotate(out, true);
+  return s;
+}
+
+void NeedleProblem::project(VecX& v) const {
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    if (fixed_[static_cast<std::size_t>(i)]) v[i] = 0.0;
+}
+
+double NeedleProblem::external_force_norm() const {
+  VecX f = base_.external_force() + f_fric_;
+  rotate(f, true);
+  project(f);
+  return f.norm();
+}
+
+std::uint64_t NeedleProblem::flops() const {
+  return base_.flops() + own_flops_;
+}
+
+const char* to_string(DirectStatus s) {
+  switch (s) {
+    case DirectStatus::kOk: return "ok";
+    case DirectStatus::kEvalFailed: return "eval-failed";
+    case DirectStatus::kFactorFailed: return "factor-failed";
+  }
+  return "?";
+}
+
+DirectOutcome direct_solve(NeedleProblem& problem, VecX& rotated) {
+  DirectOutcome out;
+  fem::PlaneStressProblem& base = problem.base();
+  const VecX x = problem.to_original(rotated);
+  Eigen::SparseMatrix<double> k;
+  EvalStatus s = base.tangent(x, k);
+  VecX g;
+  if (s == EvalStatus::kOk) s = problem.gradient(rotated, g);
+  if (s != EvalStatus::kOk || !g.allFinite()) {
+    out.status = DirectStatus::kEvalFailed;
+    out.message = std::string("tangent or gradient: ") + incise::to_string(s);
+    return out;
+  }
+  const Eigen::SparseMatrix<double> r = problem.rotation();
+  const Eigen::SparseMatrix<double> kr = Eigen::SparseMatrix<double>(r.transpose()) * k * r;
+  const Eigen::Index n = problem.size();
+  std::vector<int> free_index(static_cast<std::size_t>(n), -1);
+  std::vector<Eigen::Index> free;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (!problem.is_fixed(i)) {
+      free_index[static_cast<std::size_t>(i)] = static_cast<int>(free.size());
+      free.push_back(i);
+    }
+  const auto m = static_cast<Eigen::Index>(free.size());
+  if (m == 0) {
+    out.status = DirectStatus::kOk;
+    return out;
+  }
+  std::vector<Eigen::Triplet<double>> trip;
+  for (int c = 0; c < kr.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(kr, c); it; ++it) {
+      const int fr = free_index[static_cast<std::size_t>(it.row())];
+      const int fc = free_index[static_cast<std::size_t>(it.col())];
+      if (fr >= 0 && fc >= 0 && fr >= fc) trip.emplace_back(fr, fc, it.value());
+    }
+  linalg::SparseMatrix kff(static_cast<int>(m), static_cast<int>(m));
+  kff.setFromTriplets(trip.begin(), trip.end());
+  VecX rhs(m);
+  for (Eigen::Index j = 0; j < m; ++j) rhs[j] = -g[free[static_cast<std::size_t>(j)]];
+  linalg::CholmodFactor factor;
+  VecX delta;
+  if (factor.compute(kff, 1) != linalg::FactorStatus::kOk ||
+      factor.solve(rhs, delta) != linalg::FactorStatus::kOk) {
+    out.status = DirectStatus::kFactorFailed;
+    out.message =
+        std::string("CHOLMOD: ") + linalg::to_string(factor.info()) + " " + factor.message();
+    return out;
+  }
+  for (Eigen::Index j = 0; j < m; ++j) rotated[free[static_cast<std::size_t>(j)]] += delta[j];
+  out.status = DirectStatus::kOk;
+  return out;
+}
+
+}  // namespace incise::needle
