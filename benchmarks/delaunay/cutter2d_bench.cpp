@@ -22,7 +22,8 @@ using namespace incise::delaunay;
 const Triangulation& start(int n) {
   static std::map<int, Triangulation> cache;
   auto it = cache.find(n);
-  if (it == cache.end()) it = cache.emplace(n, Triangulation(mesh::make_rectangle(n, n, n, n))).first;
+  if (it == cache.end())
+    it = cache.emplace(n, Triangulation(mesh::make_rectangle(n, n, n, n))).first;
   return it->second;
 }
 
@@ -39,7 +40,8 @@ double cut(int n, Counts& c) {
   (void)cutter.move_to(Vec2(-0.5, y));
   const auto t0 = std::chrono::steady_clock::now();
   for (int k = 1; k <= 150; ++k) {
-    const CutMove2DReport r = cutter.move_to(Vec2(-0.5 + 0.1 * h * k, y + 0.05 * std::sin(0.1 * k)));
+    const CutMove2DReport r =
+        cutter.move_to(Vec2(-0.5 + 0.1 * h * k, y + 0.05 * std::sin(0.1 * k)));
     c.flips += r.flips;
     c.removals += r.removals;
     c.splits += r.splits;
@@ -63,7 +65,12 @@ void BM_Cutter2DMovement(benchmark::State& state) {
   state.counters["splits_per_move"] = static_cast<double>(c.splits) / c.moves;
 }
 // n = 22, 71, 224: 968, 10 082, 100 352 triangles.
-BENCHMARK(BM_Cutter2DMovement)->Arg(22)->Arg(71)->Arg(224)->UseManualTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Cutter2DMovement)
+    ->Arg(22)
+    ->Arg(71)
+    ->Arg(224)
+    ->UseManualTime()
+    ->Unit(benchmark::kMicrosecond);
 
 void BM_Cutter2DScaling(benchmark::State& state) {
   start(22);
