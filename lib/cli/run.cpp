@@ -169,8 +169,8 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   }
   if (!rep.message.empty()) out << "message:         " << rep.message << "\n";
   out << "final residual:  ||r|| = " << num(rep.residual_norm)
-      << " N, ||r||/||f_ext|| = " << num(rep.residual_norm / fnorm) << " (tolerance "
-      << spec.solver.tolerance << ", ||f_ext|| = " << num(fnorm) << " N)\n";
+      << " N, ||r||/||f_ext|| = " << num(std::isfinite(fnorm) ? rep.residual_norm / fnorm : fnorm)
+      << " (tolerance " << spec.solver.tolerance << ", ||f_ext|| = " << num(fnorm) << " N)\n";
   out << "energy:          " << num(rep.energy) << " J\n";
   if (res.inverted_elements >= 0)
     out << "inverted:        " << res.inverted_elements << " of " << built.problem->num_elements()

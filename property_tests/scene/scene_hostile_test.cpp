@@ -27,7 +27,8 @@ namespace fs = std::filesystem;
 using Json = nlohmann::json;
 
 scene::SceneSpec hostile(const std::string& name) {
-  return scene::load_scene(test::source_path("property_tests/scene/data/hostile/" + name + ".json"));
+  return scene::load_scene(
+      test::source_path("property_tests/scene/data/hostile/" + name + ".json"));
 }
 
 bool contains(const std::string& s, const std::string& part) {
@@ -91,6 +92,21 @@ TEST(SceneHostile, LoadWhoseNormOverflowsIsNonFiniteNotConverged) {
   EXPECT_TRUE(j["external_force_norm"].is_null());
 }
 
+// The same load under the direct solver ("augmented" without tools), which has no iteration to
+// refuse it: the run's final check reports it with the same message, and nothing non-finite is
+// written.
+TEST(SceneHostile, LoadWhoseNormOverflowsIsNonFiniteUnderTheDirectSolver) {
+  scene::SceneSpec spec = hostile("load_overflow");
+  spec.solver.method = scene::SolverSpec::Method::kAugmented;
+  const Ran r = run_in_scratch(spec, "overflow_direct");
+  EXPECT_EQ(r.result.report.status, solver::StopReason::kNonFinite) << r.result.report.brief();
+  EXPECT_TRUE(contains(r.result.report.message, "the external load is not finite"))
+      << r.result.report.message;
+  for (const std::string& f : r.written)
+    if (fs::exists(r.dir / f)) EXPECT_FALSE(has_non_finite(read(r.dir / f))) << f;
+  EXPECT_EQ(Json::parse(read(r.dir / "summary.json"))["status"], "failed");
+}
+
 // Zero effective load — [0, 0, 0], a load only on fixed nodes, every node fixed, a 1e-308 N
 // force whose squares underflow — was "converged" with -nan. The scene's rule (6.8) has no
 // threshold then; the build refuses it at /loads, as it refuses "loads": [].
@@ -103,8 +119,9 @@ TEST(SceneHostile, ZeroEffectiveLoadIsRefusedAtTheLoads) {
       ADD_FAILURE() << "expected a ParseError";
     } catch (const ParseError& e) {
       const std::string what = e.what();
-      EXPECT_TRUE(contains(what, "/loads: the loads give no force on a free node: ||f_ext|| = 0 "
-                                 "over the free DOFs"))
+      EXPECT_TRUE(contains(what,
+                           "/loads: the loads give no force on a free node: ||f_ext|| = 0 "
+                           "over the free DOFs"))
           << what;
       EXPECT_TRUE(contains(what, spec.file + ":" + std::to_string(spec.lines.line("/loads"))))
           << what;
@@ -141,8 +158,7 @@ TEST(SceneHostile, ConvergedStateWithInvertedElementsIsAStatusUnlessAllowed) {
 
   // Linear elasticity at E = 1e-3 Pa under 3 N: the same status.
   const Ran soft = run_in_scratch(hostile("linear_soft"), "soft");
-  EXPECT_EQ(soft.result.report.status, solver::StopReason::kInverted)
-      << soft.result.report.brief();
+  EXPECT_EQ(soft.result.report.status, solver::StopReason::kInverted) << soft.result.report.brief();
   EXPECT_GT(soft.result.inverted_elements, 0);
 }
 
@@ -161,8 +177,9 @@ TEST(SceneHostile, AllowInversionOnlyForModelsDefinedWhenInverted) {
     (void)hostile("neo_hookean_allow_inversion");
     ADD_FAILURE() << "expected a ParseError";
   } catch (const ParseError& e) {
-    EXPECT_TRUE(contains(e.what(), "/material/allow_inversion: not allowed here: material "
-                                   "\"neohookean\" has no energy for det F <= 0"))
+    EXPECT_TRUE(contains(e.what(),
+                         "/material/allow_inversion: not allowed here: material "
+                         "\"neohookean\" has no energy for det F <= 0"))
         << e.what();
   }
 }

@@ -154,7 +154,9 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
   j["iterations"] = rep.iterations;
   j["inner_iterations"] = rep.inner_iterations;
   j["residual_norm"] = num(rep.residual_norm);
-  j["relative_residual"] = num(rep.residual_norm / result.external_force_norm);
+  j["relative_residual"] = std::isfinite(result.external_force_norm)
+                               ? num(rep.residual_norm / result.external_force_norm)
+                               : Json(nullptr);
   j["external_force_norm"] = num(result.external_force_norm);
   j["tolerance"] = spec.solver.tolerance;
   j["energy"] = num(rep.energy);

@@ -77,6 +77,7 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
   VecX x;
   if (factor.solve(rhs, x) != linalg::FactorStatus::kOk || !x.allFinite()) {
     rep.status = solver::StopReason::kNonFinite;
+    rep.message = "the CHOLMOD solve of K u = f gave a non-finite u (" + factor.message() + ")";
     rep.seconds = t.seconds();
     return rep;
   }
@@ -95,6 +96,8 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
   rep.status = es != EvalStatus::kOk                ? solver::StopReason::kNonFinite
                : rep.residual_norm <= rep.threshold ? solver::StopReason::kConverged
                                                     : solver::StopReason::kStagnated;
+  if (es != EvalStatus::kOk)
+    rep.message = "the residual or energy at the direct solution is not finite";
   rep.flops = p.flops() - flops0 + static_cast<std::uint64_t>(factor.factor_flops());
   rep.seconds = t.seconds();
   return rep;
@@ -315,6 +318,10 @@ std::string estimate_failure(const std::string& what, const solver::EigenEstimat
 /// energy and displacement, and no inverted element unless the scene allows inversion.
 void check_final_state(const BuiltScene& scene, SceneRunResult& res) {
   solver::SolverReport& rep = res.report;
+  // The direct and augmented solves have no check of their own on f_ext: an overflowing load
+  // gives threshold ∞ (the iterative solvers refuse it up front). It is the cause of whatever
+  // else went wrong, so its status and message replace the solve's.
+  (void)solver::external_force_is_finite(res.external_force_norm, rep);
   const bool finite_u = res.u.allFinite();
   if (rep.ok() && !(finite_u && std::isfinite(rep.residual_norm) && std::isfinite(rep.energy))) {
     rep.status = solver::StopReason::kNonFinite;

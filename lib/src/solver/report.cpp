@@ -67,7 +67,7 @@ bool external_force_is_finite(double external_force_norm, SolverReport& rep) {
   rep.status = StopReason::kNonFinite;
   rep.message =
       "the external load is not finite: ||f_ext|| overflows the doubles (a load above ~1.3e154 "
-      "N, or a non-finite force); not solved: scale the load (or change the units)";
+      "N, or a non-finite force): scale the load (or change the units)";
   return false;
 }
 
