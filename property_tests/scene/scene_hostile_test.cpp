@@ -162,6 +162,23 @@ TEST(SceneHostile, ConvergedStateWithInvertedElementsIsAStatusUnlessAllowed) {
   EXPECT_GT(soft.result.inverted_elements, 0);
 }
 
+// The shipped StVK cylinder (thesis §4.3.1) converges with elements inverted at the clamp; its
+// scene sets allow_inversion, so the run is a success that reports the count: 179 of 1296 on
+// this machine, asserted within [170, 190] (a different round-off path may shift a few
+// near-flat elements at the clamp across det F = 0).
+TEST(SceneHostile, ShippedStvkCylinderAllowsItsInvertedElementsAndCountsThem) {
+  scene::SceneSpec spec =
+      scene::load_scene(test::source_path("reference_data/scenes/cylinder_gravity_stvk.json"));
+  EXPECT_TRUE(spec.material.allow_inversion);
+  spec.outputs = scene::OutputSpec{};
+  scene::BuiltScene built = scene::build_scene(spec);
+  const scene::SceneRunResult res = scene::run_scene(built);
+  EXPECT_TRUE(res.report.ok()) << res.report.brief();
+  EXPECT_GE(res.inverted_elements, 170);
+  EXPECT_LE(res.inverted_elements, 190);
+  EXPECT_EQ(built.mesh.num_cells(), 1296);
+}
+
 // A well-posed run counts zero inverted elements and stays converged.
 TEST(SceneHostile, OrdinaryRunCountsNoInvertedElement) {
   scene::SceneSpec spec = hostile("linear_soft");
