@@ -32,7 +32,16 @@ namespace {
 
 std::string join_vec(const Vec3& v) {
   std::ostringstream os;
+  if (!v.allFinite()) return "[not finite]";
   os << std::setprecision(6) << "[" << v[0] << ", " << v[1] << ", " << v[2] << "]";
+  return os.str();
+}
+
+/// A result number as printed: the value, or "not finite" (no NaN or inf is printed).
+std::string num(double v) {
+  if (!std::isfinite(v)) return "not finite";
+  std::ostringstream os;
+  os << v;
   return os.str();
 }
 
@@ -158,10 +167,17 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     out << "solves:          " << rep.iterations << " (initial + " << rep.iterations - 1
         << " sweep triangles), " << rep.inner_iterations << " GMRES iterations in all\n";
   }
-  out << "final residual:  ||r|| = " << rep.residual_norm
-      << " N, ||r||/||f_ext|| = " << rep.residual_norm / fnorm << " (tolerance "
-      << spec.solver.tolerance << ")\n";
-  out << "energy:          " << rep.energy << " J\n";
+  if (!rep.message.empty()) out << "message:         " << rep.message << "\n";
+  out << "final residual:  ||r|| = " << num(rep.residual_norm)
+      << " N, ||r||/||f_ext|| = " << num(std::isfinite(fnorm) ? rep.residual_norm / fnorm : fnorm)
+      << " (tolerance " << spec.solver.tolerance << ", ||f_ext|| = " << num(fnorm) << " N)\n";
+  out << "energy:          " << num(rep.energy) << " J\n";
+  if (res.inverted_elements >= 0)
+    out << "inverted:        " << res.inverted_elements << " of " << built.problem->num_elements()
+        << " elements (det F <= 0)"
+        << (spec.material.allow_inversion ? ", allowed by the scene (material.allow_inversion)"
+                                          : "")
+        << "\n";
   if (res.cut_steps.empty())
     out << "flops:           " << static_cast<double>(rep.flops) / 1e6 << " MFLOP (counted)\n";
   else
@@ -174,7 +190,7 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     out << "probe " << p.name << ":  displacement " << join_vec(p.value) << " m";
     if (p.reference)
       out << ", reference " << join_vec(*p.reference) << ", relative error "
-          << 100 * p.relative_error << " %";
+          << num(100 * p.relative_error) << " %";
     out << "\n";
   }
   if (!res.cut_steps.empty()) {
@@ -212,8 +228,7 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     for (const auto& w : written) out << "  " << w << "\n";
   }
   if (!rep.ok()) {
-    err << "incise run: solver stopped without converging: " << solver::to_string(rep.status)
-        << "\n";
+    err << "incise run: no converged solution: " << rep.brief() << "\n";
     return 3;
   }
   return 0;

@@ -304,6 +304,32 @@ TEST(AugmentedCut, Sec3_6BackgroundRefactorizationAtThresholdMatchesAFreshFactor
             << " solutions compared, " << polls << " polling solves\n";
 }
 
+/// Issue 18 (resource limits): AugmentedOptions::cholmod.memory_budget_bytes reaches the
+/// factorization of K⁰. A budget of 1 KiB, below the estimate of the symbolic analysis,
+/// refuses it: the initial report fails with the estimate and the budget in its message, the
+/// system reports kOverMemoryBudget, and a step does not solve.
+TEST(AugmentedCut, MemoryBudgetRefusesTheInitialFactorizationWithTheEstimate) {
+  const Body body = beam();
+  AugmentedCutOptions opt = test_options();
+  opt.augmented.cholmod.memory_budget_bytes = 1024;
+  AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
+  const AugmentedCutStepReport& init = session.initial_report();
+  EXPECT_EQ(init.status, CutSolveStatus::kSolverFailed);
+  EXPECT_EQ(session.system().factorization_status(), linalg::FactorStatus::kOverMemoryBudget);
+  EXPECT_NE(init.message.find("over memory budget: the numeric factorization needs an estimated"),
+            std::string::npos)
+      << init.message;
+  EXPECT_NE(init.message.find("more than the memory budget of 0.0009766 MiB"), std::string::npos)
+      << init.message;
+  const double z = 1.1;
+  const AugmentedCutStepReport r = session.step(Vec3(-1, -1, z), Vec3(2, -1, z), Vec3(2, 2, z));
+  EXPECT_FALSE(r.ok());
+  // Without the budget the same session factors and solves.
+  AugmentedCutSession free(body.mesh, linear_material(), body.fixed, force_matrix(body),
+                           test_options());
+  EXPECT_TRUE(free.initial_report().ok()) << free.initial_report().brief();
+}
+
 /// A horizontal blade through the whole beam at z = 1.1 m: the upper part loses its fixed
 /// nodes. Policy kReport: reported as kFreeComponent, no solve, no crash.
 TEST(AugmentedCut, BeamCutInTwoWithReportPolicyIsAStatus) {

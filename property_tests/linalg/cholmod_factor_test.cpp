@@ -186,6 +186,52 @@ TEST(CholmodFactor, NumericRefactorizationWithTheSamePattern) {
   }
 }
 
+// Issue 18 (resource limits): the symbolic analysis gives nnz(L), hence the bytes of the numeric
+// factorization, before any of it is allocated. The estimate is checked against what CHOLMOD
+// actually held at its peak, and a budget below it refuses with kOverMemoryBudget and a message
+// stating the estimate, nnz(L) and the budget, leaving no factor.
+TEST(CholmodFactor, MemoryBudgetRefusesTheNumericFactorizationFromTheSymbolicEstimate) {
+  const SparseMatrix a = CutModel::from_mesh(mesh::make_brick(6)).assemble();
+  for (CholmodKind kind : {CholmodKind::kSupernodal, CholmodKind::kSimplicialLdl}) {
+    SCOPED_TRACE(kind == CholmodKind::kSupernodal ? "supernodal" : "simplicial LDL'");
+    CholmodFactor free({kind, CholmodOrdering::kMetis});
+    ASSERT_EQ(free.analyze(a, 1), FactorStatus::kOk);
+    const std::uint64_t estimate = free.estimated_factor_bytes();
+    EXPECT_GE(estimate, static_cast<std::uint64_t>(free.nnz_l()) * sizeof(double));
+    ASSERT_EQ(free.factorize(a), FactorStatus::kOk);
+    // The peak also holds the analysis' own workspace (ordering), so it is at least the factor;
+    // the estimate may not undershoot the peak by more than 2x nor overshoot it (it counts
+    // what factorize allocates, all of which CHOLMOD holds at the peak).
+    const double peak = static_cast<double>(free.peak_memory_bytes());
+    EXPECT_GE(static_cast<double>(estimate), 0.5 * peak) << "peak " << peak;
+    EXPECT_LE(static_cast<double>(estimate), 1.0 * peak) << "peak " << peak;
+    RecordProperty(kind == CholmodKind::kSupernodal ? "supernodal_estimate_over_peak"
+                                                    : "simplicial_estimate_over_peak",
+                   std::to_string(static_cast<double>(estimate) / peak));
+
+    CholmodOptions o{kind, CholmodOrdering::kMetis};
+    o.memory_budget_bytes = std::uint64_t{1} << 20;  // 1 MiB
+    ASSERT_GT(estimate, o.memory_budget_bytes);
+    CholmodFactor bounded(o);
+    EXPECT_EQ(bounded.compute(a, 1), FactorStatus::kOverMemoryBudget);
+    EXPECT_EQ(bounded.estimated_factor_bytes(), estimate);
+    EXPECT_NE(bounded.message().find("the numeric factorization needs an estimated"),
+              std::string::npos)
+        << bounded.message();
+    EXPECT_NE(bounded.message().find("nnz(L) = " + std::to_string(free.nnz_l())), std::string::npos)
+        << bounded.message();
+    EXPECT_NE(bounded.message().find("more than the memory budget of 1 MiB"), std::string::npos)
+        << bounded.message();
+    Eigen::VectorXd x;
+    EXPECT_NE(bounded.solve(Eigen::VectorXd::Ones(a.rows()), x), FactorStatus::kOk);
+    EXPECT_EQ(bounded.extract_ldl(), nullptr);
+    // A budget at the estimate lets it through.
+    o.memory_budget_bytes = estimate;
+    CholmodFactor exact(o);
+    EXPECT_EQ(exact.compute(a, 1), FactorStatus::kOk);
+  }
+}
+
 TEST(CholmodFactor, NotPositiveDefiniteIsAStatus) {
   INCISE_SEEDED_RNG(rng, 5);
   for (CholmodKind kind : {CholmodKind::kSupernodal, CholmodKind::kSimplicialLdl}) {

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -164,7 +165,22 @@ TEST(SceneOutputs, InteractiveCutRunWritesOneRowAndOneFramePerSolve) {
     EXPECT_EQ(c["preconditioner_dropped"], res.cut_steps[k].preconditioner_dropped);
     EXPECT_EQ(c["amplification"], res.cut_steps[k].amplification);
     EXPECT_EQ(c["amplification_warning"], res.cut_steps[k].amplification_warning);
+    const double rcond = res.cut_steps[k].preconditioner_rcond;  // NaN (none built): null
+    if (std::isfinite(rcond)) {
+      EXPECT_EQ(c["preconditioner_rcond"], rcond);
+    } else {
+      EXPECT_TRUE(c["preconditioner_rcond"].is_null());
+    }
   }
+  // The dropped preconditioner as the run's count (issue 14.3): here none is dropped, and one
+  // marked dropped (as AugmentedReport reports a singular H S J) is counted.
+  EXPECT_EQ(summary["preconditioner_dropped_solves"], 0);
+  scene::SceneRunResult dropped = res;
+  dropped.cut_steps[1].preconditioner_dropped = true;
+  dropped.cut_steps[1].preconditioner_rcond = 1e-17;
+  const Json sd = Json::parse(scene::summary_json(built, dropped, 0.0, written));
+  EXPECT_EQ(sd["preconditioner_dropped_solves"], 1);
+  EXPECT_EQ(sd["cut_steps"][1]["preconditioner_rcond"], 1e-17);
   EXPECT_GT(res.cut_steps[0].amplification, 0.0);  // the loaded initial solve (steps that
                                                    // change nothing are not solved: 0)
   for (std::size_t k = 0; k < solves; ++k)

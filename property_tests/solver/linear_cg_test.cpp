@@ -1,7 +1,10 @@
 /// Linear CG (thesis §2.4.1, §3.1): equivalence with a dense direct solve, Jacobi variant,
 /// stopping rules (6.8)/(6.9), budgets and the indefinite status.
+#include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/solver/eigen_estimates.hpp>
 #include <incise/solver/linear_cg.hpp>
+#include <incise/solver/nonlinear_cg.hpp>
+#include <incise/solver/truncated_newton.hpp>
 #include <incise_test/seed.hpp>
 
 #include "test_problems.hpp"
@@ -258,6 +261,70 @@ TEST(LinearCg, LanczosFromCoefficientsFindsExtremeEigenvalues_Sec2_4_1) {
     EXPECT_NEAR(l.condition(), cond, 2 * kRitzTol * cond);
   }
   EXPECT_THROW((void)cg_lanczos_extremes(CgCoefficients{}), ParameterError);
+}
+
+// Issue 18: a load whose norm overflows the doubles (entries 1e155: ||b||^2 > DBL_MAX) made
+// the threshold eps ||f_ext|| infinite, and every solver "converged" at once with ||r|| = inf.
+// Now each of the four returns kNonFinite before iterating, u unchanged, with the message of
+// solver::external_force_is_finite; the same problem at scale 1 converges (control).
+TEST(ExternalForce, NormThatOverflowsIsNonFiniteInEverySolver) {
+  for (double scale : {1e155, 1.0}) {
+    INCISE_SEEDED_RNG(rng, 41);
+    QuadraticProblem base = random_spd_problem(rng, 12, 10.0, 2);
+    QuadraticProblem p(
+        base.matrix(), base.rhs() * scale,
+        {true, true, false, false, false, false, false, false, false, false, false, false},
+        VecX::Ones(12));
+    const bool overflows = !std::isfinite(p.external_force_norm());
+    ASSERT_EQ(overflows, scale == 1e155) << p.external_force_norm();
+    RelaxationOptions common;
+    common.stop.rule = ResidualRule::kExternalForce;
+    common.stop.epsilon = 1e-6;
+    std::vector<std::pair<const char*, SolverReport>> reports;
+    VecX u = VecX::Zero(12);
+    {
+      LinearCgOptions o;
+      static_cast<RelaxationOptions&>(o) = common;
+      u.setZero();
+      reports.emplace_back("linear_cg", linear_cg(p, u, o));
+    }
+    {
+      NonlinearCgOptions o;
+      static_cast<RelaxationOptions&>(o) = common;
+      u.setZero();
+      reports.emplace_back("nonlinear_cg", nonlinear_cg(p, u, o));
+    }
+    {
+      TruncatedNewtonOptions o;
+      static_cast<RelaxationOptions&>(o) = common;
+      u.setZero();
+      reports.emplace_back("truncated_newton", truncated_newton(p, u, o));
+    }
+    {
+      DynamicRelaxationOptions o;
+      static_cast<RelaxationOptions&>(o) = common;
+      o.time_step = 0.1;  // 2/sqrt(lambda_max) = 0.63 for cond 10, unit masses
+      o.damping = 2.0;
+      o.budget.max_iterations = 20000;
+      u.setZero();
+      reports.emplace_back("dynamic_relaxation", dynamic_relaxation(p, u, o));
+      if (overflows) {
+        EXPECT_EQ(u.norm(), 0.0);
+      }
+    }
+    for (const auto& [name, rep] : reports) {
+      SCOPED_TRACE(std::string(name) + (overflows ? " (entries 1e155)" : " (control)"));
+      if (overflows) {
+        EXPECT_EQ(rep.status, StopReason::kNonFinite) << rep.brief();
+        EXPECT_EQ(rep.iterations, 0);
+        EXPECT_NE(rep.message.find("the external load is not finite"), std::string::npos)
+            << rep.message;
+      } else {
+        EXPECT_TRUE(rep.ok()) << rep.brief();
+        EXPECT_TRUE(std::isfinite(rep.residual_norm));
+      }
+    }
+  }
 }
 
 }  // namespace

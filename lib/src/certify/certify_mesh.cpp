@@ -142,6 +142,7 @@ Measurement measure_shipped_scenes(const CertifyContext& ctx) {
                  "tolerance", "probes with a reference: relative error"},
                 {}};
   int failures = 0;
+  std::string failed;  // the failed scenes and their status, named in the comparison
   std::vector<std::filesystem::path> files;
   for (const auto& e : std::filesystem::directory_iterator(ctx.data_dir + "/scenes"))
     if (e.path().extension() == ".json") files.push_back(e.path());
@@ -166,18 +167,23 @@ Measurement measure_shipped_scenes(const CertifyContext& ctx) {
                                  "probe " + name + " " + p.name, p.relative_error});
         probes += (probes.empty() ? "" : ", ") + p.name + " " + fmt(p.relative_error);
       }
-      if (!res.report.ok()) ++failures;
+      if (!res.report.ok()) {
+        ++failures;
+        failed += (failed.empty() ? "" : "; ") + name + " " + res.report.brief();
+      }
       t.rows.push_back({name, scene::to_string(spec.solver.method), res.report.brief(),
                         std::to_string(res.report.iterations), std::to_string(b.mesh.num_points()),
                         std::to_string(b.mesh.num_cells()), fmt(rel), fmt(spec.solver.tolerance),
                         probes.empty() ? "—" : probes});
     } catch (const std::exception& e) {
       ++failures;
+      failed += (failed.empty() ? "" : "; ") + name + " error: " + e.what();
       t.rows.push_back({name, "", std::string("error: ") + e.what(), "", "", "", "", "", ""});
     }
   }
-  r.comparisons.push_back({"scenes that failed to load, build or solve (status not ok)", "failures",
-                           static_cast<double>(failures)});
+  r.comparisons.push_back({"scenes that failed to load, build or solve (status not ok)" +
+                               (failed.empty() ? std::string() : " [" + failed + "]"),
+                           "failures", static_cast<double>(failures)});
   r.conditions_ok = !files.empty();
   r.detail = std::to_string(files.size()) +
              " scene files parsed, built and solved by their own solver and stopping rule. The "

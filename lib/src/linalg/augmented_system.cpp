@@ -206,6 +206,10 @@ const std::string& AugmentedSystem::factorization_message() const {
   return base_ ? base_->message : kNone;
 }
 
+FactorStatus AugmentedSystem::factorization_status() const {
+  return base_ ? base_->status : FactorStatus::kNotAnalyzed;
+}
+
 const AugmentedSystem::Column* AugmentedSystem::changed_column(int j) const {
   auto it = changed_.find(j);
   return it == changed_.end() ? nullptr : &it->second;

@@ -19,6 +19,7 @@ const char* to_string(FactorStatus status) {
     case FactorStatus::kInvalidInput: return "invalid input";
     case FactorStatus::kCholmodError: return "CHOLMOD error";
     case FactorStatus::kTinyPivot: return "tiny pivot";
+    case FactorStatus::kOverMemoryBudget: return "over memory budget";
   }
   return "unknown";
 }
@@ -171,6 +172,21 @@ FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
     message_ = "matrix has non-finite entries";
     return status_ = FactorStatus::kInvalidInput;
   }
+  if (options_.memory_budget_bytes > 0 && estimated_factor_bytes() > options_.memory_budget_bytes) {
+    const auto mib = [](std::uint64_t b) {
+      std::ostringstream os;
+      os.precision(4);
+      os << static_cast<double>(b) / (1024.0 * 1024.0) << " MiB";
+      return os.str();
+    };
+    std::ostringstream os;
+    os << "the numeric factorization needs an estimated " << mib(estimated_factor_bytes())
+       << " (nnz(L) = " << nnz_l() << " from the symbolic analysis of " << n_ << " rows, "
+       << (is_supernodal() ? "supernodal" : "simplicial") << "), more than the memory budget of "
+       << mib(options_.memory_budget_bytes);
+    message_ = os.str();
+    return status_ = FactorStatus::kOverMemoryBudget;
+  }
   cholmod_sparse s = view_lower(a);
   cholmod_factorize(&s, impl_->factor, &impl_->common);
   status_ = status_from_common(impl_->common, message_);
@@ -255,6 +271,26 @@ bool CholmodFactor::is_supernodal() const {
 
 std::int64_t CholmodFactor::nnz_l() const {
   return static_cast<std::int64_t>(impl_->common.lnz);
+}
+
+std::uint64_t CholmodFactor::estimated_factor_bytes() const {
+  const cholmod_factor* l = impl_->factor;
+  if (l == nullptr) return 0;
+  const std::uint64_t n = l->n, d = sizeof(double), i = sizeof(int);
+  std::uint64_t bytes = 2 * n * d + 5 * n * i;  // CHOLMOD's workspace (Iwork, Xwork, Flag, Head)
+  if (l->is_super) {
+    bytes +=
+        (static_cast<std::uint64_t>(l->xsize) + l->maxcsize) * d +
+        (static_cast<std::uint64_t>(l->ssize) + 4 * static_cast<std::uint64_t>(l->nsuper) + n) * i;
+  } else {
+    const auto lnz = static_cast<std::uint64_t>(std::max(0.0, impl_->common.lnz));
+    bytes += lnz * (d + i) + 6 * n * i;
+  }
+  return bytes;
+}
+
+std::uint64_t CholmodFactor::peak_memory_bytes() const {
+  return static_cast<std::uint64_t>(impl_->common.memory_usage);
 }
 
 double CholmodFactor::factor_flops() const {

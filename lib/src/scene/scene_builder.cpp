@@ -10,6 +10,7 @@
 #include <incise/mesh/tet_faces.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 namespace incise::scene {
@@ -71,18 +72,13 @@ void check_memory(const SceneSpec& spec, const mesh::MeshSize& size) {
   const auto points = static_cast<std::uint64_t>(size.points);
   const auto cells = static_cast<std::uint64_t>(size.cells);
   const std::uint64_t estimate = mesh_bytes(points, 4 * cells, 0, 0) + problem_bytes(points, cells);
-  const bool from_scene = spec.limits.memory_mb > 0;
-  const std::uint64_t budget = from_scene ? static_cast<std::uint64_t>(spec.limits.memory_mb) << 20
-                                          : default_memory_budget_bytes();
+  const std::uint64_t budget = memory_budget_bytes(spec);
   if (estimate <= budget) return;
-  throw ParseError(
-      spec.file, spec.lines.line("/mesh"),
-      "/mesh: the mesh and its elastic problem need an estimated " + mib(estimate) + " (" +
-          std::to_string(size.cells) + " tetrahedra, " + std::to_string(size.points) +
-          " nodes), more than the memory budget of " + mib(budget) +
-          (from_scene ? " (limits.memory_mb = " + std::to_string(spec.limits.memory_mb) + ")"
-                      : " (by default half the physical memory; set \"limits\": {\"memory_mb\": "
-                        "N} or incise run --memory-mb N)"));
+  throw ParseError(spec.file, spec.lines.line("/mesh"),
+                   "/mesh: the mesh and its elastic problem need an estimated " + mib(estimate) +
+                       " (" + std::to_string(size.cells) + " tetrahedra, " +
+                       std::to_string(size.points) + " nodes), more than the memory budget of " +
+                       mib(budget) + " (" + memory_budget_origin(spec) + ")");
 }
 
 // A generator's refusal of a scene mesh parameter, at its JSON path (the keys of a generated
@@ -176,6 +172,18 @@ std::vector<std::array<Vec3, 3>> sweep_triangles(const ToolSpec& tool) {
     tris.push_back({a, b + tool.blade, a + tool.blade});
   }
   return tris;
+}
+
+std::uint64_t memory_budget_bytes(const SceneSpec& spec) {
+  return spec.limits.memory_mb > 0 ? static_cast<std::uint64_t>(spec.limits.memory_mb) << 20
+                                   : default_memory_budget_bytes();
+}
+
+std::string memory_budget_origin(const SceneSpec& spec) {
+  return spec.limits.memory_mb > 0
+             ? "limits.memory_mb = " + std::to_string(spec.limits.memory_mb)
+             : "by default half the physical memory; set \"limits\": {\"memory_mb\": N} or "
+               "incise run --memory-mb N";
 }
 
 material::Material make_material(const MaterialSpec& spec) {
@@ -362,8 +370,19 @@ BuiltScene build_scene(const SceneSpec& spec) {
                                   : ""),
              tp.seconds(), bytes);
   }
+  // A zero effective load (zero forces, forces only on fixed nodes, every node fixed, or forces
+  // whose squares underflow) leaves (6.8) without a threshold: refused like "loads": [].
+  if (!(b.problem->external_force_norm() != 0.0))  // 0 (NaN/inf: the solver's status)
+    throw ParseError(
+        spec.file, spec.lines.line("/loads"),
+        "/loads: the loads give no force on a free node: ||f_ext|| = 0 over the free DOFs (the "
+        "forces are zero, act only on fixed nodes, or underflow the doubles); the stopping rule "
+        "||r|| <= tol ||f_ext|| needs f_ext != 0, and u = 0 is the solution");
   b.record("external load vector f_ext: " + std::to_string(spec.loads.size()) +
-               " load(s), |f_ext| = " + std::to_string(b.external_force.norm()) + " N",
+               " load(s), |f_ext| = " +
+               (std::isfinite(b.problem->external_force_norm())
+                    ? std::to_string(b.external_force.norm()) + " N"
+                    : std::string("not finite (overflows the doubles)")),
            t.seconds(), static_cast<std::size_t>(ndof) * sizeof(double));
 
   if (spec.solver.method != SolverSpec::Method::kDynamicSS22)

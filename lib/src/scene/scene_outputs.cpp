@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <iomanip>
 #include <sstream>
 
@@ -28,8 +29,22 @@ void write_vtu_atomic(const std::string& path, const mesh::MeshData& mesh, const
       path, [&](const std::string& tmp) { io::write_vtu(tmp, mesh, {displacement_array(u)}); });
 }
 
+/// A finite number, or JSON null (never NaN or ∞ in a file).
+Json num(double v) {
+  return std::isfinite(v) ? Json(v) : Json(nullptr);
+}
+
 Json vec_json(const Vec3& v) {
-  return Json::array({v[0], v[1], v[2]});
+  return Json::array({num(v[0]), num(v[1]), num(v[2])});
+}
+
+/// A CSV field: the number, or empty when it is not finite (never NaN or ∞ in a file).
+struct Field {
+  double v;
+};
+std::ostream& operator<<(std::ostream& os, Field f) {
+  if (std::isfinite(f.v)) os << f.v;
+  return os;
 }
 
 /// Probe column names: <name>_x, <name>_y, <name>_z per probe.
@@ -40,7 +55,8 @@ void probe_columns(std::ostream& csv, const BuiltScene& scene) {
 }
 
 void probe_values(std::ostream& csv, const std::vector<Vec3>& probes) {
-  for (const auto& v : probes) csv << "," << v[0] << "," << v[1] << "," << v[2];
+  for (const auto& v : probes)
+    csv << "," << Field{v[0]} << "," << Field{v[1]} << "," << Field{v[2]};
   csv << "\n";
 }
 
@@ -59,18 +75,18 @@ std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
       csv << c.step << "," << c.tool << "," << status << "," << c.degenerate_sweep << ","
           << c.faces_dissected << "," << c.nodes_snapped << "," << c.new_nodes << "," << c.nodes
           << "," << c.tetrahedra << "," << c.m << "," << c.dirichlet << "," << c.gmres_iterations
-          << "," << c.gmres_relative_residual << "," << c.nnz_l << "," << c.seconds_cut << ","
-          << c.seconds_update << "," << c.cpu_seconds_update << "," << c.preconditioner_dropped
-          << "," << c.amplification;
+          << "," << Field{c.gmres_relative_residual} << "," << c.nnz_l << "," << c.seconds_cut
+          << "," << c.seconds_update << "," << c.cpu_seconds_update << ","
+          << c.preconditioner_dropped << "," << Field{c.amplification};
       probe_values(csv, c.probes);
     }
   } else {
     csv << "iteration,residual_norm,relative_residual,energy,flops,seconds";
     probe_columns(csv, scene);
     for (const auto& row : res.trace) {
-      csv << row.iteration << "," << row.residual_norm << ","
-          << row.residual_norm / res.external_force_norm << "," << row.energy << "," << row.flops
-          << "," << row.seconds;
+      csv << row.iteration << "," << Field{row.residual_norm} << ","
+          << Field{row.residual_norm / res.external_force_norm} << "," << Field{row.energy} << ","
+          << row.flops << "," << row.seconds;
       probe_values(csv, row.probes);
     }
   }
@@ -81,15 +97,18 @@ std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
 
 void FrameWriter::iteration(const solver::IterationInfo& info) {
   const OutputSpec& outs = scene_.spec.outputs;
-  if (outs.vtu.empty() || outs.vtu_every <= 0 || info.iteration % outs.vtu_every != 0) return;
+  if (outs.vtu.empty() || outs.vtu_every <= 0 || info.iteration % outs.vtu_every != 0 ||
+      !info.u->allFinite())
+    return;
   write_vtu_atomic(outs.vtu + "_" + std::to_string(info.iteration) + ".vtu", scene_.mesh, *info.u);
   ++frames_;
 }
 
 void FrameWriter::cut_step(const CutStepRow& row, const interactive::AugmentedCutSession& session) {
   const OutputSpec& outs = scene_.spec.outputs;
-  if (outs.vtu.empty() || outs.vtu_every <= 0 || row.step % outs.vtu_every != 0) return;
   const Eigen::Matrix3Xd& d = session.displacement();
+  if (outs.vtu.empty() || outs.vtu_every <= 0 || row.step % outs.vtu_every != 0 || !d.allFinite())
+    return;
   write_vtu_atomic(outs.vtu + "_" + std::to_string(row.step) + ".vtu",
                    live_mesh_data(session.mesh()), Eigen::Map<const VecX>(d.data(), d.size()));
   ++frames_;
@@ -103,7 +122,7 @@ std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunRe
     write_file_atomic(outs.csv, trace_csv(scene, result));
     written.push_back(outs.csv);
   }
-  if (!outs.vtu.empty()) {
+  if (!outs.vtu.empty() && result.u.allFinite()) {  // else: summary "not_written"
     const std::string f = outs.vtu + ".vtu";
     write_vtu_atomic(f, scene.mesh, result.u);
     written.push_back(f);
@@ -128,15 +147,22 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
   j["name"] = spec.name;
   j["method"] = to_string(spec.solver.method);
   j["method_detail"] = result.method_detail;
+  j["status"] = rep.ok() ? "ok" : "failed";
   j["result"] = solver::to_string(rep.status);
   j["message"] = rep.message;
   j["converged"] = rep.ok();
   j["iterations"] = rep.iterations;
   j["inner_iterations"] = rep.inner_iterations;
-  j["residual_norm"] = rep.residual_norm;
-  j["relative_residual"] = rep.residual_norm / result.external_force_norm;
+  j["residual_norm"] = num(rep.residual_norm);
+  j["relative_residual"] = std::isfinite(result.external_force_norm)
+                               ? num(rep.residual_norm / result.external_force_norm)
+                               : Json(nullptr);
+  j["external_force_norm"] = num(result.external_force_norm);
   j["tolerance"] = spec.solver.tolerance;
-  j["energy"] = rep.energy;
+  j["energy"] = num(rep.energy);
+  j["inverted_elements"] =
+      result.inverted_elements >= 0 ? Json(result.inverted_elements) : Json(nullptr);
+  j["allow_inversion"] = spec.material.allow_inversion;
   j["flops"] = rep.flops;
   j["solver_seconds"] = rep.seconds;
   j["total_seconds"] = total_seconds;
@@ -147,7 +173,7 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
     Json pj = {{"name", p.name}, {"displacement", vec_json(p.value)}};
     if (p.reference) {
       pj["reference"] = vec_json(*p.reference);
-      pj["relative_error"] = p.relative_error;
+      pj["relative_error"] = num(p.relative_error);
     }
     j["probes"].push_back(pj);
   }
@@ -170,9 +196,10 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
                {"m", c.m},
                {"dirichlet", c.dirichlet},
                {"gmres_iterations", c.gmres_iterations},
-               {"gmres_relative_residual", c.gmres_relative_residual},
+               {"gmres_relative_residual", num(c.gmres_relative_residual)},
                {"preconditioner_dropped", c.preconditioner_dropped},
-               {"amplification", c.amplification},
+               {"preconditioner_rcond", num(c.preconditioner_rcond)},
+               {"amplification", num(c.amplification)},
                {"amplification_warning", c.amplification_warning},
                {"nnz_l", c.nnz_l},
                {"refactorization_started", c.refactorization_started},
@@ -184,7 +211,15 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
       cj["probes"][scene.probes[k].spec.name] = vec_json(c.probes[k]);
     j["cut_steps"].push_back(cj);
   }
+  if (!result.cut_steps.empty()) {
+    int dropped = 0;
+    for (const auto& c : result.cut_steps) dropped += c.preconditioner_dropped ? 1 : 0;
+    j["preconditioner_dropped_solves"] = dropped;
+  }
   j["outputs"] = written;
+  j["not_written"] = Json::array();
+  if (!spec.outputs.vtu.empty() && !result.u.allFinite())
+    j["not_written"].push_back(spec.outputs.vtu + ".vtu: the displacement is not finite");
   return j.dump(2) + "\n";
 }
 

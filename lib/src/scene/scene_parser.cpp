@@ -148,6 +148,13 @@ MaterialSpec parse_material(JsonObject o, const std::string& rho_reason) {
          "missing required key \"rho\" (expected a number > 0, density in kg/m^3): " + rho_reason);
   p.density = o.number("rho", detail::any_finite(), p.density);
   validate_material(o, p);
+  if (material::Material(m.model, p).defined_when_inverted())
+    m.allow_inversion = o.boolean("allow_inversion", false);
+  else
+    o.forbid("allow_inversion", "material \"" + m.model +
+                                    "\" has no energy for det F <= 0 (its log J term), so an "
+                                    "inverted element is never a solution; only \"linear\" and "
+                                    "\"stvk\" may allow inversion");
   if (!rho_reason.empty() && !(p.density > 0))
     fail(o.file(), detail::child_path(o.path(), "rho"),
          "expected a number > 0 (density in kg/m^3), got " + detail::show(*o.get("rho")) + ": " +

@@ -7,6 +7,7 @@
 #include <incise/material/material.hpp>
 #include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/solver/eigen_estimates.hpp>
+#include <incise/solver/energy_error.hpp>
 #include <incise/solver/linear_cg.hpp>
 #include <incise/solver/nonlinear_cg.hpp>
 #include <incise/solver/truncated_newton.hpp>
@@ -26,6 +27,15 @@ constexpr double kTimeStepSafety = 0.9;
 /// Undamped SS22 steps sampled for the spectral damping estimate (FFT length).
 constexpr long kSpectralSteps = 8192;
 
+/// A factorization refused by the memory budget (linalg::FactorStatus::kOverMemoryBudget):
+/// the scene asked for more than its budget, refused like the mesh estimate (build_scene) with a
+/// ParseError at /solver/method, before anything was solved or written.
+[[noreturn]] void factor_budget_error(const SceneSpec& spec, const std::string& what) {
+  throw ParseError(
+      spec.file, spec.lines.line("/solver/method"),
+      "/solver/method: \"augmented\" needs " + what + " (" + memory_budget_origin(spec) + ")");
+}
+
 solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
   fem::ElasticProblem& p = *scene.problem;
   solver::SolverReport rep;
@@ -37,8 +47,13 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
     return rep;
   }
   const auto& k = p.tangent_matrix();
-  linalg::CholmodFactor factor;
+  linalg::CholmodOptions co;
+  co.memory_budget_bytes = memory_budget_bytes(scene.spec);
+  linalg::CholmodFactor factor(co);
   const linalg::FactorStatus st = factor.compute(k, 1);
+  if (st == linalg::FactorStatus::kOverMemoryBudget)
+    factor_budget_error(scene.spec, "the CHOLMOD factor of K (" + std::to_string(k.rows()) +
+                                        " DOFs): " + factor.message());
   scene.record(
       "sparse stiffness K (" + std::to_string(k.rows()) + " DOFs, " + std::to_string(k.nonZeros()) +
           " nonzeros) and CHOLMOD factor (|L| = " + std::to_string(factor.nnz_l()) +
@@ -62,6 +77,7 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
   VecX x;
   if (factor.solve(rhs, x) != linalg::FactorStatus::kOk || !x.allFinite()) {
     rep.status = solver::StopReason::kNonFinite;
+    rep.message = "the CHOLMOD solve of K u = f gave a non-finite u (" + factor.message() + ")";
     rep.seconds = t.seconds();
     return rep;
   }
@@ -80,6 +96,8 @@ solver::SolverReport solve_augmented(BuiltScene& scene, VecX& u) {
   rep.status = es != EvalStatus::kOk                ? solver::StopReason::kNonFinite
                : rep.residual_norm <= rep.threshold ? solver::StopReason::kConverged
                                                     : solver::StopReason::kStagnated;
+  if (es != EvalStatus::kOk)
+    rep.message = "the residual or energy at the direct solution is not finite";
   rep.flops = p.flops() - flops0 + static_cast<std::uint64_t>(factor.factor_flops());
   rep.seconds = t.seconds();
   return rep;
@@ -129,8 +147,13 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   options.augmented.solve_threads = spec.solver.solve_threads;
   options.augmented.schur_solver = spec.solver.schur_solver;
   options.augmented.preconditioner = spec.solver.schur_preconditioner;
+  options.augmented.cholmod.memory_budget_bytes = memory_budget_bytes(spec);
   auto session = std::make_unique<interactive::AugmentedCutSession>(
       scene.mesh, mat, scene.fixed_nodes, forces, options);
+  if (session->system().factorization_status() == linalg::FactorStatus::kOverMemoryBudget)
+    factor_budget_error(spec, "the CHOLMOD factor of K0 (" +
+                                  std::to_string(session->system().num_dofs()) +
+                                  " free DOFs): " + session->system().factorization_message());
   const interactive::AugmentedCutStepReport& init = session->initial_report();
   scene.record("stiffness K0 of the uncut body (" + std::to_string(session->system().num_dofs()) +
                    " free DOFs), its CHOLMOD factor (|L| = " + std::to_string(init.solve.nnz_l) +
@@ -166,6 +189,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
       row.gmres_iterations = r.solve.gmres.iterations;
       row.gmres_relative_residual = r.solve.gmres.relative_residual;
       row.preconditioner_dropped = r.solve.preconditioner_dropped;
+      row.preconditioner_rcond = r.solve.preconditioner_rcond;
       dropped += r.solve.preconditioner_dropped ? 1 : 0;
       row.amplification = r.solve.amplification;
       row.amplification_warning = r.solve.amplification_warning;
@@ -290,6 +314,41 @@ std::string estimate_failure(const std::string& what, const solver::EigenEstimat
   return os.str();
 }
 
+/// The checks every run ends with (issue 18): a "converged" report must have a finite residual,
+/// energy and displacement, and no inverted element unless the scene allows inversion.
+void check_final_state(const BuiltScene& scene, SceneRunResult& res) {
+  solver::SolverReport& rep = res.report;
+  // The direct and augmented solves have no check of their own on f_ext: an overflowing load
+  // gives threshold ∞ (the iterative solvers refuse it up front). It is the cause of whatever
+  // else went wrong, so its status and message replace the solve's.
+  (void)solver::external_force_is_finite(res.external_force_norm, rep);
+  const bool finite_u = res.u.allFinite();
+  if (rep.ok() && !(finite_u && std::isfinite(rep.residual_norm) && std::isfinite(rep.energy))) {
+    rep.status = solver::StopReason::kNonFinite;
+    rep.message = std::string("the solver stopped as converged, but its ") +
+                  (!finite_u                           ? "displacement"
+                   : !std::isfinite(rep.residual_norm) ? "residual"
+                                                       : "energy") +
+                  " is not finite";
+  }
+  if (!finite_u || res.u.size() != scene.problem->size()) return;
+  const solver::InversionCheck inv = solver::check_inversion(
+      scene.problem->points(), scene.problem->cells(), res.u);  // §4.3.1's post-check
+  res.inverted_elements = inv.inverted_elements;
+  if (res.inverted_elements == 0 || !rep.ok() || scene.spec.material.allow_inversion) return;
+  const bool defined = make_material(scene.spec.material).defined_when_inverted();
+  std::ostringstream os;
+  os << "the solver converged to a state with " << res.inverted_elements << " of "
+     << scene.problem->num_elements() << " elements inverted (det F <= 0): material \""
+     << scene.spec.material.model << "\" "
+     << (defined ? "defines an energy there, but the state is not physical; reduce the load or "
+                   "use \"neohookean\", or set \"allow_inversion\": true under /material to "
+                   "accept it"
+                 : "has no energy there");
+  rep.status = solver::StopReason::kInverted;
+  rep.message = os.str();
+}
+
 }  // namespace
 
 DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
@@ -394,6 +453,7 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
     std::ostringstream detail;
     run_augmented_cut(scene, res, cut_observer, detail);
     res.method_detail = detail.str();
+    check_final_state(scene, res);
     evaluate_probes();
     return res;
   }
@@ -472,6 +532,7 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
     }
   }
   res.method_detail = detail.str();
+  check_final_state(scene, res);
   evaluate_probes();
   return res;
 }

@@ -22,6 +22,11 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   const auto nn = static_cast<std::uint64_t>(n);
   const double dt = options.time_step, eta = options.damping;
   const double fex = problem.external_force_norm();
+  if (!external_force_is_finite(fex, rep)) {
+    rep.flops = meter.flops();
+    rep.seconds = meter.seconds();
+    return rep;
+  }
   // 1/((1 + ½Δtη) m_i): the diagonal of (M + θ₁Δt C)⁻¹ of (2.58) with θ₁ = ½, θ₂ = 0.
   const VecX inv_mass = (m * (1.0 + 0.5 * dt * eta)).cwiseInverse();
 

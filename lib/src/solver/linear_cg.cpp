@@ -78,6 +78,11 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
     return rep;
   }
   const double fex = problem.external_force_norm();
+  if (!external_force_is_finite(fex, rep)) {
+    rep.flops = meter.flops();
+    rep.seconds = meter.seconds();
+    return rep;
+  }
   VecX r = -g;
   problem.project(r);
   double rnorm = r.norm();

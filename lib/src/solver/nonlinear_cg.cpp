@@ -127,6 +127,11 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   const auto nn = static_cast<std::uint64_t>(n);
   const long restart_every = options.restart_every > 0 ? options.restart_every : long(n);
   const double fex = problem.external_force_norm();
+  if (!external_force_is_finite(fex, rep)) {
+    rep.flops = meter.flops();
+    rep.seconds = meter.seconds();
+    return rep;
+  }
 
   VecX g;
   double energy = 0.0;

@@ -62,6 +62,15 @@ StopReason CostMeter::exhausted(const Budget& budget, long iterations) const {
   return StopReason::kConverged;
 }
 
+bool external_force_is_finite(double external_force_norm, SolverReport& rep) {
+  if (std::isfinite(external_force_norm)) return true;
+  rep.status = StopReason::kNonFinite;
+  rep.message =
+      "the external load is not finite: ||f_ext|| overflows the doubles (a load above ~1.3e154 "
+      "N, or a non-finite force): scale the load (or change the units)";
+  return false;
+}
+
 double fixed_norm(const Problem& problem, const VecX& v) {
   double s = 0.0;
   for (Eigen::Index i = 0; i < v.size(); ++i)

@@ -17,6 +17,11 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
   const auto nn = static_cast<std::uint64_t>(n);
   const long max_inner = options.max_inner > 0 ? options.max_inner : long(n);
   const double fex = problem.external_force_norm();
+  if (!external_force_is_finite(fex, rep)) {
+    rep.flops = meter.flops();
+    rep.seconds = meter.seconds();
+    return rep;
+  }
 
   VecX g;
   double energy = 0.0;

@@ -185,6 +185,9 @@ class AugmentedSystem {
   [[nodiscard]] FactorStatus initialize(const SparseMatrix& k0);
   /// CholmodFactor's message of the last initialize() (empty when it succeeded).
   const std::string& factorization_message() const;
+  /// Status of the last initialize() (kNotAnalyzed before the first; kOverMemoryBudget when
+  /// AugmentedOptions::cholmod.memory_budget_bytes refused the factorization).
+  FactorStatus factorization_status() const;
 
   /// Current number of DOFs n = n₀ + added DOFs.
   int num_dofs() const { return n_; }

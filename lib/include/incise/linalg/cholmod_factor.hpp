@@ -48,6 +48,11 @@ struct CholmodOptions {
   /// by ±pivot_bound, and the factorization reports kTinyPivot (CHOLMOD_DSMALL); CHOLMOD's
   /// supernodal factorization ignores it. 0 (default) leaves every pivot as computed. ≥ 0.
   double pivot_bound = 0.0;
+  /// Memory budget of the numeric factorization (bytes; 0: none). factorize() compares
+  /// CholmodFactor::estimated_factor_bytes() — known from the symbolic analysis — with it first
+  /// and refuses with kOverMemoryBudget instead of allocating. Callers pass their budget
+  /// (e.g. incise::default_memory_budget_bytes(), scene limits.memory_mb).
+  std::uint64_t memory_budget_bytes = 0;
 };
 
 /// Outcome of analyze/factorize/solve, in the spirit of Eigen's `info()`.
@@ -62,7 +67,11 @@ enum class FactorStatus {
   /// CHOLMOD_DSMALL: pivots below CholmodOptions::pivot_bound were replaced by ±pivot_bound.
   /// The factor exists and solve() works, but it is the factor of a perturbed matrix A + E
   /// (diagonal E, |E_jj| ≤ pivot_bound); callers that need A⁻¹ itself must not accept it.
-  kTinyPivot
+  kTinyPivot,
+  /// The numeric factorization would need more than CholmodOptions::memory_budget_bytes
+  /// (estimated_factor_bytes(), from the symbolic analysis): not attempted, no factor; the
+  /// message states the estimate, nnz(L) and the budget.
+  kOverMemoryBudget
 };
 
 /// Human-readable name of a FactorStatus.
@@ -138,6 +147,15 @@ class CholmodFactor {
   /// Nonzeros of L as counted by CHOLMOD (including the diagonal; supernodal storage counts
   /// the padded dense blocks).
   std::int64_t nnz_l() const;
+  /// Bytes the numeric factorization will allocate, known after analyze() (0 before): the
+  /// values and integer pattern of L — supernodal: L->xsize doubles, L->ssize + 4·nsuper + n
+  /// ints, plus the largest update matrix (maxcsize doubles); simplicial: nnz(L) doubles and
+  /// ints plus 6n ints — and CHOLMOD's workspace (≈ 2n doubles, 5n ints). Read from the
+  /// symbolic analysis, before any of it is allocated.
+  std::uint64_t estimated_factor_bytes() const;
+  /// Peak bytes CHOLMOD has held at once since this object was made (cholmod_common's
+  /// memory_usage): what estimated_factor_bytes() predicts, measured.
+  std::uint64_t peak_memory_bytes() const;
   /// Floating point operations of the last factorization as estimated by CHOLMOD (fl).
   double factor_flops() const;
   /// Number of symbolic analyses actually performed (cache misses), for tests.

@@ -61,9 +61,20 @@ struct BuiltScene {
 /// parameter (mesh::GeneratorError, at /mesh/<parameter>); and when the estimated bytes of the
 /// mesh arrays and the elastic problem exceed the memory budget (spec.limits, default
 /// incise::default_memory_budget_bytes()), checked before a generated mesh is allocated and
-/// before a read mesh gets its problem. Throws the mesh reader's errors for bad mesh files.
-/// Nothing is written anywhere.
+/// before a read mesh gets its problem; and when the loads give ‖f_ext‖ = 0 over the free DOFs
+/// (at /loads: zero forces, forces on fixed nodes only, every node fixed, or underflow). Throws the
+/// mesh reader's errors for bad mesh files. Nothing is written anywhere.
 BuiltScene build_scene(const SceneSpec& spec);
+
+/// The memory budget of a scene's build (bytes): limits.memory_mb MiB when set (the scene key,
+/// or incise run --memory-mb), else incise::default_memory_budget_bytes(). The one budget every
+/// estimate is checked against: the mesh and its problem (build_scene) and the CHOLMOD factors
+/// of the "augmented" solver (run_scene, from the symbolic analysis).
+std::uint64_t memory_budget_bytes(const SceneSpec& spec);
+
+/// Where memory_budget_bytes() came from, for refusals: "limits.memory_mb = N", or the default
+/// and how to change it.
+std::string memory_budget_origin(const SceneSpec& spec);
 
 /// Nodes of `mesh` in `region`, sorted. Plane tolerance 0 means 1e-9 × bounding-box diagonal.
 std::vector<Index> select_nodes(const mesh::MeshData& mesh, const Region& region);

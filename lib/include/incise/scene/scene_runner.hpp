@@ -23,6 +23,7 @@
 #include <incise/solver/report.hpp>
 
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -70,6 +71,9 @@ struct CutStepRow {
   /// GMRES ran unpreconditioned: the preconditioner's LU was numerically singular
   /// (linalg::AugmentedReport::preconditioner_dropped)
   bool preconditioner_dropped = false;
+  /// rcond estimate of the preconditioner's LU (linalg::AugmentedReport::preconditioner_rcond;
+  /// NaN: none built)
+  double preconditioner_rcond = std::numeric_limits<double>::quiet_NaN();
   /// amplification of the solution (linalg::AugmentedReport::amplification, ≤ κ(K)); 0 when
   /// the step did not solve
   double amplification = 0;
@@ -96,6 +100,9 @@ struct SceneRunResult {
   /// holds iterations = number of solves, inner_iterations = total GMRES iterations and the
   /// residual ‖P(K u − f)‖ recomputed matrix-free on the final cut mesh (scene.problem).
   std::vector<CutStepRow> cut_steps;
+  /// Elements with det F ≤ 0 at u (solver::check_inversion, §4.3.1, on scene.problem's mesh);
+  /// −1 when u is not finite (not counted).
+  Index inverted_elements = -1;
 };
 
 /// Called after every iteration with the solver's snapshot (u valid during the call).
@@ -133,7 +140,14 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
 /// Runs the scene's solver from u = 0. Numerical failure is reported in result.report.status
 /// and message, never thrown; a "dynamic-ss22" run whose Δt or η cannot be estimated
 /// (dynamic_parameters() not ok) is not run: the report has that status and message, u = 0.
-/// Throws UsageError only for a scene whose problem was not built.
+/// Every run ends with the same checks (issue 18): a converged report whose residual, energy or
+/// displacement is not finite becomes kNonFinite; a load whose ‖f_ext‖ overflows is kNonFinite
+/// from the solver (solver::external_force_is_finite); the inverted elements at u are counted
+/// (result.inverted_elements) and a converged state with any becomes kInverted unless the scene
+/// sets material.allow_inversion (linear and StVK only). Throws UsageError for a scene whose
+/// problem was not built, and ParseError (at /solver/method, naming the estimate and the budget)
+/// when the "augmented" solver's CHOLMOD factor is estimated above memory_budget_bytes(spec)
+/// from its symbolic analysis — before the numeric factorization, nothing solved.
 /// An interactive cutting run replaces scene.mesh, scene.fixed_nodes and scene.problem by the
 /// final cut mesh, its held nodes (fixed from the start, fixed by the cutter, unused) and an
 /// elastic problem on it carrying the same nodal forces (used to verify the residual).

@@ -91,6 +91,12 @@ struct MaterialSpec {
   /// E (Pa), ν, γ (Veronda–Westmann, §4.3.4; 0 for the other models), ρ (kg/m³); admissible
   /// as material::validate defines it (checked by the parser and by make_material).
   material::Parameters parameters;
+  /// Scene key `allow_inversion` (default false): accept a converged state with inverted
+  /// elements (det F ≤ 0) as a success. Only for models whose energy is defined for det F ≤ 0
+  /// (material::Material::defined_when_inverted(): "linear", "stvk"); the parser refuses it for
+  /// the log models ("neohookean", "veronda-westmann"). Without it such a state is a status
+  /// (solver::StopReason::kInverted, scene_runner.hpp).
+  bool allow_inversion = false;
 };
 
 /// An external load.

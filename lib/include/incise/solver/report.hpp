@@ -139,6 +139,13 @@ inline StopReason failure_reason(EvalStatus s) {
   return s == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
 }
 
+/// The start check every solver makes on ‖f_ext‖ (Problem::external_force_norm()): a load whose
+/// norm is not finite (it overflows the doubles, e.g. a total force of 1e155 N) would make the
+/// threshold of (6.8)/(6.9) infinite, which every residual, ∞ included, would meet. Returns true
+/// when ‖f_ext‖ is finite; otherwise sets rep.status = kNonFinite and a message naming the value
+/// (the solver then returns without iterating, u unchanged).
+bool external_force_is_finite(double external_force_norm, SolverReport& rep);
+
 /// ‖v‖₂ of the components of v at fixed DOFs (the reaction force norm of (6.9) when v = ∇Π).
 double fixed_norm(const Problem& problem, const VecX& v);
 

@@ -1,0 +1,47 @@
+# ctest helper for `incise run` on hostile scenes (issue 18): run CMD (a ;-list) in the current
+# directory (a scratch folder: the scene's outputs land there) and require
+#   exit status EXIT; stderr matching STDERR_REGEX (if given) on one line; stdout matching
+#   STDOUT_REGEX (if given); and neither stdout nor any file written (FILES, a ;-list, each of
+#   which must exist unless listed in ABSENT) holding a NaN or an infinity ("nan", "inf" as a
+#   word, any case).
+#   cmake -DCMD=... -DEXIT=3 [-DSTDERR_REGEX=...] [-DSTDOUT_REGEX=...] [-DFILES=a;b]
+#         [-DABSENT=c] -P cli_run_expect.cmake
+foreach(f ${FILES} ${ABSENT})
+  file(REMOVE "${f}")
+endforeach()
+execute_process(COMMAND ${CMD} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message(STATUS "exit ${rc}\n${out}\nstderr: ${err}")
+if(NOT rc EQUAL EXIT)
+  message(FATAL_ERROR "expected exit status ${EXIT}, got ${rc}")
+endif()
+if(DEFINED STDERR_REGEX AND NOT err MATCHES "${STDERR_REGEX}")
+  message(FATAL_ERROR "stderr does not match '${STDERR_REGEX}'")
+endif()
+string(REGEX MATCHALL "\n" lines "${err}")
+list(LENGTH lines n)
+if(n GREATER 1)
+  message(FATAL_ERROR "stderr has ${n} lines; expected at most one")
+endif()
+if(DEFINED STDOUT_REGEX AND NOT out MATCHES "${STDOUT_REGEX}")
+  message(FATAL_ERROR "stdout does not match '${STDOUT_REGEX}'")
+endif()
+set(non_finite "(^|[^a-z])(nan|inf)([^a-z]|$)")
+string(TOLOWER "${out}" lower)
+if(lower MATCHES "${non_finite}")
+  message(FATAL_ERROR "stdout holds a non-finite number: '${CMAKE_MATCH_0}'")
+endif()
+foreach(f ${FILES})
+  if(NOT EXISTS "${f}")
+    message(FATAL_ERROR "expected the run to write ${f}")
+  endif()
+  file(READ "${f}" text)
+  string(TOLOWER "${text}" lower)
+  if(lower MATCHES "${non_finite}")
+    message(FATAL_ERROR "${f} holds a non-finite number: '${CMAKE_MATCH_0}'")
+  endif()
+endforeach()
+foreach(f ${ABSENT})
+  if(EXISTS "${f}")
+    message(FATAL_ERROR "expected the run not to write ${f}")
+  endif()
+endforeach()
