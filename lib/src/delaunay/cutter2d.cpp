@@ -24,6 +24,7 @@ bool segment_intersection(const Vec2& p0, const Vec2& p1, const Vec2& q0, const 
                           double& s) {
   const Vec2 r = p1 - p0, d = q1 - q0;
   const double den = cross(r, d);
+  t = s = 0;  // defined for callers that clamp a near-parallel touch
   if (den == 0) return false;
   t = cross(q0 - p0, d) / den;
   s = cross(q0 - p0, r) / den;
