@@ -39,8 +39,7 @@ DelaunayCutSession::DelaunayCutSession(const mesh::MeshData& mesh,
 DelaunayCutSession::~DelaunayCutSession() = default;
 
 Vec2 DelaunayCutSession::displacement(Index v) const {
-  return v >= 0 && static_cast<size_t>(v) < u_.size() ? u_[static_cast<size_t>(v)]
-                                                      : Vec2::Zero();
+  return v >= 0 && static_cast<size_t>(v) < u_.size() ? u_[static_cast<size_t>(v)] : Vec2::Zero();
 }
 
 Vec2 DelaunayCutSession::to_reference(const Vec2& x) const {

@@ -42,7 +42,7 @@ struct DelaunayCutSessionOptions {
 struct [[nodiscard]] DelaunayCutStepReport
     : Outcome<solver::StopReason, solver::StopReason::kConverged,
               solver::StopReason::kMaxIterations> {
-  delaunay::CutMove2DReport cut;  ///< what the cutter did
+  delaunay::CutMove2DReport cut;        ///< what the cutter did
   Vec2 reference_point = Vec2::Zero();  ///< the scalpel mapped to the reference configuration
   long cg_iterations = 0;               ///< CG steps of this movement's solve
   double residual_norm = 0.0;           ///< final ‖r‖ (N)
