@@ -148,6 +148,25 @@ TEST(DelaunayCutter2D, RandomScalpelPathsKeepTheMeshValid) {
             << " deg, growth per h of path " << growth_per_length << " triangles\n";
 }
 
+TEST(DelaunayCutter2D, FarAwayAndHugeScalpelPositionsAreCheapAndHarmless) {
+  // A scalpel 1e50 m away, then back: the boundary search is clipped to the mesh's own cells (it
+  // would otherwise visit (1e50 / h̄)² cells); the segment passes far below the mesh, so nothing
+  // enters. Beyond the predicates' range, and non-finite, positions are refused.
+  Triangulation t(mesh::make_rectangle(5, 5, 5, 5));
+  Cutter2D cutter(t);
+  (void)cutter.move_to(Vec2(1e50, -1e50));
+  const CutMove2DReport r = cutter.move_to(Vec2(-1e50, 2.5));
+  EXPECT_FALSE(r.entered);
+  EXPECT_TRUE(valid(t));
+  EXPECT_THROW((void)cutter.move_to(Vec2(1e300, 0)), ParameterError);
+  EXPECT_THROW((void)cutter.move_to(Vec2(std::nan(""), 0)), ParameterError);
+  // Still usable afterwards: a cut from outside enters.
+  (void)cutter.move_to(Vec2(-0.5, 2.5));
+  const CutMove2DReport in = cutter.move_to(Vec2(1.5, 2.5));
+  EXPECT_TRUE(in.entered);
+  EXPECT_TRUE(valid(t));
+}
+
 TEST(DelaunaySubdivision, StraightCutSlicesEveryCrossedTriangleIntoThreeAndSeparates) {
   // Fig. 5.16 top: the subdivision cutter on the 50-triangle grid. A path from outside to
   // outside that meets no vertex crosses I interior and 2 boundary edges; each interior crossing

@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <unordered_map>
 #include <vector>
 
@@ -48,8 +49,15 @@ class BoundaryGrid : public mesh::ConnectivityWatcher {
   /// bounding box of segment a–b (grown by `margin`) overlaps, each once.
   std::vector<std::array<Index, 2>> near(const Vec2& a, const Vec2& b, double margin) const {
     std::vector<std::array<Index, 2>> out;
-    const auto lo = key_of(Vec2(std::min(a.x(), b.x()) - margin, std::min(a.y(), b.y()) - margin));
-    const auto hi = key_of(Vec2(std::max(a.x(), b.x()) + margin, std::max(a.y(), b.y()) + margin));
+    if (cells_.empty() || !a.allFinite() || !b.allFinite()) return out;
+    // The query box clipped to the cells ever used: a scalpel far outside the mesh (or a huge
+    // coordinate) costs no more than the mesh's own cells.
+    const Vec2 qlo(std::min(a.x(), b.x()) - margin, std::min(a.y(), b.y()) - margin);
+    const Vec2 qhi(std::max(a.x(), b.x()) + margin, std::max(a.y(), b.y()) + margin);
+    const std::array<std::int64_t, 2> lo{std::max(used_lo_[0], clamped_key(qlo.x())),
+                                         std::max(used_lo_[1], clamped_key(qlo.y()))};
+    const std::array<std::int64_t, 2> hi{std::min(used_hi_[0], clamped_key(qhi.x())),
+                                         std::min(used_hi_[1], clamped_key(qhi.y()))};
     for (std::int64_t i = lo[0]; i <= hi[0]; ++i)
       for (std::int64_t j = lo[1]; j <= hi[1]; ++j) {
         const auto it = cells_.find(pack(i, j));
@@ -70,9 +78,13 @@ class BoundaryGrid : public mesh::ConnectivityWatcher {
     return s.sign() > 0 ? std::array<Index, 2>{s.vertex(0), s.vertex(1)}
                         : std::array<Index, 2>{s.vertex(1), s.vertex(0)};
   }
+  /// floor(x / cell) clamped to ±2⁴⁰ (no overflow for any finite x).
+  std::int64_t clamped_key(double x) const {
+    const double k = std::floor(x / cell_);
+    return static_cast<std::int64_t>(std::clamp(k, -1099511627776.0, 1099511627776.0));
+  }
   std::array<std::int64_t, 2> key_of(const Vec2& x) const {
-    return {static_cast<std::int64_t>(std::floor(x.x() / cell_)),
-            static_cast<std::int64_t>(std::floor(x.y() / cell_))};
+    return {clamped_key(x.x()), clamped_key(x.y())};
   }
   static std::int64_t pack(std::int64_t i, std::int64_t j) { return (i << 32) ^ (j & 0xffffffff); }
   void insert(const std::array<Index, 2>& e) {
@@ -80,6 +92,12 @@ class BoundaryGrid : public mesh::ConnectivityWatcher {
     const Vec2 a = mesh_.point(e[0]), b = mesh_.point(e[1]);
     const auto lo = key_of(a.cwiseMin(b)), hi = key_of(a.cwiseMax(b));
     std::vector<std::int64_t>& keys = where_[e];
+    for (int d = 0; d < 2; ++d) {
+      used_lo_[static_cast<size_t>(d)] =
+          std::min(used_lo_[static_cast<size_t>(d)], lo[static_cast<size_t>(d)]);
+      used_hi_[static_cast<size_t>(d)] =
+          std::max(used_hi_[static_cast<size_t>(d)], hi[static_cast<size_t>(d)]);
+    }
     for (std::int64_t i = lo[0]; i <= hi[0]; ++i)
       for (std::int64_t j = lo[1]; j <= hi[1]; ++j) {
         cells_[pack(i, j)].push_back(e);
@@ -107,6 +125,11 @@ class BoundaryGrid : public mesh::ConnectivityWatcher {
   std::unordered_map<std::int64_t, std::vector<std::array<Index, 2>>> cells_;
   std::unordered_map<std::array<Index, 2>, std::vector<std::int64_t>, EdgeHash> where_;
   std::unordered_map<Index, std::vector<std::array<Index, 2>>> by_vertex_;
+  // Range of cell keys ever used (grows only).
+  std::array<std::int64_t, 2> used_lo_{std::numeric_limits<std::int64_t>::max(),
+                                       std::numeric_limits<std::int64_t>::max()};
+  std::array<std::int64_t, 2> used_hi_{std::numeric_limits<std::int64_t>::min(),
+                                       std::numeric_limits<std::int64_t>::min()};
 };
 
 }  // namespace incise::delaunay::detail

@@ -409,7 +409,10 @@ bool Cutter2D::exit_at(Index p, Index q, const Vec2& x, CutMove2DReport& r) {
 }
 
 CutMove2DReport Cutter2D::move_to(const Vec2& x) {
-  INCISE_CHECK_PARAM(x.allFinite(), "Cutter2D::move_to: non-finite scalpel position");
+  // The predicates are exact for coordinates up to ~1e70 (predicates.hpp): refuse what lies
+  // beyond (1e60 m is no scalpel position).
+  INCISE_CHECK_PARAM(x.allFinite() && x.cwiseAbs().maxCoeff() <= 1e60,
+                     "Cutter2D::move_to: scalpel position must be finite with |x|, |y| <= 1e60 m");
   CutMove2DReport r;
   const long flips_before = mesh_.num_flips();
   if (!placed_) {

@@ -38,7 +38,8 @@ SubdivisionReport subdivision_cut(Triangulation& m, const std::vector<Vec2>& pat
                                   SubdivisionOptions options) {
   INCISE_CHECK_PARAM(path.size() >= 2, "subdivision_cut: the path needs at least two points");
   for (const Vec2& p : path)
-    INCISE_CHECK_PARAM(p.allFinite(), "subdivision_cut: non-finite path point");
+    INCISE_CHECK_PARAM(p.allFinite() && p.cwiseAbs().maxCoeff() <= 1e60,
+                       "subdivision_cut: path point not finite or beyond 1e60 m");
   INCISE_CHECK_PARAM(std::isfinite(options.snap) && options.snap > 0 && options.snap < 0.5,
                      "subdivision_cut: snap must be in (0, 0.5)");
   SubdivisionReport r;

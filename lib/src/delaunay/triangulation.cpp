@@ -30,8 +30,10 @@ double angle_at(const Vec2& p, const Vec2& a, const Vec2& b) {
 Triangulation::Triangulation(const mesh::MeshData& mesh) : conn_(2), points_(mesh.points) {
   INCISE_CHECK_PARAM(mesh.dimension == 2, "Triangulation: the mesh must be 2D (triangles)");
   for (Index v = 0; v < mesh.num_points(); ++v)
-    INCISE_CHECK_PARAM(mesh.points.col(v).allFinite(),
-                       "Triangulation: point " + std::to_string(v) + " is not finite");
+    INCISE_CHECK_PARAM(
+        mesh.points.col(v).allFinite() && mesh.points.col(v).cwiseAbs().maxCoeff() <= 1e60,
+        "Triangulation: point " + std::to_string(v) +
+            " is not finite or beyond 1e60 m (the predicates' exact range)");
   points_.row(2).setZero();
   for (Index c = 0; c < mesh.num_cells(); ++c) {
     const auto t = mesh.cells.col(c);

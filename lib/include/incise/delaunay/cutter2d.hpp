@@ -102,7 +102,8 @@ class Cutter2D {
   Cutter2D(const Cutter2D&) = delete;
   Cutter2D& operator=(const Cutter2D&) = delete;
 
-  /// Moves the scalpel to x (m). The first call only places it.
+  /// Moves the scalpel to x (m). The first call only places it. Throws ParameterError for a
+  /// non-finite x or a coordinate beyond 1e60 m (the predicates' exact range).
   CutMove2DReport move_to(const Vec2& x);
 
   /// Current phase.

@@ -35,7 +35,8 @@ class Triangulation {
  public:
   /// Takes a 2D triangle mesh (MeshData::dimension == 2, z ignored) whose triangles are
   /// counter-clockwise. Throws ParameterError when the mesh is not 2D, a coordinate is not
-  /// finite or a triangle is not strictly counter-clockwise (exact orient2d); UsageError for an
+  /// finite or beyond 1e60 m, or a triangle is not strictly counter-clockwise (exact orient2d);
+  /// UsageError for an
   /// invalid cell set (Connectivity::from_mesh_data).
   explicit Triangulation(const mesh::MeshData& mesh);
 
