@@ -85,7 +85,7 @@ std::vector<Vec2> random_path(double n, std::mt19937_64& rng) {
 TEST(DelaunayCutter2D, RandomScalpelPathsKeepTheMeshValid) {
   INCISE_SEEDED_RNG(rng, 5201);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  const int paths = incise::test::scaled(1000);
+  const int paths = incise::test::scaled_for_checks(1000);
   long moves = 0, splits = 0, removals = 0, blocked = 0, refused = 0;
   int exits = 0, entries = 0;
   double worst_angle = 0, growth_per_length = 0;
@@ -184,7 +184,7 @@ TEST(DelaunaySubdivision, RandomPathsKeepTheMeshValid) {
   INCISE_SEEDED_RNG(rng, 5202);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int separated = 0;
-  for (int i = 0; i < incise::test::scaled(300); ++i) {
+  for (int i = 0; i < incise::test::scaled_for_checks(300); ++i) {
     const int n = 3 + static_cast<int>(u(rng) * 6);
     Triangulation t(mesh::make_rectangle(n, n, n, n));
     const std::vector<Vec2> path = random_path(n, rng);

@@ -14,7 +14,7 @@
 namespace incise::delaunay {
 namespace {
 
-using I128 = __int128;
+__extension__ typedef __int128 I128;  // GCC/Clang extension (exact reference arithmetic)
 
 int sign(I128 v) {
   return v > 0 ? 1 : (v < 0 ? -1 : 0);

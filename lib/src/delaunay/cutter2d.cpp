@@ -154,7 +154,6 @@ bool Cutter2D::too_short(Index v) const {
 void Cutter2D::remove_close_nodes(CutMove2DReport& r) {
   for (bool again = true; again;) {
     again = false;
-    const Vec2 a = mesh_.point(active_);
     for (const Index v : mesh_.neighbours(active_)) {
       if (is_incision_node(v) || !mesh_.is_interior_vertex(v) || !too_short(v)) continue;
       if (mesh_.remove_vertex(v)) {
@@ -282,8 +281,8 @@ void Cutter2D::split_incision(CutMove2DReport& r) {
       auto closest_on = [](const Vec2& q0, const Vec2& q1, const Vec2& y) {
         const Vec2 d = q1 - q0;
         const double l2 = d.squaredNorm();
-        const double t = l2 > 0 ? std::clamp((y - q0).dot(d) / l2, 0.0, 1.0) : 0.0;
-        return Vec2(q0 + t * d);
+        const double u = l2 > 0 ? std::clamp((y - q0).dot(d) / l2, 0.0, 1.0) : 0.0;
+        return Vec2(q0 + u * d);
       };
       for (const Vec2& cand : {p0, p1, closest_on(p0, p1, pl), closest_on(p0, p1, pr)}) {
         const double dist = (closest_on(pl, pr, cand) - cand).norm();

@@ -4,6 +4,8 @@
 /// overridden with the environment variable INCISE_SEED; it is attached to every failure message
 /// through a gtest scoped trace, so a failing run can be reproduced exactly.
 
+#include <incise/core/error.hpp>
+
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -20,6 +22,18 @@ std::string source_path(const std::string& relative);
 
 /// Number of repetitions scaled by INCISE_TEST_SCALE (default 1.0; e.g. 10 for soak runs).
 int scaled(int n);
+
+/// scaled(n) in optimized builds; scaled(n / divisor) (at least 1) in builds with debug checks
+/// (Debug, and the sanitizer presets, which set INCISE_PARANOID: the connectivity validates
+/// itself after every edit, O(n) each, so long random sequences become quadratic there).
+inline int scaled_for_checks(int n, int divisor = 10) {
+#if INCISE_DEBUG_CHECKS
+  return scaled(n / divisor > 0 ? n / divisor : 1);
+#else
+  (void)divisor;
+  return scaled(n);
+#endif
+}
 
 }  // namespace incise::test
 
