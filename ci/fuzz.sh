@@ -5,8 +5,9 @@
 #   ci/fuzz.sh [SECONDS] [TARGET...]   run each target for SECONDS (default 60)
 #   ci/fuzz.sh --runs N [TARGET...]    run each target for N executions (the longer run)
 # Targets: medit tetgen gmsh off sweep scene (default: all). INCISE_FUZZ_JOBS targets run at once
-# (default: the number of cores; each fuzzer is one process on one core). Prints one line per
-# target with its executions; exits non-zero if any target has a finding, leaving the input in
+# (default: the number of cores; each fuzzer is one process on one core); INCISE_FUZZ_PREBUILT=1
+# skips the build (ci/test.sh has just built the tree). Prints one line per target with its
+# executions; exits non-zero if any target has a finding, leaving the input in
 # build/fuzz-corpus/<target>-crash-* (or -leak-, -timeout-, -oom-) and the log in
 # build/fuzz-logs/<target>.log. Reproduce with build/asan/fuzz/fuzz_<target> <input>.
 set -euo pipefail
@@ -25,8 +26,10 @@ export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
 cores=$(nproc 2>/dev/null || echo 2)
 jobs=${INCISE_FUZZ_JOBS:-$cores}
 
-cmake --preset asan >/dev/null
-cmake --build --preset asan -j"$cores" --target "${targets[@]/#/fuzz_}" >/dev/null
+if [ "${INCISE_FUZZ_PREBUILT:-0}" != "1" ]; then  # ci/test.sh has just built the asan tree
+  cmake --preset asan >/dev/null
+  cmake --build --preset asan -j"$cores" --target "${targets[@]/#/fuzz_}" >/dev/null
+fi
 mkdir -p build/fuzz-corpus build/fuzz-logs
 for t in "${targets[@]}"; do
   [ -d "reference_data/fuzz/$t" ] || { echo "fuzz: no seed folder reference_data/fuzz/$t"; exit 2; }

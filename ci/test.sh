@@ -30,21 +30,34 @@ finish() {
   [ "$rc" -eq 0 ] || status=1
   echo "== stage durations"
   for line in "${summary[@]}"; do echo "   $line"; done
-  echo "== total time $SECONDS s"
+  times >"$logdir/times"
+  echo "== total time $SECONDS s wall, $(cpu_of_times) s CPU; $(uptime | sed 's/.*load/load/')"
   [ "$skipped" -eq 0 ] || echo "skipped: $skipped (not counted below)"
   echo "tests: $passed passed, $failed failed"
   exit $status
 }
 trap finish EXIT
 
-t_stage=0
+# CPU seconds (user + system) of the finished child processes, from bash `times`: beside the
+# wall time it shows how far a stage kept both cores busy and how much a shared machine's load
+# stretched it. `times` must run in this shell (in a pipe or $(...) it would report the
+# subshell's children): callers write it to $logdir/times, cpu_of_times reads its last line.
+cpu_of_times() {
+  tail -1 "$logdir/times" |
+    awk '{ s = 0; for (i = 1; i <= 2; ++i) { split($i, a, /[ms]/); s += a[1] * 60 + a[2] }; printf "%d", s }'
+}
+t_stage=0 c_stage=0
 begin() {
   echo "== $1"
   t_stage=$SECONDS
+  times >"$logdir/times"
+  c_stage=$(cpu_of_times)
 }
 end() {
-  summary+=("$(printf '%-40s %5d s' "$1" $((SECONDS - t_stage)))")
-  echo "== stage time: $1 $((SECONDS - t_stage)) s"
+  times >"$logdir/times"
+  local wall=$((SECONDS - t_stage)) cpu=$(($(cpu_of_times) - c_stage))
+  summary+=("$(printf '%-42s %5d s wall %6d s CPU' "$1" "$wall" "$cpu")")
+  echo "== stage time: $1 $wall s wall, $cpu s CPU"
 }
 
 # Adds a ctest log's counts ("x% tests passed, M tests failed out of T"; skipped cases are listed
@@ -101,7 +114,7 @@ if [ "${INCISE_SKIP_ASAN:-0}" != "1" ]; then
   end "5 asan tests (all but label slow)"
 
   begin "6 fuzz smoke (${fuzz_seconds} s per harness)"
-  ci/fuzz.sh "$fuzz_seconds" 2>&1 | tee "$logdir/fuzz.log" || status=1
+  INCISE_FUZZ_PREBUILT=1 ci/fuzz.sh "$fuzz_seconds" 2>&1 | tee "$logdir/fuzz.log" || status=1
   passed=$((passed + $(grep -c ', no finding$' "$logdir/fuzz.log" || true)))
   failed=$((failed + $(grep -c ': FINDING' "$logdir/fuzz.log" || true)))
   end "6 fuzz smoke (${fuzz_seconds} s per harness)"
