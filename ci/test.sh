@@ -5,7 +5,7 @@
 #   2 release tests, all but label slow
 #   3 release tests, label slow
 #   4 asan build: clang++ ASan + UBSan, every test and the libFuzzer harnesses (preset asan)
-#   5 asan tests, all but label slow
+#   5 asan tests, all but label slow and the certify mutants (docs/ci.md)
 #   6 fuzz smoke: each harness of fuzz/ for INCISE_FUZZ_SECONDS (default 30) s (ci/fuzz.sh)
 #   7 tsan build of the tests labelled threads and their libraries (preset tsan)
 #   8 tsan tests, label threads
@@ -109,9 +109,9 @@ if [ "${INCISE_SKIP_ASAN:-0}" != "1" ]; then
   cmake --build --preset asan -j"$jobs"
   end "4 asan build (clang++, tests + fuzzers)"
 
-  begin "5 asan tests (all but label slow)"
+  begin "5 asan tests (all but label slow, mutants)"
   run_ctest asan --preset asan
-  end "5 asan tests (all but label slow)"
+  end "5 asan tests (all but label slow, mutants)"
 
   begin "6 fuzz smoke (${fuzz_seconds} s per harness)"
   INCISE_FUZZ_PREBUILT=1 ci/fuzz.sh "$fuzz_seconds" 2>&1 | tee "$logdir/fuzz.log" || status=1
