@@ -3,8 +3,10 @@
 # through sudo. Also makes OpenBLAS the BLAS that libblas.so.3 resolves to at run time (CHOLMOD's
 # supernodal factorization is several times faster with it than with the reference BLAS).
 set -euo pipefail
+# clang + libclang-rt-14-dev (the sanitizer and libFuzzer runtimes, only recommended by clang, so
+# not pulled in with --no-install-recommends): the asan preset that ci/test.sh builds.
 packages=(
-  build-essential cmake ccache pkg-config clang-format
+  build-essential cmake ccache pkg-config clang-format clang libclang-rt-14-dev
   libeigen3-dev libsuitesparse-dev libfftw3-dev nlohmann-json3-dev libopenblas-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev gnuplot-nox
 )

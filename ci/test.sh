@@ -1,8 +1,19 @@
 #!/usr/bin/env bash
-# The test command: install what is missing, check formatting and the module order, build
-# Release and run every non-slow test, then (with INCISE_WITH_SLOW=1) the `slow` label, then
-# build the asan preset and run the property tests under sanitizers. Prints each stage's
-# duration. Exits non-zero on any failure. Ends with one line "tests: N passed, M failed".
+# The test command (docs/ci.md): install what is missing, check formatting and the module order,
+# then the stages
+#   1 release build                     (preset release, g++)
+#   2 release tests, all but label slow
+#   3 release tests, label slow
+#   4 asan build: clang++ ASan + UBSan, every test and the libFuzzer harnesses (preset asan)
+#   5 asan tests, all but label slow and the certify mutants (docs/ci.md)
+#   6 fuzz smoke: each harness of fuzz/ for INCISE_FUZZ_SECONDS (default 30) s (ci/fuzz.sh)
+#   7 tsan build of the tests labelled threads and their libraries (preset tsan)
+#   8 tsan tests, label threads
+# Prints each stage's duration. A failing build stops the script; a failing test stage fails it
+# at the end (the other stages still run). Exits non-zero on any failure. Ends with one line
+# "tests: N passed, M failed" (ctest cases of stages 2, 3, 5, 8 and one per fuzz harness).
+# Local shortcuts (CI sets none): INCISE_SKIP_SLOW=1, INCISE_SKIP_ASAN=1 (stages 4-6),
+# INCISE_SKIP_TSAN=1.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc 2>/dev/null || echo 2)
@@ -10,6 +21,65 @@ jobs=$(nproc 2>/dev/null || echo 2)
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
 logdir=build/ci-logs
 mkdir -p "$logdir"
+fuzz_seconds=${INCISE_FUZZ_SECONDS:-30}
+
+passed=0 failed=0 skipped=0 status=0
+summary=()
+finish() {
+  local rc=$?
+  [ "$rc" -eq 0 ] || status=1
+  echo "== stage durations"
+  for line in "${summary[@]}"; do echo "   $line"; done
+  times >"$logdir/times"
+  echo "== total time $SECONDS s wall, $(cpu_of_times) s CPU; $(uptime | sed 's/.*load/load/')"
+  [ "$skipped" -eq 0 ] || echo "skipped: $skipped (not counted below)"
+  echo "tests: $passed passed, $failed failed"
+  exit $status
+}
+trap finish EXIT
+
+# CPU seconds (user + system) of the finished child processes, from bash `times`: beside the
+# wall time it shows how far a stage kept both cores busy and how much a shared machine's load
+# stretched it. `times` must run in this shell (in a pipe or $(...) it would report the
+# subshell's children): callers write it to $logdir/times, cpu_of_times reads its last line.
+cpu_of_times() {
+  tail -1 "$logdir/times" |
+    awk '{ s = 0; for (i = 1; i <= 2; ++i) { split($i, a, /[ms]/); s += a[1] * 60 + a[2] }; printf "%d", s }'
+}
+t_stage=0 c_stage=0
+begin() {
+  echo "== $1"
+  t_stage=$SECONDS
+  times >"$logdir/times"
+  c_stage=$(cpu_of_times)
+}
+end() {
+  times >"$logdir/times"
+  local wall=$((SECONDS - t_stage)) cpu=$(($(cpu_of_times) - c_stage))
+  summary+=("$(printf '%-42s %5d s wall %6d s CPU' "$1" "$wall" "$cpu")")
+  echo "== stage time: $1 $wall s wall, $cpu s CPU"
+}
+
+# Adds a ctest log's counts ("x% tests passed, M tests failed out of T"; skipped cases are listed
+# as "***Skipped") to the totals.
+count() {
+  local total fails skips
+  read -r total fails < <(sed -nE 's/.*tests passed, ([0-9]+) tests? failed out of ([0-9]+).*/\2 \1/p' "$1" |
+    awk '{ t = $1; f = $2 } END { if (t == "") { t = 0; f = 0 }; print t, f }')
+  skips=$(grep -c '\*\*\*Skipped' "$1" || true)
+  passed=$((passed + total - fails - skips))
+  failed=$((failed + fails))
+  skipped=$((skipped + skips))
+}
+
+# Runs ctest with the given arguments into log $1; a failure marks the script failed.
+run_ctest() {
+  local log=$logdir/$1.log
+  shift
+  ctest "$@" 2>&1 | tee "$log" || status=1
+  grep -q "tests passed" "$log" || status=1  # ctest stopped before running the tests
+  count "$log"
+}
 
 ci/install-deps.sh
 
@@ -18,42 +88,45 @@ ci/check-format.sh
 echo "== module order (lib/README.md)"
 ci/check-module-order.sh
 
-# counts "N passed, M failed" from a ctest log ("x% tests passed, M tests failed out of T")
-count() {
-  sed -nE 's/.*tests passed, ([0-9]+) tests? failed out of ([0-9]+).*/\2 \1/p' "$1" |
-    awk '{ t = $1; f = $2 } END { if (t == "") { t = 0; f = 0 }; print t - f, f }'
-}
-
-t0=$SECONDS
-echo "== release build"
+begin "1 release build"
 cmake --preset release >/dev/null
 cmake --build --preset release -j"$jobs"
-echo "== release tests (excluding label 'slow')"
-status=0
-ctest --preset release 2>&1 | tee "$logdir/release.log" || status=1
-read -r p1 f1 < <(count "$logdir/release.log")
-echo "== stage time: build + non-slow tests $((SECONDS - t0)) s"
+end "1 release build"
 
-p3=0 f3=0
-if [ "${INCISE_WITH_SLOW:-0}" = "1" ]; then
-  t1=$SECONDS
-  echo "== release tests, label 'slow'"
-  ctest --test-dir build/release -L slow -j"$jobs" --output-on-failure 2>&1 |
-    tee "$logdir/slow.log" || status=1
-  read -r p3 f3 < <(count "$logdir/slow.log")
-  echo "== stage time: slow label $((SECONDS - t1)) s"
+begin "2 release tests (all but label slow)"
+run_ctest release --preset release
+end "2 release tests (all but label slow)"
+
+if [ "${INCISE_SKIP_SLOW:-0}" != "1" ]; then
+  begin "3 release tests, label slow"
+  run_ctest slow --test-dir build/release -L slow -j"$jobs" --output-on-failure
+  end "3 release tests, label slow"
 fi
 
-p2=0 f2=0
 if [ "${INCISE_SKIP_ASAN:-0}" != "1" ]; then
-  echo "== asan build (property tests)"
+  begin "4 asan build (clang++, tests + fuzzers)"
   cmake --preset asan >/dev/null
   cmake --build --preset asan -j"$jobs"
-  echo "== asan property tests"
-  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-    ctest --preset asan-property 2>&1 | tee "$logdir/asan.log" || status=1
-  read -r p2 f2 < <(count "$logdir/asan.log")
+  end "4 asan build (clang++, tests + fuzzers)"
+
+  begin "5 asan tests (all but label slow, mutants)"
+  run_ctest asan --preset asan
+  end "5 asan tests (all but label slow, mutants)"
+
+  begin "6 fuzz smoke (${fuzz_seconds} s per harness)"
+  INCISE_FUZZ_PREBUILT=1 ci/fuzz.sh "$fuzz_seconds" 2>&1 | tee "$logdir/fuzz.log" || status=1
+  passed=$((passed + $(grep -c ', no finding$' "$logdir/fuzz.log" || true)))
+  failed=$((failed + $(grep -c ': FINDING' "$logdir/fuzz.log" || true)))
+  end "6 fuzz smoke (${fuzz_seconds} s per harness)"
 fi
-echo "== total time $SECONDS s"
-echo "tests: $((p1 + p2 + p3)) passed, $((f1 + f2 + f3)) failed"
-exit $status
+
+if [ "${INCISE_SKIP_TSAN:-0}" != "1" ]; then
+  begin "7 tsan build (tests labelled threads)"
+  cmake --preset tsan >/dev/null
+  cmake --build --preset tsan -j"$jobs" --target incise_threads_tests
+  end "7 tsan build (tests labelled threads)"
+
+  begin "8 tsan tests (label threads)"
+  run_ctest tsan --preset tsan
+  end "8 tsan tests (label threads)"
+fi

@@ -12,7 +12,8 @@ endfunction()
 
 # incise_add_gtest(NAME SOURCES ... LIBS ... LABELS ... [TIMEOUT s])
 #   A GoogleTest executable; every TEST becomes one ctest case carrying LABELS.
-#   Label vocabulary: unit, property, verification, slow, plus the module name.
+#   Label vocabulary: unit, property, verification, slow, threads (starts threads: run under
+#   ThreadSanitizer by ci/test.sh), plus the module name.
 function(incise_add_gtest name)
   cmake_parse_arguments(A "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
   if(NOT A_TIMEOUT)
@@ -33,6 +34,9 @@ function(incise_add_gtest name)
        "    TIMEOUT ${A_TIMEOUT} ENVIRONMENT \"INCISE_SOURCE_DIR=${PROJECT_SOURCE_DIR}\")\n"
        "endif()\n")
   set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES "${props}")
+  if("threads" IN_LIST A_LABELS)
+    set_property(GLOBAL APPEND PROPERTY INCISE_THREADS_TESTS ${name})
+  endif()
 endfunction()
 
 # incise_add_benchmark(NAME SOURCES ... LIBS ...)

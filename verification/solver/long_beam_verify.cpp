@@ -13,15 +13,19 @@
 ///   bulk, and CG removes isolated eigenvalues at a few iterations each (§2.4.1 — the same
 ///   reason §4.5.6's short edge barely matters);
 /// - as the beam lengthens the low end of the spectrum fills with bending modes and CG
-///   approaches the √κ scaling: local slopes 0.80–0.93 for h = 64…1024 (slow run). From
+///   approaches the √κ scaling: local slopes 0.80–0.93 for h = 64…512 (slow run). From
 ///   h = 128 on the true residual cannot reach 1e-8 (κ ≳ 1e8): reported as `stagnated`.
 /// - Dynamic relaxation (SS22, Δt = 0.9·2/√λ_n, η = 2√λ₁ of M⁻¹K; §4.1, §4.6) has no such
 ///   mechanism: its step count is ∝ √κ(M⁻¹K) ("the number of iterations is proportional to
 ///   √cond₂(M⁻¹K)", §4.6), which we measure as a log-log slope ≈ 1.
 ///
 /// Default: CG for h = 8, 16, 32, 64, SS22 for h = 8, 16, 32 (seconds). The `slow` entry
-/// (INCISE_LONG_BEAM_ALL=1) adds CG for h = 128, 256, 512, 1024 (the paper's 25,600-node beam)
-/// and SS22 for h = 64.
+/// (INCISE_LONG_BEAM_ALL=1) adds CG for h = 128, 256, 512 and SS22 for h = 64. Not h = 1024
+/// (the paper's 25,600-node beam; its augmented solves are papers_yeung2016_beam1024): with
+/// κ ≈ 7e11 its attainable accuracy ε_mach·κ ≈ 1e-4 is four decades above the 1e-8 rule, so its
+/// iteration count measures finite-precision CG (45,519 in docs/solvers.md's table, 80,438 in a
+/// 2026-12-01 run whose h ≤ 256 counts matched that table's to within 1 %), not the spectrum the
+/// slopes are about; and it was 90 % of the entry's time.
 #include <incise/fem/elastic_problem.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
@@ -91,7 +95,7 @@ double log_slope(const std::vector<double>& x, const std::vector<double>& y) {
 
 TEST(LongBeam, CgIterationsVsLanczosCondition_Sec2_4_1) {
   std::vector<int> lengths = {8, 16, 32, 64};
-  if (all_lengths()) lengths.insert(lengths.end(), {128, 256, 512, 1024});
+  if (all_lengths()) lengths.insert(lengths.end(), {128, 256, 512});
   std::printf("%6s %7s %-15s %9s %12s %12s %12s %10s %9s %9s\n", "h", "nodes", "CG end", "its",
               "lambda_min", "lambda_max", "kappa(K)", "sqrt(k)", "its/sqrtk", "bound");
   std::vector<double> hs, its, sqrt_kappa, kappa;
@@ -140,10 +144,10 @@ TEST(LongBeam, CgIterationsVsLanczosCondition_Sec2_4_1) {
   EXPECT_LT(s_short, 0.6);
   EXPECT_GT(s_short, 0.1);
   if (hs.size() >= 7) {
-    // Long beams (the three longest run): the bending modes fill the low spectrum and CG
-    // approaches √κ scaling. Measured local slopes 0.80 (64→128), 0.88, 0.86, 0.93
-    // (512→1024), 0.89 over 256/512/1024; we require [0.7, 1.1] on the three longest (1 would
-    // be exact √κ scaling).
+    // Long beams (the three longest run, h = 128, 256, 512): the bending modes fill the low
+    // spectrum and CG approaches √κ scaling. Measured local slopes 0.80 (64→128), 0.88, 0.86
+    // (256→512); over 128/256/512: 0.87 (docs/solvers.md's table), 0.91 and 0.89 (two later
+    // runs); we require [0.7, 1.1] (1 would be exact √κ scaling).
     const std::size_t n = hs.size();
     const double s_long = log_slope({sqrt_kappa[n - 3], sqrt_kappa[n - 2], sqrt_kappa[n - 1]},
                                     {its[n - 3], its[n - 2], its[n - 1]});

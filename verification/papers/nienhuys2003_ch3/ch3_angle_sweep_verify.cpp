@@ -6,7 +6,11 @@
 /// cell size h = 1/8). For every setting the cut is made four ways — (a) thesis-faithful
 /// snapping without removal, (b) inverting snaps refused without removal, (c) = (b) + removal,
 /// (d) = (a) + removal — and the warm-restarted CG is run where possible (§3.3 setup, see
-/// ch3_common.hpp). Label `slow` (≈ 1 min in Release); prints the table and the ranges.
+/// ch3_common.hpp). Label `slow` (≈ 30 s CPU in Release); prints the table and the ranges.
+/// The CG of (b) — reported, never asserted — stops at kReportedCgCap = 30,000 iterations: the
+/// largest count that converges is 24,173, and the 4 settings that reach any cap (they did not
+/// converge within 100,000 either) cost 44 % of the case's CPU time (56 → 32 s). (c) and (d),
+/// whose convergence is asserted, keep ch3_common.hpp's budget of 100,000.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -20,6 +24,7 @@ namespace incise::verify {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+constexpr long kReportedCgCap = 30000;  // CG budget of (b), see above
 
 /// Blade for the plane through the cube centre shifted by `offset` (m) along the horizontal
 /// normal, containing the horizontal direction t = (cos θ, sin θ, 0) and the descent direction
@@ -65,7 +70,7 @@ TEST(Nienhuys2003Ch3Slow, DegeneraciesAgainstTheAngleOfTheCut) {
         faithful_rm.remove_degeneracies = true;
         refused_rm.remove_degeneracies = true;
         const CutOutcome a = run_cut(cube, blade, faithful, false);
-        const CutOutcome b = run_cut(cube, blade, refused);
+        const CutOutcome b = run_cut(cube, blade, refused, true, kReportedCgCap);
         const CutOutcome c = run_cut(cube, blade, refused_rm);
         const CutOutcome d = run_cut(cube, blade, faithful_rm);
         std::printf("%5.1f %4.0f %7.2f | %9d %5d %3d | %9d %5d %5s | %4d %6d %5s | %4d %6d %5s\n",

@@ -45,8 +45,9 @@ struct Solve {
 };
 
 /// Linear CG (§3.1) on the mesh of `cm` with fixed nodes from `cm`, loads on original nodes,
-/// warm start from the carried displacements x − X.
-inline Solve solve(const cut::CutMesh& cm, const std::vector<fem::PointLoad>& loads) {
+/// warm start from the carried displacements x − X; at most `max_iterations` iterations.
+inline Solve solve(const cut::CutMesh& cm, const std::vector<fem::PointLoad>& loads,
+                   long max_iterations = 100000) {
   std::vector<Index> map;
   const mesh::MeshData md = cm.to_mesh_data(false, true, &map);
   fem::ElasticProblem p(md, material::Material("linear", {kE, kNu, 0.0, 1000.0}));
@@ -67,7 +68,7 @@ inline Solve solve(const cut::CutMesh& cm, const std::vector<fem::PointLoad>& lo
   solver::LinearCgOptions opt;
   opt.stop.rule = solver::ResidualRule::kExternalForce;  // (6.8), the rule of ch. 3
   opt.stop.epsilon = 1e-3;                               // §3.3
-  opt.budget.max_iterations = 100000;
+  opt.budget.max_iterations = max_iterations;
   const solver::SolverReport r = solver::linear_cg(p, u, opt);
   Solve s;
   s.attempted = true;
@@ -123,9 +124,10 @@ struct CutOutcome {
 };
 
 /// Cuts the equilibrium cube along `blade` with the given options, validating after every
-/// step; then (no inverted element) the warm-restarted CG when `with_solve`.
+/// step; then (no inverted element) the warm-restarted CG when `with_solve`, with at most
+/// `max_iterations` iterations.
 inline CutOutcome run_cut(const Ch3Cube& cube, const Blade& blade, const cut::CutOptions& opt,
-                          bool with_solve = true) {
+                          bool with_solve = true, long max_iterations = 100000) {
   cut::CutMesh cm = cube.make_mesh(true);
   cut::Cutter cutter(cm, opt);
   CutOutcome out;
@@ -145,7 +147,7 @@ inline CutOutcome run_cut(const Ch3Cube& cube, const Blade& blade, const cut::Cu
   for (Index v = 0; v < cm.num_nodes(); ++v) out.nodes += cm.unused(v) ? 0 : 1;
   out.elements = cm.num_elements();
   out.inverted = cm.validate().inverted_reference;
-  if (with_solve && out.inverted == 0) out.solve = solve(cm, cube.loads);
+  if (with_solve && out.inverted == 0) out.solve = solve(cm, cube.loads, max_iterations);
   return out;
 }
 
