@@ -3,7 +3,7 @@
 # then the stages
 #   1 release build                     (preset release, g++)
 #   2 release tests, all but label slow
-#   3 release tests, label slow
+#   3 release tests, label slow (but the soak, label soak: docs/ci.md)
 #   4 asan build: clang++ ASan + UBSan, every test and the libFuzzer harnesses (preset asan)
 #   5 asan tests, all but label slow and the certify mutants (docs/ci.md)
 #   6 fuzz smoke: each harness of fuzz/ for INCISE_FUZZ_SECONDS (default 30) s (ci/fuzz.sh)
@@ -99,7 +99,10 @@ end "2 release tests (all but label slow)"
 
 if [ "${INCISE_SKIP_SLOW:-0}" != "1" ]; then
   begin "3 release tests, label slow"
-  run_ctest slow --test-dir build/release -L slow -j"$jobs" --output-on-failure
+  # The soak (label soak, issue 18: 10⁴ liver sweep triangles, ≈ 4–6 min CPU) is run by hand
+  # before an issue that touches cutting is resolved (docs/ci.md); it would take the rest of
+  # the 30-minute budget here.
+  run_ctest slow --test-dir build/release -L slow -LE soak -j"$jobs" --output-on-failure
   end "3 release tests, label slow"
 fi
 
