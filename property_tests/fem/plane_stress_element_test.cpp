@@ -194,8 +194,11 @@ TEST_P(PlaneStressElement, TangentIsForceDerivative_SweepAndTaylor) {
         return (qt.array() * w.array()).sum();
       };
       const double unit = kt.norm() * c.d.norm() * w.norm();
+      // The forces' round-off grows with the conditioning κ of F near inversion; √κ on the
+      // floor keeps the Taylor pairs above it under both g++ and clang++ rounding (with 1 the
+      // last pairs at det 1e-3 fell into it under clang; κ itself left too few pairs).
       const auto r = incise::fixtures::check_directional_derivative(
-          phi, (dq.array() * w.array()).sum(), 0.1, unit, q2.norm() * w.norm());
+          phi, (dq.array() * w.array()).sum(), 0.1, unit, q2.norm() * w.norm() * std::sqrt(kappa));
       EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
       EXPECT_GE(r.taylor_order, kMinTaylorOrder) << r.report;
     }

@@ -86,7 +86,11 @@ class BoundaryGrid : public mesh::ConnectivityWatcher {
   std::array<std::int64_t, 2> key_of(const Vec2& x) const {
     return {clamped_key(x.x()), clamped_key(x.y())};
   }
-  static std::int64_t pack(std::int64_t i, std::int64_t j) { return (i << 32) ^ (j & 0xffffffff); }
+  static std::int64_t pack(std::int64_t i, std::int64_t j) {
+    // Unsigned shift: a negative cell index must not be shifted as a signed value (UB).
+    return static_cast<std::int64_t>((static_cast<std::uint64_t>(i) << 32) ^
+                                     (static_cast<std::uint64_t>(j) & 0xffffffffu));
+  }
   void insert(const std::array<Index, 2>& e) {
     for (const Index v : e) by_vertex_[v].push_back(e);
     const Vec2 a = mesh_.point(e[0]), b = mesh_.point(e[1]);

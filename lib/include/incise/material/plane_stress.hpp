@@ -20,8 +20,7 @@
 /// Veronda-Westmann need iterations. A step that would make q² ≤ 0 is cut to half the
 /// distance to q² = 0 (models with J only: the others are defined, if unphysical, for q² ≤ 0).
 /// Converged when the correction falls below kNewtonTolerance · (|E₃₃| + ‖E₂‖_max) or stops
-/// shrinking below kStallTolerance · (|E₃₃| + ‖E₂‖_max) (the residual has reached its rounding
-/// floor), and then |S₃₃| ≤
+/// shrinking while S₃₃ already meets the acceptance test (the rounding floor), and then |S₃₃| ≤
 /// kResidualTolerance · max(|S_ii|, (λ + 2μ)(|E₃₃| + ‖E₂‖_max)); otherwise kNotConverged (e.g.
 /// Veronda-Westmann with λ = 0 at large stretch, whose root lies at q² < 0).
 ///
@@ -74,9 +73,6 @@ struct PlaneStress {
   /// Relative size of the last Newton correction at which E₃₃ counts as converged (Newton
   /// converges quadratically: the error left after a correction δ is O(δ²), far below ε).
   static constexpr double kNewtonTolerance = 1e-12;
-  /// Relative size below which a correction that stopped shrinking counts as the rounding floor
-  /// (above it Newton is still converging from afar and goes on).
-  static constexpr double kStallTolerance = 1e-6;
   /// |S₃₃| relative to the largest stress term that an accepted solution may keep.
   static constexpr double kResidualTolerance = 1e-8;
 
@@ -115,12 +111,16 @@ struct PlaneStress {
       }
       e(2, 2) = e33 + step;
       st.newton_iterations = it;
-      // Converged: the correction is negligible, or it stopped shrinking while already small
-      // (the residual is at its rounding floor, e.g. near inversion where C⁻¹ amplifies the
-      // rounding of S₃₃). A large correction that does not shrink is Newton still far from the
-      // root (the stiff exponential of Veronda-Westmann at large stretch): iterate on.
-      const bool stalled = !(abs(step) < previous) &&
-                           !(abs(step) > T(kStallTolerance) * (abs(e(2, 2)) + scale));
+      // Converged: the correction is negligible, or it stopped shrinking at the rounding floor
+      // (e.g. near inversion, where C⁻¹ amplifies the rounding of S₃₃): S₃₃ at this iterate
+      // already meets the acceptance test below. A correction that does not shrink while S₃₃ is
+      // still large is Newton converging from afar (the stiff exponential of Veronda-Westmann
+      // at large stretch): iterate on.
+      T size_now = T(p.lambda + 2.0 * p.mu) * (abs(e33) + scale);
+      for (int i = 0; i < 3; ++i)
+        if (abs(st.s(i, i)) > size_now) size_now = abs(st.s(i, i));
+      const bool stalled =
+          !(abs(step) < previous) && abs(st.s(2, 2)) <= T(kResidualTolerance) * size_now;
       previous = abs(step);
       if (stalled || !(abs(step) > T(kNewtonTolerance) * (abs(e(2, 2)) + scale))) {
         if (!evaluate(p, j2m1, st)) return PlaneStressStatus::kInverted;
