@@ -3,7 +3,7 @@
 # For now (foundation): `incise mesh check` on the real liver mesh, writing a VTU next to it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-jobs=$(nproc 2>/dev/null || echo 2)
+jobs=$(getconf _NPROCESSORS_ONLN 2>/dev/null || echo 2)  # not nproc: it honours OMP_NUM_THREADS
 ci/install-deps.sh
 cmake --preset release >/dev/null
 cmake --build --preset release -j"$jobs" --target incise

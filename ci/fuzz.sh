@@ -23,7 +23,9 @@ fi
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(medit tetgen gmsh off sweep scene)
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
-cores=$(nproc 2>/dev/null || echo 2)
+# getconf, not nproc: nproc honours OMP_NUM_THREADS (exported as 1 above and by ci/test.sh), which
+# made the harnesses run one at a time.
+cores=$(getconf _NPROCESSORS_ONLN 2>/dev/null || echo 2)
 jobs=${INCISE_FUZZ_JOBS:-$cores}
 
 if [ "${INCISE_FUZZ_PREBUILT:-0}" != "1" ]; then  # ci/test.sh has just built the asan tree

@@ -16,7 +16,7 @@
 # INCISE_SKIP_TSAN=1.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-jobs=$(nproc 2>/dev/null || echo 2)
+jobs=$(getconf _NPROCESSORS_ONLN 2>/dev/null || echo 2)  # not nproc: it honours OMP_NUM_THREADS
 # ctest runs $jobs tests at once: keep BLAS/OpenMP single-threaded so they don't oversubscribe.
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
 logdir=build/ci-logs
