@@ -167,6 +167,46 @@ TEST(DelaunayCutter2D, FarAwayAndHugeScalpelPositionsAreCheapAndHarmless) {
   EXPECT_TRUE(valid(t));
 }
 
+TEST(DelaunayCutter2D, ErraticPathsThroughAMeshWithHolesKeepItValid) {
+  // A 10 × 10 grid with two round holes (non-convex, three boundary loops); paths that turn by
+  // up to ±60° per movement with steps 0.01–0.31 h̄, leaving and re-entering through the holes.
+  // Regression: with the default seed such a path once flattened a corner triangle to zero
+  // area (exact orientation still positive) by the kinetic sub-steps; movements now stop before
+  // 2·area < 1e-8 · longest edge².
+  INCISE_SEEDED_RNG(rng, 7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  mesh::MeshData m = mesh::make_rectangle(10, 10, 10, 10);
+  std::vector<Index> keep;
+  for (Index c = 0; c < m.num_cells(); ++c) {
+    const Vec2 g =
+        ((m.points.col(m.cells(0, c)) + m.points.col(m.cells(1, c)) + m.points.col(m.cells(2, c))) /
+         3)
+            .head<2>();
+    if ((g - Vec2(3, 3)).norm() >= 1.5 && (g - Vec2(7, 6.5)).norm() >= 1.8) keep.push_back(c);
+  }
+  mesh::CellMatrix cells(3, static_cast<Eigen::Index>(keep.size()));
+  for (size_t k = 0; k < keep.size(); ++k)
+    cells.col(static_cast<Eigen::Index>(k)) = m.cells.col(keep[k]);
+  m.cells = cells;
+  long moves = 0;
+  for (int trial = 0; trial < incise::test::scaled_for_checks(60); ++trial) {
+    Triangulation t(m);
+    t.legalize(t.edges());
+    Cutter2D cutter(t);
+    Vec2 p(-1, 10 * u(rng));
+    (void)cutter.move_to(p);
+    Vec2 dir = Vec2(1, u(rng) - 0.5).normalized();
+    for (int k = 0; k < 400; ++k) {
+      dir = (dir + 1.5 * Vec2(u(rng) - 0.5, u(rng) - 0.5)).normalized();
+      p += (0.01 + 0.3 * u(rng)) * dir;
+      (void)cutter.move_to(p);
+      ++moves;
+      ASSERT_TRUE(valid(t)) << "trial " << trial << " movement " << k;
+    }
+  }
+  EXPECT_GT(moves, 0);
+}
+
 TEST(DelaunaySubdivision, StraightCutSlicesEveryCrossedTriangleIntoThreeAndSeparates) {
   // Fig. 5.16 top: the subdivision cutter on the 50-triangle grid. A path from outside to
   // outside that meets no vertex crosses I interior and 2 boundary edges; each interior crossing

@@ -165,6 +165,22 @@ void Cutter2D::remove_close_nodes(CutMove2DReport& r) {
   }
 }
 
+bool Cutter2D::move_keeping_shape(const Vec2& x) {
+  // Every star triangle must keep 2·area ≥ kMinShape · (longest edge)² at x: exact orientation
+  // alone admits triangles flat to the last bit (a kinetic approach whose flips keep resetting
+  // the stall count can get there), which no element computation can use.
+  constexpr double kMinShape = 1e-8;
+  for (const ElementHandle e : mesh_.connectivity().star(active_)) {
+    const auto t = starting_at(mesh_.triangle(e), active_);
+    const Vec2 u = mesh_.point(t[1]), w = mesh_.point(t[2]);
+    const double area2 = cross(u - x, w - x);
+    const double longest =
+        std::max({(u - x).squaredNorm(), (w - x).squaredNorm(), (w - u).squaredNorm()});
+    if (!(area2 >= kMinShape * longest)) return false;
+  }
+  return mesh_.move_vertex(active_, x);
+}
+
 void Cutter2D::move_active(const Vec2& target, CutMove2DReport& r) {
   int stalled = 0;  // consecutive half-steps towards a flat triangle without a mesh change
   for (int step = 0; step < options_.max_substeps; ++step) {
@@ -182,9 +198,9 @@ void Cutter2D::move_active(const Vec2& target, CutMove2DReport& r) {
     }
     const double s = tmin >= 1 ? 1.0 : 0.5 * tmin;
     ++r.substeps;
-    if (!mesh_.move_vertex(active_, a + s * d) && !mesh_.move_vertex(active_, a + 0.25 * s * d)) {
+    if (!move_keeping_shape(a + s * d) && !move_keeping_shape(a + 0.25 * s * d)) {
       r.status = CutMoveStatus::kBlocked;
-      r.message = "the active node cannot move without inverting a triangle";
+      r.message = "the active node cannot move without inverting or flattening a triangle";
       return;
     }
     const long changes = mesh_.num_flips() + r.removals + r.splits;

@@ -9,7 +9,9 @@
 ///     position where a triangle of a's star would become flat, and after it the edges around a
 ///     are legalized (empty-circle flips, Fig. 5.3). An interior edge that a approaches is
 ///     flipped before a reaches it (points of a chord lie inside the circumcircle), so the star
-///     never inverts; interior nodes closer to a than ε_edge are removed by ear flips (Fig. 5.10);
+///     never inverts (nor gets flatter than 2·area = 10⁻⁸ · longest edge²: the movement stops as
+///     blocked instead); interior nodes closer to a than ε_edge are removed by ear flips
+///     (Fig. 5.10);
 ///  2. records the scalpel path and splits the incision (Fig. 5.5): when the incision, seen as one
 ///     edge from its last node pair c₁, c₂ (midpoint c) to a, fails the empty-circle criterion in
 ///     the quadrilateral a o₁ c o₂, new nodes c₁′, c₂′ are inserted where o₁o₂ meets the path,
@@ -117,6 +119,7 @@ class Cutter2D {
 
  private:
   bool locate_entry(const Vec2& from, const Vec2& to, Index& p, Index& q, double& t) const;
+  bool move_keeping_shape(const Vec2& x);
   void move_active(const Vec2& target, CutMove2DReport& r);
   void remove_close_nodes(CutMove2DReport& r);
   void legalize_around(Index v, CutMove2DReport& r);
