@@ -330,15 +330,16 @@ void Cutter2D::split_incision(CutMove2DReport& r) {
   }
 }
 
+Index Cutter2D::boundary_node_at(Index p, Index q, const Vec2& x, double snap) {
+  // An end of the edge within `snap` of x, else a new node at x (never a new node that close
+  // to an existing one: it would make a sliver); −1 when the split is refused.
+  if ((mesh_.point(p) - x).norm() < snap) return p;
+  if ((mesh_.point(q) - x).norm() < snap) return q;
+  return mesh_.split_boundary_edge(p, q, x);
+}
+
 bool Cutter2D::exit_at(Index p, Index q, const Vec2& x, CutMove2DReport& r) {
-  // The exit node: an end of the edge within ε_exit of x, else a new node at x.
-  Index n = -1;
-  if ((mesh_.point(p) - x).norm() < eps_exit_)
-    n = p;
-  else if ((mesh_.point(q) - x).norm() < eps_exit_)
-    n = q;
-  else
-    n = mesh_.split_boundary_edge(p, q, x);
+  const Index n = boundary_node_at(p, q, x, eps_exit_);  // the exit node
   if (n < 0) {
     ++r.refused;
     return false;
@@ -448,15 +449,7 @@ CutMove2DReport Cutter2D::move_to(const Vec2& x) {
       return r;
     }
     const Vec2 e = from + t * (x - from);
-    Index a = -1;
-    // Near an end of the edge the scalpel takes that node (never a new node within ε_entry of
-    // one: it would make a sliver).
-    if ((mesh_.point(p) - e).norm() < eps_entry_)
-      a = p;
-    else if ((mesh_.point(q) - e).norm() < eps_entry_)
-      a = q;
-    else
-      a = mesh_.split_boundary_edge(p, q, e);
+    const Index a = boundary_node_at(p, q, e, eps_entry_);
     if (a < 0) {
       ++r.refused;
       r.phase = phase_;

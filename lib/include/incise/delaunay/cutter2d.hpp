@@ -125,6 +125,7 @@ class Cutter2D {
   void legalize_around(Index v, CutMove2DReport& r);
   void fix_up(CutMove2DReport& r);
   void split_incision(CutMove2DReport& r);
+  Index boundary_node_at(Index p, Index q, const Vec2& x, double snap);
   bool exit_at(Index p, Index q, const Vec2& x, CutMove2DReport& r);
   bool boundary_hit(const Vec2& from, const Vec2& to, Index& p, Index& q, double& t) const;
   bool is_incision_node(Index v) const;
