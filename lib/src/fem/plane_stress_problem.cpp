@@ -2,6 +2,7 @@
 #include <incise/core/flop_count.hpp>
 #include <incise/fem/plane_stress_problem.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -56,6 +57,14 @@ TriElementFlops tri_element_flops(const material::Material& material, const Mat2
     }
     {
       FlopScope s;
+      Counted we;
+      ok =
+          K::forces_and_energy(p, zi, b, Counted(ref.volume), x, q, we) == PlaneStressStatus::kOk &&
+          ok;
+      out.force_and_energy = s.flops();
+    }
+    {
+      FlopScope s;
       ok = K::product(p, zi, b, x, d, dq) == PlaneStressStatus::kOk && ok;
       out.product = s.flops();
     }
@@ -95,6 +104,8 @@ PlaneStressProblem::PlaneStressProblem(const mesh::MeshData& mesh,
   fixed_.assign(static_cast<std::size_t>(size()), 0);
   f_ext_ = VecX::Zero(size());
   element_flops_ = tri_element_flops(material_);
+  constant_tangent_ = material::visit_model(material_.model_index(),
+                                            [](auto m) { return decltype(m)::kLinearGeometry; });
 }
 
 void PlaneStressProblem::fix_nodes(const std::vector<Index>& nodes) {
@@ -184,26 +195,105 @@ EvalStatus PlaneStressProblem::energy(const VecX& u, double& energy) {
 EvalStatus PlaneStressProblem::gradient(const VecX& u, VecX& g, double* energy) {
   const material::Lame p = material_.lame();
   g = -f_ext_;
+  double sum = 0.0;
+  // With the energy requested, one sweep evaluates both from the same kinematics.
   const EvalStatus s = sweep(u, [&](auto k, Index e, const Eigen::Matrix<double, 2, 3>& x) {
     const TriReference& r = refs_[static_cast<std::size_t>(e)];
     Eigen::Matrix<double, 2, 3> q;
-    const PlaneStressStatus st = decltype(k)::forces(p, r.z_inv, r.b, x, q);
+    PlaneStressStatus st;
+    if (energy) {
+      double w = 0.0;
+      st = decltype(k)::forces_and_energy(p, r.z_inv, r.b, r.volume, x, q, w);
+      sum += w;
+    } else {
+      st = decltype(k)::forces(p, r.z_inv, r.b, x, q);
+    }
     if (st == PlaneStressStatus::kOk)
       for (int a = 0; a < 3; ++a) g.segment<2>(2 * cells_(a, e)) += q.col(a);
     return st;
   });
-  flops_ += (element_flops_.force + 6) * static_cast<std::uint64_t>(num_elements());
+  flops_ += ((energy ? element_flops_.force_and_energy + 1 : element_flops_.force) + 6) *
+            static_cast<std::uint64_t>(num_elements());
   if (s != EvalStatus::kOk) {
     g.setZero();
     if (energy) *energy = std::numeric_limits<double>::infinity();
     return s;
   }
-  if (energy) return this->energy(u, *energy);
+  if (energy) {
+    *energy = sum - f_ext_.dot(u);
+    flops_ += 2 * static_cast<std::uint64_t>(size());
+    if (!std::isfinite(*energy)) return EvalStatus::kNonFinite;
+  }
   return g.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
+}
+
+void PlaneStressProblem::assemble_constant_tangent() {
+  const auto nodes = static_cast<std::size_t>(num_nodes());
+  // Node adjacency (each node with itself and its element neighbours), sorted per row.
+  std::vector<std::vector<Index>> adjacent(nodes);
+  for (Index e = 0; e < num_elements(); ++e)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        adjacent[static_cast<std::size_t>(cells_(a, e))].push_back(cells_(b, e));
+  NodeBlocks k;
+  k.row.assign(nodes + 1, 0);
+  for (std::size_t i = 0; i < nodes; ++i) {
+    std::vector<Index>& a = adjacent[i];
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+    k.row[i + 1] = k.row[i] + static_cast<Index>(a.size());
+    k.col.insert(k.col.end(), a.begin(), a.end());
+  }
+  k.values.assign(4 * k.col.size(), 0.0);
+  const material::Lame p = material_.lame();
+  const VecX zero = VecX::Zero(size());  // K does not depend on u: evaluate the kernels at 0
+  const EvalStatus s = sweep(zero, [&](auto kernel, Index e, const Eigen::Matrix<double, 2, 3>& x) {
+    const TriReference& r = refs_[static_cast<std::size_t>(e)];
+    Eigen::Matrix<double, 2, 3> q;
+    Mat6T<double> ke;
+    const PlaneStressStatus st = decltype(kernel)::forces_and_tangent(p, r.z_inv, r.b, x, q, ke);
+    if (st != PlaneStressStatus::kOk) return st;
+    for (int a = 0; a < 3; ++a) {
+      const Index i = cells_(a, e);
+      const auto first = k.col.begin() + k.row[static_cast<std::size_t>(i)];
+      const auto last = k.col.begin() + k.row[static_cast<std::size_t>(i) + 1];
+      for (int b = 0; b < 3; ++b) {
+        const auto r_index =
+            static_cast<std::size_t>(std::lower_bound(first, last, cells_(b, e)) - k.col.begin());
+        double* v = &k.values[4 * r_index];
+        v[0] += ke(2 * a, 2 * b);
+        v[1] += ke(2 * a + 1, 2 * b);
+        v[2] += ke(2 * a, 2 * b + 1);
+        v[3] += ke(2 * a + 1, 2 * b + 1);
+      }
+    }
+    return st;
+  });
+  // A linear-geometry model's kernels cannot fail at u = 0 (no log, no plane-stress Newton).
+  INCISE_CHECK(s == EvalStatus::kOk, "constant tangent: element kernel failed at u = 0");
+  flops_ += (element_flops_.force_and_tangent + 36) * static_cast<std::uint64_t>(num_elements());
+  k_blocks_ = std::move(k);
 }
 
 EvalStatus PlaneStressProblem::hessian_product(const VecX& u, const VecX& d, VecX& out) {
   INCISE_CHECK(d.size() == size(), "direction vector has the wrong size");
+  if (constant_tangent_) {
+    INCISE_CHECK(u.size() == size(), "displacement vector has the wrong size");
+    if (k_blocks_.row.empty()) assemble_constant_tangent();
+    outcome_ = PlaneStressOutcome{};
+    out.resize(size());
+    const NodeBlocks& k = k_blocks_;
+    for (Index i = 0; i < num_nodes(); ++i) {
+      Vec2 o = Vec2::Zero();
+      for (Index r = k.row[static_cast<std::size_t>(i)]; r < k.row[static_cast<std::size_t>(i) + 1];
+           ++r)
+        o.noalias() += Eigen::Map<const Mat2>(&k.values[4 * static_cast<std::size_t>(r)]) *
+                       d.segment<2>(2 * k.col[static_cast<std::size_t>(r)]);
+      out.segment<2>(2 * i) = o;
+    }
+    flops_ += 8 * static_cast<std::uint64_t>(k.col.size());
+    return EvalStatus::kOk;
+  }
   const material::Lame p = material_.lame();
   out = VecX::Zero(size());
   const EvalStatus s = sweep(u, [&](auto k, Index e, const Eigen::Matrix<double, 2, 3>& x) {

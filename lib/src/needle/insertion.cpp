@@ -143,28 +143,37 @@ void NeedleInsertion::refine_at_tip() {
 int NeedleInsertion::intercept() {
   const Eigen::Matrix2Xd x = deformed();
   const mesh::Connectivity& conn = mesh_.connectivity();
-  std::vector<std::pair<Index, Index>> edges;
+  const Vec2 p0 = pose_.base(), d = pose_.tip - p0;
+  // The crossing parameter α along edge (p, q), p < q, or a negative value when the edge
+  // misses the shaft: a + α e = p0 + β d  ⇒  α = cross(p0 − a, d)/cross(e, d),
+  // β = cross(p0 − a, e)/cross(e, d), both in [0, 1].
+  const auto crossing = [&](Index p, Index q) {
+    const Vec2 a = x.col(p), e = x.col(q) - a;
+    const double den = cross(e, d);
+    if (den == 0.0) return -1.0;
+    const double alpha = cross(p0 - a, d) / den, beta = cross(p0 - a, e) / den;
+    if (alpha < 0.0 || alpha > 1.0 || beta < 0.0 || beta > 1.0) return -1.0;
+    return alpha;
+  };
+  // Only the few crossing edges are collected (an edge is seen from each of its triangles),
+  // then visited in (p, q) order.
+  std::vector<std::pair<std::pair<Index, Index>, double>> edges;
   for (const mesh::ElementHandle e : conn.elements()) {
     const mesh::Simplex& s = conn.simplex(e);
     for (int i = 0; i < 3; ++i) {
       Index p = s.vertex(i), q = s.vertex((i + 1) % 3);
       if (p > q) std::swap(p, q);
-      edges.emplace_back(p, q);
+      const double alpha = crossing(p, q);
+      if (alpha >= 0.0) edges.push_back({{p, q}, alpha});
     }
   }
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
   std::vector<char> is_needle(static_cast<std::size_t>(x.cols()), 0);
   for (const NeedleNode& n : nodes_) is_needle[static_cast<std::size_t>(n.vertex)] = 1;
-  const Vec2 p0 = pose_.base(), d = pose_.tip - p0;
   int added = 0;
-  for (const auto& [p, q] : edges) {
-    const Vec2 a = x.col(p), e = x.col(q) - a;
-    // a + α e = p0 + β d  ⇒  α = cross(p0 − a, d)/cross(e, d), β = cross(p0 − a, e)/cross(e, d).
-    const double den = cross(e, d);
-    if (den == 0.0) continue;
-    const double alpha = cross(p0 - a, d) / den, beta = cross(p0 - a, e) / den;
-    if (alpha < 0.0 || alpha > 1.0 || beta < 0.0 || beta > 1.0) continue;
+  for (const auto& [edge, alpha] : edges) {
+    const auto [p, q] = edge;
     const Index v = alpha < 0.5 ? p : q;
     if (is_needle[static_cast<std::size_t>(v)] || is_fixed_vertex(v)) continue;
     NeedleNode n;

@@ -102,20 +102,41 @@ EvalStatus NeedleProblem::energy(const VecX& u, double& energy) {
 }
 
 EvalStatus NeedleProblem::gradient(const VecX& u, VecX& g, double* energy) {
-  const VecX x = to_original(u);
-  const EvalStatus s = base_.gradient(x, g, energy);
+  // The solvers end by evaluating the gradient at their final iterate, and the interaction
+  // loop asks for it again (reactions, rearrangement): the last evaluation is kept and reused
+  // when u is bitwise the same (energy included if it was computed then).
+  if (memo_valid_ && u.size() == memo_u_.size() && u == memo_u_ &&
+      (energy == nullptr || memo_has_energy_)) {
+    g = memo_g_;
+    if (energy) *energy = memo_energy_;
+    return EvalStatus::kOk;
+  }
+  memo_valid_ = false;
+  x_ = u;
+  rotate(x_, false);
+  const EvalStatus s = base_.gradient(x_, g, energy);
   if (s != EvalStatus::kOk) return s;
   g -= f_fric_;
-  if (energy) *energy -= f_fric_.dot(x);
+  if (energy) *energy -= f_fric_.dot(x_);
   own_flops_ += 3 * static_cast<std::uint64_t>(size());
   rotate(g, true);
+  memo_u_ = u;
+  memo_g_ = g;
+  memo_has_energy_ = energy != nullptr;
+  memo_energy_ = energy ? *energy : 0.0;
+  memo_valid_ = true;
   return s;
 }
 
 EvalStatus NeedleProblem::hessian_product(const VecX& u, const VecX& d, VecX& out) {
-  const VecX x = to_original(u);
-  const VecX dx = to_original(d);
-  const EvalStatus s = base_.hessian_product(x, dx, out);
+  dx_ = d;
+  rotate(dx_, false);
+  // A constant tangent does not depend on the point: u need not be rotated back then.
+  if (!base_.has_constant_tangent()) {
+    x_ = u;
+    rotate(x_, false);
+  }
+  const EvalStatus s = base_.hessian_product(base_.has_constant_tangent() ? u : x_, dx_, out);
   if (s == EvalStatus::kOk) rotate(out, true);
   return s;
 }

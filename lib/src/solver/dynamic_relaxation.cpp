@@ -18,6 +18,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
 
   SolverReport rep;
   CostMeter meter(problem);
+  const FixedDofs fixed_dofs(problem);
   const Eigen::Index n = u.size();
   const auto nn = static_cast<std::uint64_t>(n);
   const double dt = options.time_step, eta = options.damping;
@@ -47,7 +48,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
     acc = -g;
     problem.project(acc);  // r = −P∇Π(ū)
     rnorm = acc.norm();
-    threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+    threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
     have_residual = true;
     rep.residual_history.push_back(rnorm);
     rep.energy_history.push_back(energy);

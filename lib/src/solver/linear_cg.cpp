@@ -64,6 +64,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
   INCISE_CHECK(u.size() == problem.size(), "linear_cg: u has the wrong size");
   SolverReport rep;
   CostMeter meter(problem);
+  const FixedDofs fixed_dofs(problem);
   const Eigen::Index n = u.size();
   const auto nn = static_cast<std::uint64_t>(n);
   const VecX u0 = u;
@@ -86,7 +87,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
   VecX r = -g;
   problem.project(r);
   double rnorm = r.norm();
-  double threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+  double threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
   rep.residual_history.push_back(rnorm);
   rep.energy_history.push_back(energy);
   VecX inv_diag;
@@ -140,7 +141,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
       g = gt;
       energy = e;
       rnorm = true_norm;
-      threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+      threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
       meter.add(4 * nn);
       confirmed = true;
       if (true_norm <= threshold) break;
@@ -188,7 +189,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
     rz = rz_new;
     d = z + beta * d;
     rnorm = r.norm();
-    threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+    threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
     meter.add(20 * nn);
     ++k;
     rep.residual_history.push_back(rnorm);
@@ -210,7 +211,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
       problem.project(rt);
       rnorm = rt.norm();
       energy = e;
-      threshold = residual_threshold(options.stop, fex, fixed_norm(problem, gt), n);
+      threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(gt), n);
       // The recursive residual met the rule but the true one may not: report honestly.
       if (reason == StopReason::kConverged && rnorm > threshold) reason = StopReason::kStagnated;
     }

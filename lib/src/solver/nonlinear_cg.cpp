@@ -123,6 +123,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   INCISE_CHECK_PARAM(options.alpha_minus1 != 0.0, "nonlinear_cg: alpha_minus1 must be non-zero");
   SolverReport rep;
   CostMeter meter(problem);
+  const FixedDofs fixed_dofs(problem);
   const Eigen::Index n = u.size();
   const auto nn = static_cast<std::uint64_t>(n);
   const long restart_every = options.restart_every > 0 ? options.restart_every : long(n);
@@ -147,7 +148,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   VecX d = r;
   double rr = r.squaredNorm();
   double rnorm = std::sqrt(rr);
-  double threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+  double threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
   rep.residual_history.push_back(rnorm);
   rep.energy_history.push_back(energy);
 
@@ -193,7 +194,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
     d = r + beta * d;
     ++since_restart;
     if (beta == 0.0) since_restart = 0;  // PR reset = steepest descent restart
-    threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+    threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
     meter.add(12 * nn);
     ++k;
     rep.residual_history.push_back(rnorm);

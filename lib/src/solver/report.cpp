@@ -72,9 +72,17 @@ bool external_force_is_finite(double external_force_norm, SolverReport& rep) {
 }
 
 double fixed_norm(const Problem& problem, const VecX& v) {
+  return FixedDofs(problem).norm(v);
+}
+
+FixedDofs::FixedDofs(const Problem& problem) {
+  for (Eigen::Index i = 0; i < problem.size(); ++i)
+    if (problem.is_fixed(i)) dofs_.push_back(i);
+}
+
+double FixedDofs::norm(const VecX& v) const {
   double s = 0.0;
-  for (Eigen::Index i = 0; i < v.size(); ++i)
-    if (problem.is_fixed(i)) s += v[i] * v[i];
+  for (const Eigen::Index i : dofs_) s += v[i] * v[i];
   return std::sqrt(s);
 }
 

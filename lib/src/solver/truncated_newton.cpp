@@ -13,6 +13,7 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
                      "truncated_newton: forcing_max must lie in (0, 1)");
   SolverReport rep;
   CostMeter meter(problem);
+  const FixedDofs fixed_dofs(problem);
   const Eigen::Index n = u.size();
   const auto nn = static_cast<std::uint64_t>(n);
   const long max_inner = options.max_inner > 0 ? options.max_inner : long(n);
@@ -36,7 +37,7 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
   problem.project(r);
   double rnorm = r.norm();
   const double r0 = rnorm;
-  double threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+  double threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
   rep.residual_history.push_back(rnorm);
   rep.energy_history.push_back(energy);
 
@@ -125,7 +126,7 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
     r.swap(rt);
     energy = e_new;
     last_step_norm = alpha * p.norm();
-    threshold = residual_threshold(options.stop, fex, fixed_norm(problem, g), n);
+    threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
     meter.add(4 * nn);
     ++k;
     rep.residual_history.push_back(rnorm);

@@ -5,6 +5,13 @@
 /// Σ q_τ − f_ext (tri_kernels.hpp), the tangent matrix-free and assembled.
 ///
 /// Unknowns: in-plane nodal displacements u (m), node-major: DOF 2·node + component (x, y).
+/// hessian_product() is matrix-free (one element sweep, kinematics at u) for the nonlinear
+/// models. For the linear model (models.hpp kLinearGeometry: linear strain and stress) K does
+/// not depend on u: it is assembled once, on the first product, from the element tangents into
+/// 2×2 node blocks, and each product is one block-sparse multiply (8 flops per block, counted);
+/// test PlaneStressProblemProperty.EnergyGradientHessianChain checks it against the gradient
+/// (Taylor order) and the assembled tangent for every material.
+///
 /// Fixed DOFs are handled as in ElasticProblem: gradient() and hessian_product() are not
 /// projected, project() zeroes fixed components, the assembled tangent gets unit diagonals at
 /// fixed DOFs.
@@ -32,7 +39,8 @@ namespace incise::fem {
 struct TriElementFlops {
   std::uint64_t energy = 0;             ///< A·d·W₂
   std::uint64_t force = 0;              ///< internal forces q
-  std::uint64_t product = 0;            ///< K_e·d (matrix-free)
+  std::uint64_t force_and_energy = 0;   ///< q and A·d·W₂ from one kinematics evaluation
+  std::uint64_t product = 0;            ///< K_e·d (matrix-free; nonlinear models)
   std::uint64_t force_and_tangent = 0;  ///< q and the 6×6 K_e
 };
 
@@ -105,12 +113,25 @@ class PlaneStressProblem : public Problem {
   const mesh::CellMatrix& cells() const { return cells_; }
   const TriReference& reference(Index e) const { return refs_[static_cast<std::size_t>(e)]; }
   const TriElementFlops& element_flop_counts() const { return element_flops_; }
+  /// True when K does not depend on u (the linear model): hessian_product() then multiplies
+  /// the assembled K and ignores its u argument (but for its size).
+  bool has_constant_tangent() const { return constant_tangent_; }
 
  private:
   /// Calls visit(kernel-tag, element, x (2×3 displacements)) for every element; stops at the
   /// first non-ok status, records it in outcome_ and maps it to an EvalStatus.
   template <class Visit>
   EvalStatus sweep(const VecX& u, Visit&& visit);
+  /// Assembles k_blocks_ (the constant tangent of a linear-geometry model).
+  void assemble_constant_tangent();
+
+  /// Block-sparse rows of the constant tangent: node i's blocks are the columns col[r] with
+  /// values[4r .. 4r+3] (column-major 2×2) for r in [row[i], row[i+1]).
+  struct NodeBlocks {
+    std::vector<Index> row;
+    std::vector<Index> col;
+    std::vector<double> values;
+  };
 
   Eigen::Matrix2Xd points_;
   mesh::CellMatrix cells_;
@@ -122,6 +143,8 @@ class PlaneStressProblem : public Problem {
   TriElementFlops element_flops_;
   std::uint64_t flops_ = 0;
   PlaneStressOutcome outcome_;
+  bool constant_tangent_ = false;  ///< the model's K is independent of u (kLinearGeometry)
+  NodeBlocks k_blocks_;            ///< empty until the first product of a constant-tangent model
 };
 
 }  // namespace incise::fem

@@ -131,6 +131,23 @@ struct TriKernel {
     return s;
   }
 
+  /// Internal forces q and the element energy A·d·W₂ from one kinematics evaluation (the
+  /// gradient with its energy in one sweep). On failure w = +∞ and q is untouched.
+  static INCISE_KERNEL_INLINE Status forces_and_energy(const material::Lame& p,
+                                                       const Mat2T<T>& z_inv, const Mat2T<T>& b,
+                                                       const T& volume, const Mat23T<T>& x,
+                                                       Mat23T<T>& q, T& w) {
+    State st;
+    const Status s = kinematics(p, z_inv, x, st);
+    if (s != Status::kOk) {
+      w = material::detail::infinity<T>();
+      return s;
+    }
+    nodal_from_piola(piola(st), b, q);
+    w = volume * Adapter::energy(p, st.ps);
+    return s;
+  }
+
   /// Matrix-free product dq = K_e·d (recomputes the kinematics at x).
   static INCISE_KERNEL_INLINE Status product(const material::Lame& p, const Mat2T<T>& z_inv,
                                              const Mat2T<T>& b, const Mat23T<T>& x,

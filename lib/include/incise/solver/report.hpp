@@ -149,6 +149,19 @@ bool external_force_is_finite(double external_force_norm, SolverReport& rep);
 /// ‖v‖₂ of the components of v at fixed DOFs (the reaction force norm of (6.9) when v = ∇Π).
 double fixed_norm(const Problem& problem, const VecX& v);
 
+/// The fixed DOFs of a problem, listed once per solve: the reaction norm of (6.9) is needed
+/// every iteration, and Problem::is_fixed is a virtual call per DOF. The fixed set must not
+/// change while this lives (it does not during a solve).
+class FixedDofs {
+ public:
+  explicit FixedDofs(const Problem& problem);
+  /// fixed_norm(problem, v), summed in the same order.
+  double norm(const VecX& v) const;
+
+ private:
+  std::vector<Eigen::Index> dofs_;
+};
+
 /// True when every entry of v is finite.
 inline bool all_finite(const VecX& v) {
   return v.allFinite();
