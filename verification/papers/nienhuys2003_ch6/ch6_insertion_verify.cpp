@@ -226,7 +226,7 @@ TEST(Chapter6, Fig6_12_NonlinearSideways) {
     NeedleInsertion sim(incise::mesh::make_thesis_slab(3),
                         incise::material::Material(nonlinear ? "neohookean" : "linear", p), 0.01,
                         {{1, 0.0}}, incise::needle::FrictionProfile{}, o);
-    const double step = 0.1 * o.h_ref;
+    const double step = 0.01 * o.h_ref;  // the caption's insertion speed, 0.01 h_ref/update
     const int n = static_cast<int>(std::ceil(0.07 / step - 1e-9));
     incise::Timer timer;
     long solves = 0, cg = 0;
