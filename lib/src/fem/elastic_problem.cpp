@@ -206,6 +206,18 @@ ElementFlops element_flops(const material::Material& material) {
     }
     {
       FlopScope s;
+      Counted we;
+      ok = K::forces_and_energy(p, zi, b, Counted(ref.volume), x, q, we) && ok;
+      out.force_and_energy = s.flops();
+    }
+    {
+      FlopScope s;
+      Counted we;
+      ok = K::forces_energy_and_product(p, zi, b, Counted(ref.volume), x, d, q, dq, we) && ok;
+      out.force_energy_and_product = s.flops();
+    }
+    {
+      FlopScope s;
       ok = K::forces_and_product(p, zi, b, x, d, q, dq) && ok;
       out.force_and_product = s.flops();
     }
@@ -493,20 +505,79 @@ EvalStatus ElasticProblem::internal_forces(const VecX& u, VecX& f_int) {
 }
 
 EvalStatus ElasticProblem::gradient(const VecX& u, VecX& g, double* energy_out) {
-  EvalStatus s = internal_forces(u, g);
-  if (s == EvalStatus::kInverted) {
-    if (energy_out) *energy_out = kInf;
+  if (!energy_out) {
+    const EvalStatus s = internal_forces(u, g);
+    if (s != EvalStatus::kInverted) g -= f_ext_;
     return s;
   }
-  g -= f_ext_;
-  if (energy_out) {
-    const EvalStatus se = energy(u, *energy_out);
-    if (se != EvalStatus::kOk) {
-      if (se == EvalStatus::kInverted) g.setZero();
-      return se;
-    }
+  // Gradient and energy in one sweep from the same kinematics (the sums, and so the results,
+  // are those of internal_forces() and energy(): same kernels, same element order).
+  INCISE_CHECK(u.size() == size(), "gradient: u has the wrong size");
+  const material::Lame p = material_.lame();
+  g.setZero(size());
+  double* out = g.data();
+  double sum = 0.0;
+  const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
+    return sweep([&](const auto& el, auto& w) {
+      using T = typename std::decay_t<decltype(el)>::Scalar;
+      el.gather(u.data(), w.x);
+      T e(0);
+      if (!TetKernel<decltype(m), T>::forces_and_energy(p, el.z_inv(), el.b(), el.volume(), w.x,
+                                                        w.q, e))
+        return false;
+      el.add(w.q, out);
+      sum += el.sum(e);
+      return true;
+    });
+  });
+  flops_ += (element_flops_.force_and_energy + 13) * static_cast<std::uint64_t>(num_elements());
+  if (!ok) {
+    g.setZero();
+    *energy_out = kInf;
+    return EvalStatus::kInverted;
   }
-  return s;
+  g -= f_ext_;
+  *energy_out = sum - f_ext_.dot(u);
+  if (!std::isfinite(*energy_out)) return EvalStatus::kNonFinite;
+  return g.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
+}
+
+EvalStatus ElasticProblem::gradient_energy_product(const VecX& u, const VecX& d, VecX& g,
+                                                   double& energy, VecX& out) {
+  INCISE_CHECK(u.size() == size() && d.size() == size(), "gradient_energy_product: wrong sizes");
+  const material::Lame p = material_.lame();
+  g.setZero(size());
+  out.setZero(size());
+  double* gq = g.data();
+  double* dst = out.data();
+  double sum = 0.0;
+  const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
+    return sweep([&](const auto& el, auto& w) {
+      using T = typename std::decay_t<decltype(el)>::Scalar;
+      el.gather(u.data(), w.x);
+      el.gather(d.data(), w.d);
+      T e(0);
+      if (!TetKernel<decltype(m), T>::forces_energy_and_product(p, el.z_inv(), el.b(), el.volume(),
+                                                                w.x, w.d, w.q, w.dq, e))
+        return false;
+      el.add(w.q, gq);
+      el.add(w.dq, dst);
+      sum += el.sum(e);
+      return true;
+    });
+  });
+  flops_ +=
+      (element_flops_.force_energy_and_product + 25) * static_cast<std::uint64_t>(num_elements());
+  if (!ok) {
+    g.setZero();
+    out.setZero();
+    energy = kInf;
+    return EvalStatus::kInverted;
+  }
+  g -= f_ext_;
+  energy = sum - f_ext_.dot(u);
+  if (!std::isfinite(energy)) return EvalStatus::kNonFinite;
+  return g.allFinite() && out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
 }
 
 EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& out) {

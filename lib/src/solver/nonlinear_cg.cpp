@@ -34,10 +34,14 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
   double delta0 = 0.0;
   g_out = g0;
   e_out = e0;
+  // Newton: each trial point's gradient, energy and K·d come from one evaluation
+  // (Problem::gradient_energy_product), so s already holds K(x + α_j d)·d for j ≥ 1.
+  const bool newton = opt.line_search == LineSearchKind::kNewton;
+  bool have_product = false;
   for (int j = 0; j < opt.j_max; ++j) {
     double c = 0.0;  // estimate of g′(α_j) = (d, K(x + α_j d) d)
-    bool need_product = opt.line_search == LineSearchKind::kNewton ||
-                        (j == 0 && opt.line_search == LineSearchKind::kSecant);
+    bool need_product =
+        (newton && !have_product) || (j == 0 && opt.line_search == LineSearchKind::kSecant);
     if (j == 0 && opt.line_search == LineSearchKind::kScaleDependentSecant) {
       // Finite-difference curvature from a gradient at α₋₁ (4.9).
       xt = x + opt.alpha_minus1 * d;
@@ -64,6 +68,9 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
         break;
       }
       c = d.dot(s);
+    } else if (newton) {
+      c = d.dot(s);  // K(x + α_j d)·d from the evaluation at α_j
+      meter.add(2 * nn);
     } else if (j > 0) {
       c = -(gamma - gamma_prev) / (alpha - alpha_prev);  // secant (4.9)
     }
@@ -85,11 +92,14 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
     double et = 0.0;
     for (int b = 0; b <= opt.max_backtracks; ++b) {
       xt = x + alpha_new * d;
-      const EvalStatus st = problem.gradient(xt, gt, &et);
+      const EvalStatus st = newton ? problem.gradient_energy_product(xt, d, gt, et, s)
+                                   : problem.gradient(xt, gt, &et);
       ++res.evaluations;
       meter.add(2 * nn);
-      if (st == EvalStatus::kOk && gt.allFinite() && std::isfinite(et)) {
+      if (st == EvalStatus::kOk && gt.allFinite() && std::isfinite(et) &&
+          (!newton || s.allFinite())) {
         admissible = true;
+        have_product = newton;  // st covers K·d too (a non-finite one backtracks)
         break;
       }
       alpha_new = alpha + 0.5 * (alpha_new - alpha);  // backtrack towards the admissible α_j

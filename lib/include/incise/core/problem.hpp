@@ -51,6 +51,17 @@ class Problem {
   /// out = K(u)·d, the tangent (Hessian of Π) applied to d, matrix-free (§3.1), not projected.
   virtual EvalStatus hessian_product(const VecX& u, const VecX& d, VecX& out) = 0;
 
+  /// g = ∇Π(u), Π(u) and out = K(u)·d at one point: what a Newton line search needs at each
+  /// trial step (§4.4.2). The default calls gradient() then hessian_product(); a problem may
+  /// evaluate all three in one sweep over its elements (ElasticProblem does) with the same
+  /// results. On a non-ok status the outputs are as gradient() leaves them.
+  virtual EvalStatus gradient_energy_product(const VecX& u, const VecX& d, VecX& g, double& energy,
+                                             VecX& out) {
+    const EvalStatus s = gradient(u, g, &energy);
+    if (s != EvalStatus::kOk) return s;
+    return hessian_product(u, d, out);
+  }
+
   /// Diagonal of K(u), for Jacobi preconditioning. Default: not available (returns false).
   virtual bool hessian_diagonal(const VecX& u, VecX& diag) { return false; }
 

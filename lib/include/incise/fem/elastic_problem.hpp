@@ -31,8 +31,10 @@ namespace incise::fem {
 /// Counted flops per element evaluation for one material (obtained by running the kernels once
 /// with incise::Counted; see element_flops()).
 struct ElementFlops {
-  std::uint64_t energy = 0;             ///< v·W
-  std::uint64_t force = 0;              ///< internal forces q (Table 4.3 "Force")
+  std::uint64_t energy = 0;                    ///< v·W
+  std::uint64_t force = 0;                     ///< internal forces q (Table 4.3 "Force")
+  std::uint64_t force_and_energy = 0;          ///< q and v·W from one kinematics evaluation
+  std::uint64_t force_energy_and_product = 0;  ///< q, v·W and K_e·d (Newton line-search point)
   std::uint64_t force_and_product = 0;  ///< q and K_e·d ((4.3)+(4.4), Table 4.3 "Derivative")
   std::uint64_t product = 0;            ///< K_e·d alone (matrix-free product)
   std::uint64_t force_and_tangent = 0;  ///< q and the full 12×12 K_e
@@ -122,6 +124,10 @@ class ElasticProblem : public Problem {
   /// out = K(u)·d matrix-free (element products (4.4), §3.1), not projected. On kInverted out
   /// is zero.
   [[nodiscard]] EvalStatus hessian_product(const VecX& u, const VecX& d, VecX& out) override;
+  /// One element sweep (TetKernel::forces_energy_and_product); results equal gradient() and
+  /// hessian_product() evaluated separately.
+  [[nodiscard]] EvalStatus gradient_energy_product(const VecX& u, const VecX& d, VecX& g,
+                                                   double& energy, VecX& out) override;
   /// Diagonal of K(u) (from element tangents). Fixed DOFs get 1. Returns false if inverted.
   bool hessian_diagonal(const VecX& u, VecX& diag) override;
   void project(VecX& v) const override;

@@ -140,14 +140,57 @@ struct TetKernel {
     return true;
   }
 
+  /// Internal forces q and the element energy v(τ)·W from one kinematics evaluation (the
+  /// gradient with its energy in one sweep). Returns false when inverted (q untouched, w = +∞).
+  static INCISE_KERNEL_INLINE bool forces_and_energy(const material::Lame& p, const Mat3T<T>& z_inv,
+                                                     const Mat3T<T>& b, const T& volume,
+                                                     const Mat34T<T>& x, Mat34T<T>& q, T& w) {
+    State st;
+    if (!kinematics(p, z_inv, x, st)) {
+      w = material::detail::infinity<T>();
+      return false;
+    }
+    if constexpr (Model::kLinearGeometry) {
+      nodal_from_piola(st.s, b, q);
+    } else {
+      nodal_from_piola(material::detail::mul(st.f, st.s), b, q);
+    }
+    w = volume * Model::energy(p, st.strain);
+    return true;
+  }
+
   /// Forces and the directional derivative (4.4) along nodal displacement direction d:
   /// dq = K_e·d. This is the pair Table 4.3 counts ("force" and "derivative").
   static INCISE_KERNEL_INLINE bool forces_and_product(const material::Lame& p,
                                                       const Mat3T<T>& z_inv, const Mat3T<T>& b,
                                                       const Mat34T<T>& x, const Mat34T<T>& d,
                                                       Mat34T<T>& q, Mat34T<T>& dq) {
+    return forces_product_impl<false>(p, z_inv, b, T(0), x, d, q, dq, nullptr);
+  }
+
+  /// Forces, the element energy v(τ)·W and dq = K_e·d from one kinematics evaluation: what a
+  /// Newton line search needs at each trial point (§4.4.2). False when inverted (w = +∞).
+  static INCISE_KERNEL_INLINE bool forces_energy_and_product(const material::Lame& p,
+                                                             const Mat3T<T>& z_inv,
+                                                             const Mat3T<T>& b, const T& volume,
+                                                             const Mat34T<T>& x, const Mat34T<T>& d,
+                                                             Mat34T<T>& q, Mat34T<T>& dq, T& w) {
+    return forces_product_impl<true>(p, z_inv, b, volume, x, d, q, dq, &w);
+  }
+
+ private:
+  template <bool kEnergy>
+  static INCISE_KERNEL_INLINE bool forces_product_impl(const material::Lame& p,
+                                                       const Mat3T<T>& z_inv, const Mat3T<T>& b,
+                                                       const T& volume, const Mat34T<T>& x,
+                                                       const Mat34T<T>& d, Mat34T<T>& q,
+                                                       Mat34T<T>& dq, T* w) {
     State st;
-    if (!kinematics(p, z_inv, x, st)) return false;
+    if (!kinematics(p, z_inv, x, st)) {
+      if constexpr (kEnergy) *w = material::detail::infinity<T>();
+      return false;
+    }
+    if constexpr (kEnergy) *w = volume * Model::energy(p, st.strain);
     const Mat3T<T> dg = material::detail::mul(differences(d), z_inv);
     Mat3T<T> dc;
     if constexpr (Model::kLinearGeometry) {
@@ -169,6 +212,7 @@ struct TetKernel {
     return true;
   }
 
+ public:
   /// Matrix-free product only: dq = K_e·d (recomputes the kinematics; no forces). For the
   /// linear model K_e does not depend on x, so the kinematics at x are skipped.
   static INCISE_KERNEL_INLINE bool product(const material::Lame& p, const Mat3T<T>& z_inv,
