@@ -5,13 +5,14 @@
 #include <exception>
 #include <iostream>
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 
 namespace incise::cli {
 namespace {
 
 int version(const Args&, std::ostream& out, std::ostream&) {
-  out << "incise 0.1.0\n";
+  out << "incise " << build_version() << " (commit " << build_commit() << ")\n";
   return 0;
 }
 

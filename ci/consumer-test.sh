@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# The consumer test (docs/install.md; stage "2b" of ci/test.sh): installs a built tree to a fresh
+# prefix and uses it the ways a user would, each step required to succeed:
+#   1. cmake --install BUILD --prefix build/consumer-test/prefix
+#   2. ci/consumer/ configured with find_package(incise CONFIG REQUIRED COMPONENTS scene),
+#      built, and its ctest run: the shipped cantilever scene from <prefix>/share/incise solved
+#      (converged, finite, tip deflection below beam theory)
+#   3. pkg-config --cflags --libs incise with PKG_CONFIG_PATH=<prefix>/<libdir>/pkgconfig, and the
+#      same program compiled and linked with those flags alone, then run
+#   4. the installed examples/ built standalone against the prefix, and their ctest run
+#   5. the installed program, run from / with INCISE_DATA_DIR unset, finds <prefix>/share/incise
+# Usage: ci/consumer-test.sh [BUILD_DIR]   (default build/release; it must be built)
+# Prints each step's duration; exits non-zero at the first failure.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$(pwd)
+build=${1:-build/release}
+jobs=$(getconf _NPROCESSORS_ONLN 2>/dev/null || echo 2)
+work=$root/build/consumer-test  # fixed path: ccache (base_dir /work) hits across runs
+prefix=$work/prefix
+rm -rf "$work"
+mkdir -p "$work"
+unset INCISE_DATA_DIR
+launcher=()
+if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
+t=$SECONDS
+step() { echo "consumer-test: $* ($((SECONDS - t)) s)"; }
+
+cmake --install "$build" --prefix "$prefix" >"$work/install.log"
+step "installed $build to $prefix: $(find "$prefix" -type f | wc -l) files"
+
+cmake -S ci/consumer -B "$work/cmake" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_TYPE=Release \
+  "${launcher[@]}" >"$work/cmake-configure.log"
+cmake --build "$work/cmake" -j"$jobs" >"$work/cmake-build.log"
+ctest --test-dir "$work/cmake" --output-on-failure -V | grep -E '^[0-9]+: |tests passed|tests failed'
+step "find_package(incise) consumer built and passed"
+
+pcfile=$(find "$prefix" -name incise.pc)
+export PKG_CONFIG_PATH=$(dirname "$pcfile")
+flags=$(pkg-config --cflags --libs incise)
+echo "consumer-test: pkg-config --cflags --libs incise: $flags"
+# shellcheck disable=SC2086  # the flags are words
+${launcher:+ccache} c++ -std=c++17 -O2 ci/consumer/main.cpp -o "$work/incise_consumer_pc" $flags
+"$work/incise_consumer_pc" "$prefix/share/incise/scenes/cantilever.json" | tail -1
+step "pkg-config consumer built and passed"
+
+cmake -S examples -B "$work/examples" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_TYPE=Release \
+  "${launcher[@]}" >"$work/examples-configure.log"
+cmake --build "$work/examples" -j"$jobs" >"$work/examples-build.log"
+ctest --test-dir "$work/examples" --output-on-failure | grep -E 'tests passed|tests failed'
+step "examples built standalone and passed"
+
+out=$(cd / && "$prefix/bin/incise" certify --quick --filter '^box_volume$' --out "$work/certify")
+echo "$out" | grep -q "reference data $prefix/share/incise\$" ||
+  { echo "$out"; echo "consumer-test: the installed incise did not use $prefix/share/incise" >&2; exit 1; }
+"$prefix/bin/incise" version
+step "installed incise found its data in $prefix/share/incise"
+echo "consumer-test: passed in $((SECONDS - t)) s"
