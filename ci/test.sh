@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The test command (docs/ci.md): install what is missing, check formatting and the module order,
 # then the stages
-#   1 release build                     (preset release, g++)
+#   1 release build                     (preset release, g++), and the API reference (target
+#     incise_docs: Doxygen, any warning fails it)
 #   2 release tests, all but label slow
 #   2b consumer test: install the release build to a prefix, build and run a project against it
 #      with find_package(incise) and with pkg-config, and examples/ standalone (ci/consumer-test.sh)
@@ -94,6 +95,7 @@ ci/check-module-order.sh
 begin "1 release build"
 cmake --preset release >/dev/null
 cmake --build --preset release -j"$jobs"
+cmake --build --preset release --target incise_docs  # Doxygen; a warning fails the build
 end "1 release build"
 
 begin "2 release tests (all but label slow)"
