@@ -1,7 +1,8 @@
 # Writes OUT, the definitions of incise::cli::build_version() (VERSION, the project version) and
-# build_commit() (cli_util.hpp): the short commit of SOURCE_DIR with "-dirty" when tracked files have uncommitted changes, "unknown" outside a git
-# checkout. Run on every build (lib/cli/CMakeLists.txt); OUT changes only when the text does, so
-# only a new commit or a change of dirtiness recompiles it.
+# build_commit() (cli_util.hpp): the short commit of SOURCE_DIR with "-dirty" when tracked files
+# have uncommitted changes (or git status fails), "unknown" outside a git checkout or without
+# git. Run on every build (lib/cli/CMakeLists.txt); OUT changes only when the text does, so only
+# a new commit or a change of dirtiness recompiles it.
 #   cmake -DSOURCE_DIR=... -DVERSION=... -DOUT=... -P build_info.cmake
 set(commit unknown)
 find_program(GIT git)
