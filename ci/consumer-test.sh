@@ -25,14 +25,25 @@ launcher=()
 if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
 t=$SECONDS
 step() { echo "consumer-test: $* ($((SECONDS - t)) s)"; }
+# quiet LOG COMMAND...: runs COMMAND with its output in $work/LOG, shown when it fails.
+quiet() {
+  local log=$work/$1
+  shift
+  if ! "$@" >"$log" 2>&1; then
+    tail -n 40 "$log"
+    echo "consumer-test: FAILED: $* (log: $log)" >&2
+    exit 1
+  fi
+}
 
-cmake --install "$build" --prefix "$prefix" >"$work/install.log"
+quiet install.log cmake --install "$build" --prefix "$prefix"
 step "installed $build to $prefix: $(find "$prefix" -type f | wc -l) files"
 
-cmake -S ci/consumer -B "$work/cmake" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_TYPE=Release \
-  "${launcher[@]}" >"$work/cmake-configure.log"
-cmake --build "$work/cmake" -j"$jobs" >"$work/cmake-build.log"
-ctest --test-dir "$work/cmake" --output-on-failure -V | grep -E '^[0-9]+: |tests passed|tests failed'
+quiet cmake-configure.log cmake -S ci/consumer -B "$work/cmake" -DCMAKE_PREFIX_PATH="$prefix" \
+  -DCMAKE_BUILD_TYPE=Release "${launcher[@]}"
+quiet cmake-build.log cmake --build "$work/cmake" -j"$jobs"
+quiet cmake-ctest.log ctest --test-dir "$work/cmake" --output-on-failure -V
+grep -E '^[0-9]+: (Test command|.*consumer)|tests passed' "$work/cmake-ctest.log"
 step "find_package(incise) consumer built and passed"
 
 pcfile=$(find "$prefix" -name incise.pc)
@@ -41,13 +52,14 @@ flags=$(pkg-config --cflags --libs incise)
 echo "consumer-test: pkg-config --cflags --libs incise: $flags"
 # shellcheck disable=SC2086  # the flags are words
 ${launcher:+ccache} c++ -std=c++17 -O2 ci/consumer/main.cpp -o "$work/incise_consumer_pc" $flags
-"$work/incise_consumer_pc" "$prefix/share/incise/scenes/cantilever.json" | tail -1
+"$work/incise_consumer_pc" "$prefix/share/incise/scenes/cantilever.json"
 step "pkg-config consumer built and passed"
 
-cmake -S examples -B "$work/examples" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_TYPE=Release \
-  "${launcher[@]}" >"$work/examples-configure.log"
-cmake --build "$work/examples" -j"$jobs" >"$work/examples-build.log"
-ctest --test-dir "$work/examples" --output-on-failure | grep -E 'tests passed|tests failed'
+quiet examples-configure.log cmake -S examples -B "$work/examples" -DCMAKE_PREFIX_PATH="$prefix" \
+  -DCMAKE_BUILD_TYPE=Release "${launcher[@]}"
+quiet examples-build.log cmake --build "$work/examples" -j"$jobs"
+quiet examples-ctest.log ctest --test-dir "$work/examples" --output-on-failure
+grep -E 'tests passed' "$work/examples-ctest.log"
 step "examples built standalone and passed"
 
 out=$(cd / && "$prefix/bin/incise" certify --quick --filter '^box_volume$' --out "$work/certify")
