@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The consumer test (docs/install.md; stage "2b" of ci/test.sh): installs a built tree to a fresh
 # prefix and uses it the ways a user would, each step required to succeed:
-#   1. cmake --install BUILD --prefix build/consumer-test/prefix
+#   1. cmake --install BUILD --prefix build/consumer-test/prefix; no installed CMake package
+#      file nor incise.pc names the source tree (raw source or build paths)
 #   2. ci/consumer/ configured with find_package(incise CONFIG REQUIRED COMPONENTS scene),
 #      built, and its ctest run: the shipped cantilever scene from <prefix>/share/incise solved
 #      (converged, finite, tip deflection below beam theory)
@@ -38,6 +39,12 @@ quiet() {
 
 quiet install.log cmake --install "$build" --prefix "$prefix"
 step "installed $build to $prefix: $(find "$prefix" -type f | wc -l) files"
+# The installed package names no source or build path (include directories are
+# $<INSTALL_INTERFACE:include>, incise.pc is relative to itself).
+if grep -rl -e "$root" "$prefix/lib/cmake" "$(find "$prefix" -name incise.pc)"; then
+  echo "consumer-test: FAILED: the installed package files above name $root" >&2
+  exit 1
+fi
 
 quiet cmake-configure.log cmake -S ci/consumer -B "$work/cmake" -DCMAKE_PREFIX_PATH="$prefix" \
   -DCMAKE_BUILD_TYPE=Release "${launcher[@]}"
