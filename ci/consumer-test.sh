@@ -54,7 +54,8 @@ grep -E '^[0-9]+: (Test command|.*consumer)|tests passed' "$work/cmake-ctest.log
 step "find_package(incise) consumer built and passed"
 
 pcfile=$(find "$prefix" -name incise.pc)
-export PKG_CONFIG_PATH=$(dirname "$pcfile")
+PKG_CONFIG_PATH=$(dirname "$pcfile")
+export PKG_CONFIG_PATH
 flags=$(pkg-config --cflags --libs incise)
 echo "consumer-test: pkg-config --cflags --libs incise: $flags"
 # shellcheck disable=SC2086  # the flags are words
