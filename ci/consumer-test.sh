@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The consumer test (docs/install.md; stage "2b" of ci/test.sh): installs a built tree to a fresh
 # prefix and uses it the ways a user would, each step required to succeed:
-#   1. cmake --install BUILD --prefix build/consumer-test/prefix; no installed CMake package
-#      file nor incise.pc names the source tree (raw source or build paths)
+#   1. cmake --install BUILD --prefix build/consumer-test/staging, then the tree moved to
+#      build/consumer-test/prefix (relocatable); no installed CMake package file nor incise.pc
+#      names the source tree (raw source or build paths)
 #   2. ci/consumer/ configured with find_package(incise CONFIG REQUIRED COMPONENTS scene),
 #      built, and its ctest run: the shipped cantilever scene from <prefix>/share/incise solved
 #      (converged, finite, tip deflection below beam theory)
@@ -37,8 +38,10 @@ quiet() {
   fi
 }
 
-quiet install.log cmake --install "$build" --prefix "$prefix"
-step "installed $build to $prefix: $(find "$prefix" -type f | wc -l) files"
+# Installed to one folder and used from another: nothing installed may store the prefix.
+quiet install.log cmake --install "$build" --prefix "$work/staging"
+mv "$work/staging" "$prefix"
+step "installed $build to $work/staging, moved to $prefix: $(find "$prefix" -type f | wc -l) files"
 # The installed package names no source or build path (include directories are
 # $<INSTALL_INTERFACE:include>, incise.pc is relative to itself).
 if grep -rl -e "$root" "$prefix/lib/cmake" "$(find "$prefix" -name incise.pc)"; then
