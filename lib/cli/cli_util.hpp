@@ -13,6 +13,11 @@
 #include <string>
 #include <vector>
 
+/// Path from the installed program's folder to the installed data (lib/cli/CMakeLists.txt).
+#ifndef INCISE_DATA_FROM_BIN
+#define INCISE_DATA_FROM_BIN "../share/incise"
+#endif
+
 namespace incise::cli {
 
 /// The value after option args[i] (advances i); UsageError when missing.
@@ -51,7 +56,8 @@ inline std::string executable_dir() {
 ///   2. the environment variable INCISE_DATA_DIR when set and not empty;
 ///   3. <folder of the program>/reference_data: in a build tree, a link to the source tree's
 ///      reference_data made by lib/cli/CMakeLists.txt;
-///   4. <folder of the program>/../share/incise: an installed program.
+///   4. <folder of the program>/INCISE_DATA_FROM_BIN (compile definition, default
+///      ../share/incise): an installed program, <prefix>/bin/incise → <prefix>/share/incise.
 /// A folder chosen by 1 or 2 must exist (UsageError naming it); otherwise the first of 3 and 4
 /// that exists is returned, canonical. UsageError naming every path tried when none does.
 inline std::string find_data_dir(const std::string& option) {
@@ -77,7 +83,7 @@ inline std::string find_data_dir(const std::string& option) {
     tried += ", the program's folder (/proc/self/exe unreadable)";
   } else {
     const fs::path candidates[] = {fs::path(exe) / "reference_data",
-                                   fs::path(exe) / ".." / "share" / "incise"};
+                                   fs::path(exe) / INCISE_DATA_FROM_BIN};
     for (const fs::path& c : candidates) {
       const fs::path p = c.lexically_normal();
       if (fs::is_directory(p, ec)) {
