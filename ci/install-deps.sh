@@ -4,11 +4,12 @@
 # supernodal factorization is several times faster with it than with the reference BLAS).
 set -euo pipefail
 # clang + libclang-rt-14-dev (the sanitizer and libFuzzer runtimes, only recommended by clang, so
-# not pulled in with --no-install-recommends): the asan preset that ci/test.sh builds.
+# not pulled in with --no-install-recommends): the asan preset that ci/test.sh builds. doxygen:
+# the API reference (target incise_docs), built by ci/test.sh.
 packages=(
   build-essential cmake ccache pkg-config clang-format clang libclang-rt-14-dev
   libeigen3-dev libsuitesparse-dev libfftw3-dev nlohmann-json3-dev libopenblas-dev
-  libgtest-dev libgmock-dev googletest libbenchmark-dev gnuplot-nox
+  libgtest-dev libgmock-dev googletest libbenchmark-dev gnuplot-nox doxygen
 )
 # Headless Chromium (large) only on request, for the `slow` render test of the certification
 # report and the benchmark dashboard (verification/scene/render_pages.sh).

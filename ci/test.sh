@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # The test command (docs/ci.md): install what is missing, check formatting and the module order,
 # then the stages
-#   1 release build                     (preset release, g++)
+#   1 release build                     (preset release, g++), and the API reference (target
+#     incise_docs: Doxygen, any warning fails it)
 #   2 release tests, all but label slow
+#   2b consumer test: install the release build to a prefix, build and run a project against it
+#      with find_package(incise) and with pkg-config, and examples/ standalone (ci/consumer-test.sh)
 #   3 release tests, label slow (but the soak, label soak: docs/ci.md)
 #   4 asan build: clang++ ASan + UBSan, every test and the libFuzzer harnesses (preset asan)
 #   5 asan tests, all but label slow and the certify mutants (docs/ci.md)
@@ -11,7 +14,8 @@
 #   8 tsan tests, label threads
 # Prints each stage's duration. A failing build stops the script; a failing test stage fails it
 # at the end (the other stages still run). Exits non-zero on any failure. Ends with one line
-# "tests: N passed, M failed" (ctest cases of stages 2, 3, 5, 8 and one per fuzz harness).
+# "tests: N passed, M failed" (ctest cases of stages 2, 3, 5, 8, one per fuzz harness and one for
+# the consumer test).
 # Local shortcuts (CI sets none): INCISE_SKIP_SLOW=1, INCISE_SKIP_ASAN=1 (stages 4-6),
 # INCISE_SKIP_TSAN=1.
 set -euo pipefail
@@ -91,11 +95,21 @@ ci/check-module-order.sh
 begin "1 release build"
 cmake --preset release >/dev/null
 cmake --build --preset release -j"$jobs"
+cmake --build --preset release --target incise_docs  # Doxygen; a warning fails the build
 end "1 release build"
 
 begin "2 release tests (all but label slow)"
 run_ctest release --preset release
 end "2 release tests (all but label slow)"
+
+begin "2b consumer test (installed package)"
+if ci/consumer-test.sh build/release 2>&1 | tee "$logdir/consumer.log"; then
+  passed=$((passed + 1))
+else
+  failed=$((failed + 1))
+  status=1
+fi
+end "2b consumer test (installed package)"
 
 if [ "${INCISE_SKIP_SLOW:-0}" != "1" ]; then
   begin "3 release tests, label slow"

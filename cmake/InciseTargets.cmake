@@ -1,13 +1,18 @@
 # Helper functions shared by every folder.
 
 # incise_add_library(NAME SOURCES ... DEPS ...)
-#   A module library incise_<NAME> with public headers under lib/include.
+#   A module library incise_<NAME> with public headers under lib/include, exported and installed
+#   as incise::<NAME> (cmake/InciseInstall.cmake installs every target listed in the global
+#   property INCISE_LIBRARIES).
 function(incise_add_library name)
   cmake_parse_arguments(A "" "" "SOURCES;DEPS" ${ARGN})
   add_library(incise_${name} ${A_SOURCES})
   add_library(incise::${name} ALIAS incise_${name})
-  target_include_directories(incise_${name} PUBLIC ${PROJECT_SOURCE_DIR}/lib/include)
+  set_target_properties(incise_${name} PROPERTIES EXPORT_NAME ${name})
+  target_include_directories(incise_${name} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/lib/include>
+                                                   $<INSTALL_INTERFACE:include>)
   target_link_libraries(incise_${name} PUBLIC ${A_DEPS} PRIVATE incise_options)
+  set_property(GLOBAL APPEND PROPERTY INCISE_LIBRARIES incise_${name})
 endfunction()
 
 # incise_add_gtest(NAME SOURCES ... LIBS ... LABELS ... [TIMEOUT s])

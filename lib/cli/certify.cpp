@@ -27,17 +27,19 @@ int run_certify_command(const Args& args, std::ostream& out, std::ostream& err) 
       filter = option_value(args, i, "--filter");
     } else if (a == "--data") {
       data_dir = option_value(args, i, "--data");
+      if (data_dir.empty()) throw UsageError("--data expects a folder, got ''");
     } else if (a == "--help" || a == "-h") {
       out << "usage: incise certify [--quick] [--out DIR] [--filter RE] [--data DIR]\n"
              "Runs the verification catalogue; writes DIR/index.html and DIR/summary.json\n"
-             "(default DIR: out/certify). --data: the reference_data folder (default: found\n"
-             "from the current directory or the source tree). Exit 1 when a check fails.\n";
+             "(default DIR: out/certify). --data: the data folder (default: $INCISE_DATA_DIR,\n"
+             "else reference_data/ beside the program in a build tree, else ../share/incise\n"
+             "beside the installed program). Exit 1 when a check fails.\n";
       return 0;
     } else {
       throw UsageError("unknown argument '" + a + "' (see incise certify --help)");
     }
   }
-  if (data_dir.empty()) data_dir = find_reference_data();
+  data_dir = find_data_dir(data_dir);
   const std::string commit = git_commit();
   out << "certify: " << (quick ? "quick" : "full") << " catalogue, reference data " << data_dir
       << "\n";

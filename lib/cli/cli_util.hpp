@@ -5,15 +5,18 @@
 #include <incise/core/atomic_file.hpp>
 #include <incise/core/error.hpp>
 
-#include <array>
 #include <cerrno>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <string>
 #include <vector>
+
+/// Path from the installed program's folder to the installed data (lib/cli/CMakeLists.txt).
+#ifndef INCISE_DATA_FROM_BIN
+#define INCISE_DATA_FROM_BIN "../share/incise"
+#endif
 
 namespace incise::cli {
 
@@ -47,48 +50,64 @@ inline std::string executable_dir() {
   return ec ? std::string() : p.parent_path().string();
 }
 
-/// Output of a shell command (stdout, trailing newline removed), or "" when it fails.
-inline std::string command_output(const std::string& command) {
-  std::string result;
-  FILE* pipe = popen((command + " 2>/dev/null").c_str(), "r");
-  if (!pipe) return result;
-  std::array<char, 256> buf{};
-  while (fgets(buf.data(), static_cast<int>(buf.size()), pipe)) result += buf.data();
-  if (pclose(pipe) != 0) return "";
-  while (!result.empty() && (result.back() == '\n' || result.back() == '\r')) result.pop_back();
-  return result;
-}
-
-/// The source tree: the current directory when it holds reference_data/, else the tree this
-/// program was configured from (INCISE_SOURCE_DIR, compile definition).
-inline std::string source_root() {
+/// The data folder (the source tree's reference_data/, or <prefix>/share/incise when
+/// installed), looked up in this order (docs/install.md, "Where incise finds its data"):
+///   1. `option` (the --data DIR option) when not empty;
+///   2. the environment variable INCISE_DATA_DIR when set and not empty;
+///   3. <folder of the program>/reference_data: in a build tree, a link to the source tree's
+///      reference_data made by lib/cli/CMakeLists.txt;
+///   4. <folder of the program>/INCISE_DATA_FROM_BIN (compile definition, default
+///      ../share/incise): an installed program, <prefix>/bin/incise → <prefix>/share/incise.
+/// A folder chosen by 1 or 2 must exist (UsageError naming it); otherwise the first of 3 and 4
+/// that exists is returned, canonical. UsageError naming every path tried when none does.
+inline std::string find_data_dir(const std::string& option) {
+  namespace fs = std::filesystem;
   std::error_code ec;
-  if (std::filesystem::is_directory("reference_data", ec)) return ".";
-#ifdef INCISE_SOURCE_DIR
-  return INCISE_SOURCE_DIR;
-#else
-  return ".";
-#endif
+  const char* expected =
+      "the incise data folder: reference_data/ of the source tree or <prefix>/share/incise";
+  if (!option.empty()) {
+    if (!fs::is_directory(option, ec))
+      throw UsageError("--data " + option + ": not a folder (expected " + expected + ")");
+    return option;
+  }
+  const char* env = std::getenv("INCISE_DATA_DIR");
+  if (env && *env) {
+    if (!fs::is_directory(env, ec))
+      throw UsageError("INCISE_DATA_DIR=" + std::string(env) + ": not a folder (expected " +
+                       expected + ")");
+    return env;
+  }
+  std::string tried = "--data (not given), INCISE_DATA_DIR (not set)";
+  const std::string exe = executable_dir();
+  if (exe.empty()) {
+    tried += ", the program's folder (/proc/self/exe unreadable)";
+  } else {
+    const fs::path candidates[] = {fs::path(exe) / "reference_data",
+                                   fs::path(exe) / INCISE_DATA_FROM_BIN};
+    for (const fs::path& c : candidates) {
+      const fs::path p = c.lexically_normal();
+      if (fs::is_directory(p, ec)) {
+        const fs::path canonical = fs::canonical(p, ec);
+        return ec ? p.string() : canonical.string();
+      }
+      tried += ", " + p.string();
+    }
+  }
+  throw UsageError(std::string("cannot find ") + expected + "; tried " + tried +
+                   " (pass --data DIR or set INCISE_DATA_DIR)");
 }
 
-/// reference_data folder (see source_root); UsageError when it is not found.
-inline std::string find_reference_data() {
-  const std::string d = source_root() + "/reference_data";
-  std::error_code ec;
-  if (!std::filesystem::is_directory(d, ec))
-    throw UsageError("cannot find reference_data/ (run from the source tree or pass --data DIR)");
-  return d;
-}
+/// The project version (CMakeLists.txt project(VERSION)).
+const char* build_version();
 
-/// Short commit of the source tree, with "-dirty" when it has uncommitted changes to tracked
-/// files; "unknown" outside a git checkout.
+/// Short commit of the source tree this program was built from, with "-dirty" when it had
+/// uncommitted changes to tracked files at build time; "unknown" when it was not built from a
+/// git checkout (lib/cli/build_info.cmake, regenerated on every build).
+const char* build_commit();
+
+/// build_commit() (the name the subcommands use).
 inline std::string git_commit() {
-  const std::string root = source_root();
-  std::string c = command_output("git -C '" + root + "' rev-parse --short=10 HEAD");
-  if (c.empty()) return "unknown";
-  if (!command_output("git -C '" + root + "' status --porcelain --untracked-files=no").empty())
-    c += "-dirty";
-  return c;
+  return build_commit();
 }
 
 }  // namespace incise::cli

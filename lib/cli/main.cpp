@@ -5,19 +5,20 @@
 #include <exception>
 #include <iostream>
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 
 namespace incise::cli {
 namespace {
 
 int version(const Args&, std::ostream& out, std::ostream&) {
-  out << "incise 0.1.0\n";
+  out << "incise " << build_version() << " (commit " << build_commit() << ")\n";
   return 0;
 }
 
 // Registered subcommands. Add one line per subcommand family (declared in commands.hpp).
 const Command kCommands[] = {
-    {"version", "print the version", &version},
+    {"version", "print the version and the commit it was built from", &version},
     {"mesh", "mesh check FILE [--vtu OUT]: load, report quality, validate (7.1)-(7.5)", &run_mesh},
     {"run", "run SCENE [--summary-json PATH] [--progress MODE]: run a scene file (docs/scenes.md)",
      &run_scene_command},

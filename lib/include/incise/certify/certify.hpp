@@ -58,7 +58,7 @@ struct ReportPlot {
 /// One compared quantity of a measurement: judged against band `band` of its check.
 struct Comparison {
   std::string quantity;  ///< what was measured, e.g. "24 x 6 x 6: CG iterations / thesis"
-  std::string band;      ///< the band's name under checks.<id> in tolerances.json
+  std::string band;      ///< the band's name under `checks.<id>` in tolerances.json
   double value = std::numeric_limits<double>::quiet_NaN();
 };
 
@@ -82,7 +82,7 @@ struct Check {
   std::string title;
   std::string source;              ///< thesis / paper section the check reproduces
   std::string criterion;           ///< what must hold, in words
-  std::vector<std::string> bands;  ///< names of its bands under checks.<id> in tolerances.json
+  std::vector<std::string> bands;  ///< names of its bands under `checks.<id>` in tolerances.json
   std::function<Measurement(const CertifyContext&)> measure;
 };
 

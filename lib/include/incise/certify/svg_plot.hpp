@@ -39,7 +39,7 @@ std::string svg_line_plot(const std::vector<Series>& series, const PlotOptions& 
 /// Escapes &, <, >, " and ' for HTML text and attribute values.
 std::string html_escape(const std::string& s);
 
-/// Opening of a self-contained HTML page (inline CSS) with the given title, up to <body>.
+/// Opening of a self-contained HTML page (inline CSS) with the given title, up to `<body>`.
 std::string html_page_begin(const std::string& title);
 
 /// Closing tags of a page begun with html_page_begin.

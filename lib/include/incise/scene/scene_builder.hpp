@@ -58,7 +58,7 @@ struct BuiltScene {
 /// Builds `spec` (mesh, fixed nodes, loads, the elastic problem, and the optional parts). Throws
 /// ParseError naming the JSON path when a region selects no node (or no boundary face for a surface
 /// load) or a probe location lies outside the mesh's bounding box; when a mesh generator refuses a
-/// parameter (mesh::GeneratorError, at /mesh/<parameter>); and when the estimated bytes of the
+/// parameter (mesh::GeneratorError, at `/mesh/<parameter>`); and when the estimated bytes of the
 /// mesh arrays and the elastic problem exceed the memory budget (spec.limits, default
 /// incise::default_memory_budget_bytes()), checked before a generated mesh is allocated and
 /// before a read mesh gets its problem; and when the loads give ‖f_ext‖ = 0 over the free DOFs
