@@ -234,7 +234,7 @@ std::vector<NeedleUpdatePlan> needle_updates(const ToolSpec& tool) {
   std::vector<NeedleUpdatePlan> plan;
   const std::vector<Vec3>& p = tool.path;
   double total = 0.0;
-  for (std::size_t i = 0; i + 1 < p.size(); ++i) total += (p[i + 1] - p[i]).norm();
+  for (std::size_t i = 0; i + 1 < p.size(); ++i) total += (p[i + 1] - p[i]).stableNorm();
   const double step = tool.speed * tool.h_ref;
   // 1e-9 of a step: a path of exactly n steps ends at update n, not n + 1.
   const long n = static_cast<long>(std::ceil(total / step - 1e-9));
@@ -243,12 +243,12 @@ std::vector<NeedleUpdatePlan> needle_updates(const ToolSpec& tool) {
   for (long k = 0; k <= n; ++k) {
     const double depth = std::min(total, static_cast<double>(k) * step);
     // The segment the tip is on: the next one at a joint, the last one at the end.
-    while (seg + 2 < p.size() && depth >= seg_start + (p[seg + 1] - p[seg]).norm()) {
-      seg_start += (p[seg + 1] - p[seg]).norm();
+    while (seg + 2 < p.size() && depth >= seg_start + (p[seg + 1] - p[seg]).stableNorm()) {
+      seg_start += (p[seg + 1] - p[seg]).stableNorm();
       ++seg;
     }
     const Vec3 d = p[seg + 1] - p[seg];
-    const double len = d.norm();
+    const double len = d.stableNorm();
     const Vec3 tip = p[seg] + std::min(1.0, (depth - seg_start) / len) * d;
     NeedleUpdatePlan u;
     u.pose = needle::NeedlePose::make(tip.head<2>(), d.head<2>(), tool.length);

@@ -286,7 +286,7 @@ void parse_needle(JsonObject& o, ToolSpec& t) {
     const Vec2 x = detail::as_vec2((*p)[i], file, detail::child_path(path + "/path", i));
     t.path.push_back(Vec3(x[0], x[1], 0.0));
     if (i == 0) continue;
-    const double seg = (t.path[i] - t.path[i - 1]).norm();
+    const double seg = (t.path[i] - t.path[i - 1]).stableNorm();
     if (!(seg > 0.0))
       fail(file, detail::child_path(path + "/path", i),
            "the needle path segment from point " + std::to_string(i - 1) +
@@ -501,7 +501,7 @@ void check_needle(const SceneSpec& s, const std::string& file) {
   bool enters = false;
   double total = 0.0;
   for (std::size_t i = 0; i + 1 < t.path.size(); ++i) {
-    total += (t.path[i + 1] - t.path[i]).norm();
+    total += (t.path[i + 1] - t.path[i]).stableNorm();
     double t0 = 0, t1 = 0;
     if (!clip_to_rectangle(t.path[i], t.path[i + 1], m.width, m.height, t0, t1) || !(t1 > t0))
       continue;

@@ -346,9 +346,10 @@ void run_needle(BuiltScene& scene, SceneRunResult& res, const NeedleUpdateObserv
                               ? solver::StopReason::kNonFinite  // the gradient at the solution
                               : r.last_solver_status)
                        : solver::StopReason::kMaxIterations;  // the stick–slip cap
-      rep.message = "update " + std::to_string(k) + " of " +
-                    std::to_string(scene.needle_plan.size()) + " (depth " +
-                    std::to_string(plan.depth) + " m): " + r.brief();
+      std::ostringstream m;
+      m << "update " << k << " of " << scene.needle_plan.size() << " (depth " << plan.depth
+        << " m): " << r.brief();
+      rep.message = m.str();
       break;
     }
   }
