@@ -154,10 +154,18 @@ TEST(SceneNeedle, DefaultsAndLengthFormsOfTheSpacings) {
   EXPECT_DOUBLE_EQ(s.needle()->h_ref, 0.00625);
   EXPECT_DOUBLE_EQ(s.needle()->length, 0.03);  // default: the path's length
   EXPECT_DOUBLE_EQ(s.solver.tolerance_round, 1e-8);
-  const needle::FrictionProfile d;
-  EXPECT_EQ(s.needle()->friction.tip_density, d.tip_density);
-  EXPECT_EQ(s.needle()->friction.static_factor, d.static_factor);
+  // The documented defaults (docs/scenes.md, "Needle scenes").
+  EXPECT_EQ(s.needle()->friction.shaft_density, 50.0);
+  EXPECT_EQ(s.needle()->friction.tip_density, 150.0);
+  EXPECT_EQ(s.needle()->friction.bulge_length, 0.005);
+  EXPECT_EQ(s.needle()->friction.static_factor, 2.0);
+  EXPECT_FALSE(s.needle()->relocate);
+  EXPECT_EQ(s.needle()->max_rearrangements, 100);
+  EXPECT_EQ(s.solver.max_iterations, 10000);
+  EXPECT_EQ(s.solver.tolerance, 0.01);
   EXPECT_EQ(s.solver.method, SolverSpec::Method::kCG);
+  j["solver"].erase("tolerance");
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.tolerance, 1e-8);
 }
 
 TEST(SceneNeedle, UpdatesAdvanceTheTipAlongThePathAtTheSpeed) {

@@ -127,8 +127,9 @@ struct SceneRunResult {
   /// residual ‖P(K u − f)‖ recomputed matrix-free on the final cut mesh (scene.problem).
   std::vector<CutStepRow> cut_steps;
   /// Needle scenes only: one row per update run (the report then holds iterations = updates,
-  /// inner_iterations = CG iterations in all, energy = the final elastic energy, residual NaN:
-  /// every solve met (6.9), which has no single ‖f_ext‖).
+  /// inner_iterations = CG iterations in all, flops summed, seconds = the summed update times
+  /// (without the observer's, e.g. frame writing), energy = the final elastic energy, residual
+  /// NaN: every solve met (6.9), which has no single ‖f_ext‖).
   std::vector<NeedleUpdateRow> needle_updates;
   /// Elements with det F ≤ 0 at u (solver::check_inversion, §4.3.1, on scene.problem's mesh);
   /// −1 when u is not finite (not counted).
