@@ -409,6 +409,17 @@ TEST(SceneNeedleBad, SlabValues) {
                    {"speed", 1.0},
                    {"h_ref", 1e-200}};
   expect_error(j, "/mesh/h_start", "h_start = 1e-200 m is outside [1e-100, 1e+100] m");
+  j = small_needle_scene();  // builder: counts beyond an Index, and beyond the memory budget
+  j["mesh"].erase("h_start_level");
+  j["mesh"]["h_start"] = 1e-90;
+  j["tools"][0].erase("h_ref_level");
+  j["tools"][0]["h_ref"] = 1e-90;
+  j["tools"][0]["speed"] = 1e85;
+  expect_error(j, "/mesh", "/mesh: the slab would have 2e+178 triangles on 1e+178 nodes");
+  j["mesh"]["h_start"] = j["tools"][0]["h_ref"] = 1e-4;  // 2·10⁶ triangles
+  j["tools"][0]["speed"] = 10;
+  j["limits"] = {{"memory_mb", 1}};
+  expect_error(j, "/mesh", "/mesh: the slab and its plane-stress problem need an estimated");
   j = small_needle_scene();  // builder: no node on x = 0.09 at h2
   j["fixed"][0]["value"] = 0.09;
   expect_error(j, "/fixed/0", "region selects no node of the mesh");

@@ -153,11 +153,21 @@ BuiltScene build_needle_scene(const SceneSpec& spec) {
     throw ParseError(spec.file, spec.lines.line(h_path), e.str());
   }
   const double nx = std::round(ms.width / ms.h_start), ny = std::round(ms.height / ms.h_start);
-  if (nx * ny < 1e15) {  // else make_right_triangle_slab refuses the spacing below
-    const std::uint64_t points = static_cast<std::uint64_t>((nx + 1) * (ny + 1));
-    const std::uint64_t cells = static_cast<std::uint64_t>(2 * nx * ny);
+  const double cells_d = 2 * nx * ny, points_d = (nx + 1) * (ny + 1);
+  const auto max_index = static_cast<double>(std::numeric_limits<Index>::max());
+  if (!(cells_d <= max_index && points_d <= max_index)) {  // NaN too
+    std::ostringstream e;
+    e << "/mesh: the slab would have " << cells_d << " triangles on " << points_d
+      << " nodes (width / h_start = " << ms.width / ms.h_start
+      << ", height / h_start = " << ms.height / ms.h_start << "), more than an Index can number ("
+      << std::numeric_limits<Index>::max() << ")";
+    throw ParseError(spec.file, spec.lines.line("/mesh"), e.str());
+  }
+  {
+    const auto points = static_cast<std::uint64_t>(points_d);
+    const auto cells = static_cast<std::uint64_t>(cells_d);
     const std::uint64_t estimate = slab_bytes(points, cells), budget = memory_budget_bytes(spec);
-    if (estimate > budget || 2 * nx * ny > static_cast<double>(std::numeric_limits<Index>::max()))
+    if (estimate > budget)
       throw ParseError(spec.file, spec.lines.line("/mesh"),
                        "/mesh: the slab and its plane-stress problem need an estimated " +
                            mib(estimate) + " (" + std::to_string(cells) + " triangles, " +
