@@ -219,16 +219,35 @@ LoadSpec parse_load(const Json& j, const std::string& path, const std::string& f
   return l;
 }
 
-SolverSpec parse_solver(JsonObject o) {
+// `slab`: the scene's mesh is a slab2d, i.e. a needle scene (thesis ch. 6): linear or nonlinear
+// CG on the projected problem (6.7) of §6.6, stopped by (6.9) with ε_round, plain CG.
+SolverSpec parse_solver(JsonObject o, bool slab) {
   SolverSpec s;
   s.method = o.choice("method", kMethodNames);
+  if (slab && s.method != SolverSpec::Method::kCG && s.method != SolverSpec::Method::kNonlinearCG)
+    fail(o.file(), detail::child_path(o.path(), "method"),
+         "a slab2d (needle) scene is solved by \"cg\" or \"nonlinear-cg\" on the projected "
+         "problem (6.7) of thesis §6.6, got \"" +
+             std::string(to_string(s.method)) + "\"");
   s.tolerance = o.number("tolerance", Range{0.0, 1.0, true, true}, 1e-8);
   s.max_iterations = o.integer("max_iterations", 1, kMaxIterations, 10000);
-  s.time_budget = o.number("time_budget", detail::non_negative(), 0.0);
-  // Needle scenes only (parse_root refuses it elsewhere).
-  s.tolerance_round = o.number("tolerance_round", Range{0.0, 1.0, false, true}, 1e-8);
+  if (slab) {
+    o.forbid("time_budget",
+             "a needle run has no wall-clock budget (max_iterations caps each solve)");
+    s.tolerance_round = o.number("tolerance_round", Range{0.0, 1.0, false, true}, 1e-8);
+    o.forbid("preconditioner",
+             "the needle's projected problem (6.7) has no Jacobi diagonal; a needle scene runs "
+             "plain CG, as the thesis does");
+  } else {
+    s.time_budget = o.number("time_budget", detail::non_negative(), 0.0);
+    o.forbid("tolerance_round",
+             "only a needle scene (a \"slab2d\" mesh) has the rounding term epsilon_round of the "
+             "(6.9) stopping rule; this scene stops by (6.8), ||r|| <= tol ||f_ext||");
+  }
   const bool dynamic = s.method == SolverSpec::Method::kDynamicSS22;
-  if (s.method == SolverSpec::Method::kCG || s.method == SolverSpec::Method::kNewton) {
+  if (slab) {
+    // preconditioner: refused above
+  } else if (s.method == SolverSpec::Method::kCG || s.method == SolverSpec::Method::kNewton) {
     s.preconditioner =
         o.choice("preconditioner", solver::kPreconditionerNames, solver::Preconditioner::kNone);
   } else {
@@ -419,23 +438,6 @@ void check_tool_dimension(const ToolSpec& t, const MeshSpec& m, const std::strin
              got + "; a slab2d scene takes a \"needle\"");
 }
 
-// The solver of a needle scene: linear or nonlinear CG on the projected problem (6.7), §6.6.
-void check_needle_solver(const SolverSpec& s, const Json& j, const std::string& file) {
-  if (s.method != SolverSpec::Method::kCG && s.method != SolverSpec::Method::kNonlinearCG)
-    fail(file, "/solver/method",
-         "a slab2d (needle) scene is solved by \"cg\" or \"nonlinear-cg\" on the projected "
-         "problem (6.7) of thesis §6.6, got \"" +
-             std::string(to_string(s.method)) + "\"");
-  if (j.contains("preconditioner"))
-    fail(file, "/solver/preconditioner",
-         "not allowed here: the needle's projected problem (6.7) has no Jacobi diagonal; a needle "
-         "scene runs plain CG, as the thesis does");
-  if (j.contains("time_budget"))
-    fail(file, "/solver/time_budget",
-         "not allowed here: a needle run has no wall-clock budget (max_iterations caps each "
-         "solve)");
-}
-
 // A fixed region of a slab2d scene: a line x = value or y = value (needle::FixedLine).
 void check_slab_fixed_line(const Region& r, const Json& j, const std::string& file) {
   if (r.kind != Region::Kind::kPlane || r.axis == 2)
@@ -530,13 +532,12 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
   s.name = root.string("name", "");
   s.description = root.string("description", "");
   s.mesh = parse_mesh(root.object("mesh", typed_object("mesh", kMeshSourceNames)), file, base_dir);
-  s.solver = parse_solver(root.object("solver", "a solver object {\"method\": ...}"));
-  const bool dynamic = s.solver.method == SolverSpec::Method::kDynamicSS22;
   // A slab2d mesh is the 2D (plane-stress) body of a needle insertion (thesis ch. 6); every
   // other mesh is tetrahedral.
   const bool slab = s.mesh.source == MeshSpec::Source::kSlab2d;
+  s.solver = parse_solver(root.object("solver", "a solver object {\"method\": ...}"), slab);
+  const bool dynamic = s.solver.method == SolverSpec::Method::kDynamicSS22;
   const Json* solver_json = root.get("solver");
-  if (slab) check_needle_solver(s.solver, *solver_json, file);
 
   std::string rho_reason;
   if (slab) {
@@ -587,11 +588,6 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
     }
   }
   if (slab) check_needle(s, file);
-  if (!slab && solver_json && solver_json->is_object() && solver_json->contains("tolerance_round"))
-    fail(file, "/solver/tolerance_round",
-         "not allowed here: only a needle scene (a \"slab2d\" mesh) has the rounding term "
-         "epsilon_round of the (6.9) stopping rule; this scene stops by (6.8), ||r|| <= tol "
-         "||f_ext||");
   // Keys of the interactive cutting run (augmented solver with a tool) in a scene without one.
   if (s.tools.empty() && solver_json && solver_json->is_object()) {
     const std::pair<const char*, const char*> cut_only_keys[] = {
