@@ -396,7 +396,10 @@ TEST(SceneNeedleBad, SlabValues) {
   j["mesh"]["h_start"] = 0.03;
   j["tools"][0]["h_ref"] = 0.0075;
   j["tools"][0].erase("h_ref_level");
-  expect_error(j, "/mesh/h_start", "expected width and height to be integer multiples of h_start");
+  expect_error(j, "/mesh/h_start",
+               "expected width and height to be integer multiples of h_start = 0.03 m (the slab "
+               "is a grid of squares of side h_start; to 1e-9 relative), got width / h_start = "
+               "3.33333, height / h_start = 3.33333");
   j = small_needle_scene();  // builder: a spacing whose triangle areas underflow
   j["mesh"] = {{"type", "slab2d"},
                {"width", 1e-199},

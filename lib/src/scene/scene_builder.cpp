@@ -176,10 +176,12 @@ BuiltScene build_needle_scene(const SceneSpec& spec) {
   }
   try {
     b.mesh = mesh::make_right_triangle_slab(ms.width, ms.height, ms.h_start);
-  } catch (const ParameterError& e) {
+  } catch (const ParameterError&) {  // its message names the generator's check, not the scene
     std::ostringstream m;
     m << h_path << ": expected width and height to be integer multiples of h_start = " << ms.h_start
-      << " m (the slab is a grid of squares of side h_start): " << e.what();
+      << " m (the slab is a grid of squares of side h_start; to 1e-9 relative), got "
+      << "width / h_start = " << ms.width / ms.h_start
+      << ", height / h_start = " << ms.height / ms.h_start;
     throw ParseError(spec.file, spec.lines.line(h_path), m.str());
   }
   std::ostringstream os;
