@@ -26,10 +26,16 @@ echo "== demo: incise run reference_data/scenes/cantilever.json"
 echo "== demo: incise run reference_data/scenes/cube_cut_augmented.json"
 "$incise" run reference_data/scenes/cube_cut_augmented.json \
   --summary-json out/cube_cut_augmented_summary.json --progress none
+# Needle insertion in 2D (thesis ch. 6, §6.8.1 slab): a per-update CSV and a VTU series with its
+# ParaView index out/needle_slab.pvd (open it in ParaView and press play).
+echo "== demo: incise run reference_data/scenes/needle_slab.json"
+"$incise" run reference_data/scenes/needle_slab.json \
+  --summary-json out/needle_slab_summary.json --progress none
 echo "== demo: incise certify --quick"
 certify_status=0
 "$incise" certify --quick --out out/certify || certify_status=$?
-echo "demo: scene summaries in out/cantilever_summary.json, out/cube_cut_augmented_summary.json"
+echo "demo: scene summaries in out/cantilever_summary.json, out/cube_cut_augmented_summary.json," \
+  "out/needle_slab_summary.json; needle animation: out/needle_slab.pvd"
 echo "demo: certification report in $(pwd)/out/certify/index.html (summary: out/certify/summary.json)"
 echo "demo: to put incise on PATH: export PATH=\"$prefix/bin:\$PATH\""
 exit "$certify_status"

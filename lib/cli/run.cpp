@@ -14,6 +14,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -43,6 +44,32 @@ std::string num(double v) {
   std::ostringstream os;
   os << v;
   return os.str();
+}
+
+/// The residual, energy, inversion, flops and time lines of a relaxation or cutting run.
+void print_residual_summary(std::ostream& out, const scene::SceneSpec& spec,
+                            const scene::BuiltScene& built, const scene::SceneRunResult& res) {
+  const auto& rep = res.report;
+  const double fnorm = res.external_force_norm;
+  if (!rep.message.empty()) out << "message:         " << rep.message << "\n";
+  out << "final residual:  ||r|| = " << num(rep.residual_norm)
+      << " N, ||r||/||f_ext|| = " << num(std::isfinite(fnorm) ? rep.residual_norm / fnorm : fnorm)
+      << " (tolerance " << spec.solver.tolerance << ", ||f_ext|| = " << num(fnorm) << " N)\n";
+  out << "energy:          " << num(rep.energy) << " J\n";
+  if (res.inverted_elements >= 0)
+    out << "inverted:        " << res.inverted_elements << " of " << built.problem->num_elements()
+        << " elements (det F <= 0)"
+        << (spec.material.allow_inversion ? ", allowed by the scene (material.allow_inversion)"
+                                          : "")
+        << "\n";
+  if (res.cut_steps.empty())
+    out << "flops:           " << static_cast<double>(rep.flops) / 1e6 << " MFLOP (counted)\n";
+  else
+    out << "flops:           not counted (CHOLMOD and the augmented updates are timed)\n";
+  out << "solver time:     " << rep.seconds << " s";
+  if (rep.seconds > 0 && rep.flops > 0)
+    out << " (" << static_cast<double>(rep.flops) / rep.seconds / 1e6 << " MFLOP/s)";
+  out << "\n";
 }
 
 }  // namespace
@@ -95,9 +122,15 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   scene::BuiltScene built = scene::build_scene(spec);
 
   out << "scene: " << scene_path << (spec.name.empty() ? "" : "  (" + spec.name + ")") << "\n";
+  const bool needle_run = built.needle != nullptr;
   out << "solver: " << scene::to_string(spec.solver.method) << ", tolerance "
-      << spec.solver.tolerance << " (||r|| <= tol ||f_ext||)";
-  if (spec.solver.method == scene::SolverSpec::Method::kAugmented)
+      << spec.solver.tolerance
+      << (needle_run ? " (eps of (6.9), eps_round " + num(spec.solver.tolerance_round) + ")"
+                     : std::string(" (||r|| <= tol ||f_ext||)"));
+  if (needle_run)
+    out << ", needle insertion: " << built.needle_plan.size() << " updates, budget "
+        << spec.solver.max_iterations << " iterations per solve\n";
+  else if (spec.solver.method == scene::SolverSpec::Method::kAugmented)
     out << (spec.tools.empty()
                 ? ", direct solve\n"
                 : ", interactive cut: " + std::to_string(built.sweep_triangles.size()) +
@@ -106,7 +139,8 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     out << ", budget " << spec.solver.max_iterations << " iterations\n";
 
   // Progress: fraction of the way (in log10 of the residual) from ||r_0|| to the threshold.
-  const double threshold = spec.solver.tolerance * built.problem->external_force_norm();
+  const double threshold =
+      needle_run ? 0.0 : spec.solver.tolerance * built.problem->external_force_norm();
   double r0 = -1;
   int last_decile = -1;
   Timer bar_timer;  // redraw the bar at most every 0.1 s
@@ -151,15 +185,65 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
           << " ms\n";
     }
   };
-  const scene::SceneRunResult res = scene::run_scene(built, observer, cut_observer);
+  // Needle scene: one line (or bar frame) per update.
+  auto needle_observer = [&](const scene::NeedleUpdateRow& row, std::size_t total_updates,
+                             const needle::NeedleInsertion& insertion) {
+    frames.needle_update(row, total_updates, insertion);
+    if (progress == "bar") {
+      const double frac = total_updates ? double(row.update + 1) / double(total_updates) : 1.0;
+      const int width = 30, filled = static_cast<int>(frac * width);
+      out << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
+          << std::string(static_cast<std::size_t>(width - filled), '.') << "] update "
+          << std::setw(5) << row.update << "/" << total_updates - 1 << "  depth " << std::fixed
+          << std::setprecision(2) << row.depth * 1e3 << " mm" << std::defaultfloat
+          << std::setprecision(6) << std::flush;
+    } else if (progress == "lines") {
+      out << "update " << row.update << "/" << total_updates - 1 << ": depth "
+          << num(row.depth * 1e3) << " mm, stick " << row.sticking << ", slip " << row.slipping
+          << ", rearrangements " << row.rearrangements << ", CG " << row.cg_iterations
+          << " it, update " << row.seconds * 1e3 << " ms, " << row.status << "\n";
+    }
+  };
+  const scene::SceneRunResult res =
+      scene::run_scene(built, observer, cut_observer, needle_observer);
   if (progress == "bar") out << "\n";
 
   const auto& rep = res.report;
-  const double fnorm = res.external_force_norm;
   out << "\n== summary\n";
   out << "method:          " << res.method_detail << "\n";
   out << "result:          " << solver::to_string(rep.status) << "\n";
-  if (res.cut_steps.empty()) {
+  if (needle_run) {
+    long rearrangements = 0, max_cg = 0;
+    for (const auto& r : res.needle_updates) {
+      rearrangements += r.rearrangements;
+      max_cg = std::max(max_cg, r.max_cg_iterations);
+    }
+    out << "updates:         " << res.needle_updates.size() << " of " << built.needle_plan.size()
+        << ", " << rearrangements << " rearrangements, " << rep.inner_iterations
+        << " CG iterations (longest solve " << max_cg << ")\n";
+    if (!rep.message.empty()) out << "message:         " << rep.message << "\n";
+    if (!res.needle_updates.empty()) {
+      const auto& last = res.needle_updates.back();
+      out << "final needle:    tip [" << num(last.tip.x()) << ", " << num(last.tip.y())
+          << "] m, depth " << num(last.depth) << " m, " << last.sticking << " sticking, "
+          << last.slipping << " slipping needle nodes; force on the material ["
+          << num(last.needle_force.x()) << ", " << num(last.needle_force.y()) << "] N\n";
+    }
+    out << "final mesh:      " << built.mesh.num_points() << " nodes, " << built.mesh.num_cells()
+        << " triangles\n";
+    out << "energy:          " << num(rep.energy) << " J\n";
+    if (res.inverted_elements >= 0)
+      out << "inverted:        " << res.inverted_elements << " of " << built.mesh.num_cells()
+          << " triangles (deformed area <= 0)"
+          << (spec.material.allow_inversion ? ", allowed by the scene (material.allow_inversion)"
+                                            : "")
+          << "\n";
+    out << "flops:           " << static_cast<double>(rep.flops) / 1e6 << " MFLOP (counted)\n";
+    out << "solver time:     " << rep.seconds << " s";
+    if (rep.seconds > 0 && !res.needle_updates.empty())
+      out << " (" << static_cast<double>(res.needle_updates.size()) / rep.seconds << " updates/s)";
+    out << "\n";
+  } else if (res.cut_steps.empty()) {
     out << "iterations:      " << rep.iterations;
     if (rep.inner_iterations > 0) out << " (inner " << rep.inner_iterations << ")";
     out << "\n";
@@ -167,25 +251,7 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     out << "solves:          " << rep.iterations << " (initial + " << rep.iterations - 1
         << " sweep triangles), " << rep.inner_iterations << " GMRES iterations in all\n";
   }
-  if (!rep.message.empty()) out << "message:         " << rep.message << "\n";
-  out << "final residual:  ||r|| = " << num(rep.residual_norm)
-      << " N, ||r||/||f_ext|| = " << num(std::isfinite(fnorm) ? rep.residual_norm / fnorm : fnorm)
-      << " (tolerance " << spec.solver.tolerance << ", ||f_ext|| = " << num(fnorm) << " N)\n";
-  out << "energy:          " << num(rep.energy) << " J\n";
-  if (res.inverted_elements >= 0)
-    out << "inverted:        " << res.inverted_elements << " of " << built.problem->num_elements()
-        << " elements (det F <= 0)"
-        << (spec.material.allow_inversion ? ", allowed by the scene (material.allow_inversion)"
-                                          : "")
-        << "\n";
-  if (res.cut_steps.empty())
-    out << "flops:           " << static_cast<double>(rep.flops) / 1e6 << " MFLOP (counted)\n";
-  else
-    out << "flops:           not counted (CHOLMOD and the augmented updates are timed)\n";
-  out << "solver time:     " << rep.seconds << " s";
-  if (rep.seconds > 0 && rep.flops > 0)
-    out << " (" << static_cast<double>(rep.flops) / rep.seconds / 1e6 << " MFLOP/s)";
-  out << "\n";
+  if (!needle_run) print_residual_summary(out, spec, built, res);
   for (const auto& p : res.probes) {
     out << "probe " << p.name << ":  displacement " << join_vec(p.value) << " m";
     if (p.reference)

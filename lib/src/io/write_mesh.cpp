@@ -97,6 +97,21 @@ void write_vtu(const std::string& path, const mesh::MeshData& m,
   w.save(path);
 }
 
+void write_pvd(const std::string& path, const std::vector<PvdFrame>& frames) {
+  TextWriter w;
+  w << "<?xml version=\"1.0\"?>\n"
+    << "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+    << "  <Collection>\n";
+  for (const PvdFrame& f : frames) {
+    INCISE_CHECK(!f.file.empty() && f.file.find_first_of("\"<>&") == std::string::npos,
+                 "write_pvd: file names must be non-empty without \" < > &");
+    w << "    <DataSet timestep=\"" << f.timestep << "\" group=\"\" part=\"0\" file=\"" << f.file
+      << "\"/>\n";
+  }
+  w << "  </Collection>\n</VTKFile>\n";
+  w.save(path);
+}
+
 void write_gmsh(const std::string& path, const mesh::MeshData& m, int version) {
   check_mesh(m);
   INCISE_CHECK_PARAM(version == 22 || version == 41, "write_gmsh: version must be 22 or 41");

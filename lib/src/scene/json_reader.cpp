@@ -146,6 +146,18 @@ Vec3 as_vec3(const Json& j, const std::string& file, const std::string& path) {
   return v;
 }
 
+Vec2 as_vec2(const Json& j, const std::string& file, const std::string& path) {
+  const std::string form = "an array of 2 finite numbers [x, y]";
+  if (!j.is_array() || j.size() != 2) fail_expected(file, path, form, j);
+  Vec2 v;
+  for (int i = 0; i < 2; ++i) {
+    if (!j[i].is_number() || !std::isfinite(j[i].get<double>()))
+      fail_expected(file, child_path(path, static_cast<std::size_t>(i)), "a finite number", j[i]);
+    v[i] = j[i].get<double>();
+  }
+  return v;
+}
+
 double JsonObject::number(const std::string& key, const Range& r) {
   return as_number(require(key, r.describe()), file_, child_path(path_, key), r);
 }

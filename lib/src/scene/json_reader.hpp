@@ -106,6 +106,7 @@ class JsonObject {
 /// Value-level checks for elements of arrays.
 double as_number(const Json& j, const std::string& file, const std::string& path, const Range& r);
 Vec3 as_vec3(const Json& j, const std::string& file, const std::string& path);
+Vec2 as_vec2(const Json& j, const std::string& file, const std::string& path);  ///< [x, y]
 
 /// A JSON text parsed by parse_strict: its value and the line of each of its values.
 struct ParsedJson {

@@ -7,6 +7,7 @@
 #include <incise/io/read_mesh.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
+#include <incise/mesh/slab2d.hpp>
 #include <incise/mesh/tet_faces.hpp>
 
 #include <algorithm>
@@ -118,6 +119,7 @@ mesh::MeshData make_mesh(const SceneSpec& spec, std::string& what) {
         check_memory(spec, {loaded.mesh.num_points(), loaded.mesh.num_cells()});
         return std::move(loaded.mesh);
       }
+      case MeshSpec::Source::kSlab2d: break;  // build_needle_scene
     }
   } catch (const mesh::GeneratorError& e) {
     generator_error(spec, e);
@@ -125,7 +127,148 @@ mesh::MeshData make_mesh(const SceneSpec& spec, std::string& what) {
   throw UsageError("scene mesh source not handled");
 }
 
+// Bytes of a needle insertion's starting slab and its plane-stress problem, per triangle and
+// node: mesh arrays as above, and the BisectionMesh (connectivity ≈ 4 handles per element and
+// vertex, tree node per element) with the triangle references and 2 DOFs per node held by the
+// problem. An estimate of the start only: refinement adds O(path / h_ref) triangles.
+std::uint64_t slab_bytes(std::uint64_t points, std::uint64_t cells) {
+  return mesh_bytes(points, 3 * cells, 0, 0) + cells * (12 * sizeof(Index) + 8 * sizeof(double)) +
+         points * (4 * sizeof(Index) + 6 * sizeof(double));
+}
+
+/// A slab2d scene (scene_builder.hpp): the slab, its fixed lines and the needle insertion.
+BuiltScene build_needle_scene(const SceneSpec& spec) {
+  BuiltScene b;
+  b.spec = spec;
+  const MeshSpec& ms = spec.mesh;
+  const ToolSpec& tool = *spec.needle();
+  Timer t;
+  // Mesh: checked against the budget from its counts before it is generated.
+  const std::string h_path = ms.h_start_level ? "/mesh/h_start_level" : "/mesh/h_start";
+  // As for the tetrahedral generators: edges, squared edges and areas stay normal doubles.
+  if (!(ms.h_start >= mesh::kMinCellSize && ms.h_start <= mesh::kMaxCellSize)) {
+    std::ostringstream e;
+    e << h_path << ": h_start = " << ms.h_start
+      << " m is outside [1e-100, 1e+100] m (triangle areas would not be representable)";
+    throw ParseError(spec.file, spec.lines.line(h_path), e.str());
+  }
+  const double nx = std::round(ms.width / ms.h_start), ny = std::round(ms.height / ms.h_start);
+  const double cells_d = 2 * nx * ny, points_d = (nx + 1) * (ny + 1);
+  const auto max_index = static_cast<double>(std::numeric_limits<Index>::max());
+  if (!(cells_d <= max_index && points_d <= max_index)) {  // NaN too
+    std::ostringstream e;
+    e << "/mesh: the slab would have " << cells_d << " triangles on " << points_d
+      << " nodes (width / h_start = " << ms.width / ms.h_start
+      << ", height / h_start = " << ms.height / ms.h_start << "), more than an Index can number ("
+      << std::numeric_limits<Index>::max() << ")";
+    throw ParseError(spec.file, spec.lines.line("/mesh"), e.str());
+  }
+  {
+    const auto points = static_cast<std::uint64_t>(points_d);
+    const auto cells = static_cast<std::uint64_t>(cells_d);
+    const std::uint64_t estimate = slab_bytes(points, cells), budget = memory_budget_bytes(spec);
+    if (estimate > budget)
+      throw ParseError(spec.file, spec.lines.line("/mesh"),
+                       "/mesh: the slab and its plane-stress problem need an estimated " +
+                           mib(estimate) + " (" + std::to_string(cells) + " triangles, " +
+                           std::to_string(points) + " nodes), more than the memory budget of " +
+                           mib(budget) + " (" + memory_budget_origin(spec) + ")");
+  }
+  try {
+    b.mesh = mesh::make_right_triangle_slab(ms.width, ms.height, ms.h_start);
+  } catch (const ParameterError&) {  // its message names the generator's check, not the scene
+    std::ostringstream m;
+    m << h_path << ": expected width and height to be integer multiples of h_start = " << ms.h_start
+      << " m (the slab is a grid of squares of side h_start; to 1e-9 relative), got "
+      << "width / h_start = " << ms.width / ms.h_start
+      << ", height / h_start = " << ms.height / ms.h_start;
+    throw ParseError(spec.file, spec.lines.line(h_path), m.str());
+  }
+  std::ostringstream os;
+  os << "mesh: slab2d " << ms.width << " x " << ms.height << " m, h_start = " << ms.h_start << " m"
+     << (ms.h_start_level ? " (h" + std::to_string(ms.h_start_level) + ")" : "") << ", thickness "
+     << ms.thickness << " m -> " << b.mesh.num_cells() << " triangles, " << b.mesh.num_points()
+     << " nodes";
+  b.record(os.str(), t.seconds(), matrix_bytes(b.mesh));
+  // Fixed lines: each must hold a node of the starting slab.
+  t.restart();
+  std::vector<needle::FixedLine> lines;
+  for (const Region& r : spec.fixed) {
+    const auto sel = select_nodes(b.mesh, r);
+    if (sel.empty()) region_error(spec, r.path, "region selects no node of the mesh", b.mesh);
+    b.fixed_nodes.insert(b.fixed_nodes.end(), sel.begin(), sel.end());
+    lines.push_back(needle::FixedLine{r.axis, r.value});
+  }
+  std::sort(b.fixed_nodes.begin(), b.fixed_nodes.end());
+  b.fixed_nodes.erase(std::unique(b.fixed_nodes.begin(), b.fixed_nodes.end()), b.fixed_nodes.end());
+  b.record("fixed lines: " + std::to_string(lines.size()) + ", " +
+               std::to_string(b.fixed_nodes.size()) + " of " + std::to_string(b.mesh.num_points()) +
+               " starting nodes (nodes refinement creates on them are fixed too)",
+           t.seconds(), b.fixed_nodes.size() * sizeof(Index));
+  // The insertion: plane-stress problem on the slab, friction, options (thesis §6.7).
+  t.restart();
+  needle::InsertionOptions o;
+  o.h_ref = tool.h_ref;
+  o.epsilon = spec.solver.tolerance;
+  o.epsilon_round = spec.solver.tolerance_round;
+  o.relaxation = spec.solver.method == SolverSpec::Method::kNonlinearCG
+                     ? needle::Relaxation::kNonlinearCg
+                     : needle::Relaxation::kLinearCg;
+  o.max_iterations = spec.solver.max_iterations;
+  o.max_rearrangements = tool.max_rearrangements;
+  o.relocate = tool.relocate;
+  b.needle = std::make_unique<needle::NeedleInsertion>(b.mesh, make_material(spec.material),
+                                                       ms.thickness, lines, tool.friction, o);
+  b.needle_plan = needle_updates(tool);
+  std::ostringstream ns;
+  ns << "needle insertion: plane-stress problem (material \"" << spec.material.model
+     << "\", thickness " << ms.thickness << " m), needle of length " << tool.length << " m, "
+     << b.needle_plan.size() << " updates at " << tool.speed << " h_ref (h_ref = " << tool.h_ref
+     << " m" << (tool.h_ref_level ? ", h" + std::to_string(tool.h_ref_level) : std::string())
+     << "), friction " << tool.friction.shaft_density << " N/m shaft, " << tool.friction.tip_density
+     << " N/m tip over " << tool.friction.bulge_length << " m, static factor "
+     << tool.friction.static_factor << (tool.relocate ? ", relocation (§6.8.6)" : "");
+  b.record(ns.str(), t.seconds(),
+           slab_bytes(static_cast<std::uint64_t>(b.mesh.num_points()),
+                      static_cast<std::uint64_t>(b.mesh.num_cells())) -
+               matrix_bytes(b.mesh));
+  b.not_built.push_back(
+      "tetrahedral elastic problem, loads and probes: a slab2d scene is a needle insertion on "
+      "plane-stress triangles (thesis ch. 6)");
+  b.not_built.push_back("sparse stiffness factorization: the needle run relaxes with CG");
+  b.not_built.push_back("cut mesh and sweep triangles: the needle refines, it does not cut");
+  return b;
+}
+
 }  // namespace
+
+std::vector<NeedleUpdatePlan> needle_updates(const ToolSpec& tool) {
+  std::vector<NeedleUpdatePlan> plan;
+  const std::vector<Vec3>& p = tool.path;
+  double total = 0.0;
+  for (std::size_t i = 0; i + 1 < p.size(); ++i) total += (p[i + 1] - p[i]).stableNorm();
+  const double step = tool.speed * tool.h_ref;
+  // 1e-9 of a step: a path of exactly n steps ends at update n, not n + 1.
+  const long n = static_cast<long>(std::ceil(total / step - 1e-9));
+  std::size_t seg = 0;
+  double seg_start = 0.0;  // distance along the path where segment `seg` starts
+  for (long k = 0; k <= n; ++k) {
+    const double depth = std::min(total, static_cast<double>(k) * step);
+    // The segment the tip is on: the next one at a joint, the last one at the end.
+    while (seg + 2 < p.size() && depth >= seg_start + (p[seg + 1] - p[seg]).stableNorm()) {
+      seg_start += (p[seg + 1] - p[seg]).stableNorm();
+      ++seg;
+    }
+    const Vec3 d = p[seg + 1] - p[seg];
+    const double len = d.stableNorm();
+    const Vec3 tip = p[seg] + std::min(1.0, (depth - seg_start) / len) * d;
+    NeedleUpdatePlan u;
+    u.pose = needle::NeedlePose::make(tip.head<2>(), d.head<2>(), tool.length);
+    u.depth = depth;
+    plan.push_back(u);
+  }
+  return plan;
+}
 
 std::vector<Index> select_nodes(const mesh::MeshData& m, const Region& r) {
   std::vector<Index> out;
@@ -210,6 +353,7 @@ mesh::MeshData live_mesh_data(const cut::CutMesh& cm) {
 }
 
 BuiltScene build_scene(const SceneSpec& spec) {
+  if (spec.mesh.source == MeshSpec::Source::kSlab2d) return build_needle_scene(spec);
   BuiltScene b;
   b.spec = spec;
   Timer t;

@@ -6,7 +6,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <sstream>
 
@@ -60,18 +62,36 @@ void probe_values(std::ostream& csv, const std::vector<Vec3>& probes) {
   csv << "\n";
 }
 
+/// A CSV field of free text: commas and quotes replaced by ';'.
+std::string csv_text(std::string s) {
+  for (char& ch : s)
+    if (ch == ',' || ch == '"' || ch == '\n') ch = ';';
+  return s;
+}
+
 std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
   std::ostringstream csv;
   csv << std::setprecision(10);
+  if (scene.needle) {
+    csv << "update,depth,tip_x,tip_y,sticking,slipping,rearrangements,cg_iterations,"
+           "update_seconds,needle_force_x,needle_force_y,status,solves,max_cg_iterations,"
+           "bisections,intercepted,released,nodes,triangles,flops\n";
+    for (const auto& r : res.needle_updates)
+      csv << r.update << "," << Field{r.depth} << "," << Field{r.tip.x()} << "," << Field{r.tip.y()}
+          << "," << r.sticking << "," << r.slipping << "," << r.rearrangements << ","
+          << r.cg_iterations << "," << r.seconds << "," << Field{r.needle_force.x()} << ","
+          << Field{r.needle_force.y()} << "," << csv_text(r.status) << "," << r.solves << ","
+          << r.max_cg_iterations << "," << r.bisections << "," << r.intercepted << "," << r.released
+          << "," << r.nodes << "," << r.triangles << "," << r.flops << "\n";
+    return csv.str();
+  }
   if (!res.cut_steps.empty()) {
     csv << "step,tool,status,degenerate_sweep,faces_dissected,nodes_snapped,new_nodes,nodes,"
            "tetrahedra,m,dirichlet,gmres_iterations,gmres_relative_residual,nnz_l,cut_seconds,"
            "update_seconds,update_cpu_seconds,preconditioner_dropped,amplification";
     probe_columns(csv, scene);
     for (const auto& c : res.cut_steps) {
-      std::string status = c.status;  // CSV field: no commas or quotes
-      for (char& ch : status)
-        if (ch == ',' || ch == '"') ch = ';';
+      const std::string status = csv_text(c.status);
       csv << c.step << "," << c.tool << "," << status << "," << c.degenerate_sweep << ","
           << c.faces_dissected << "," << c.nodes_snapped << "," << c.new_nodes << "," << c.nodes
           << "," << c.tetrahedra << "," << c.m << "," << c.dirichlet << "," << c.gmres_iterations
@@ -114,6 +134,42 @@ void FrameWriter::cut_step(const CutStepRow& row, const interactive::AugmentedCu
   ++frames_;
 }
 
+std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion& insertion) {
+  const VecX& u2 = insertion.displacement();
+  const Eigen::Index n = u2.size() / 2;
+  io::DataArray u{"displacement", 3, std::vector<double>(static_cast<std::size_t>(3 * n), 0.0)};
+  for (Eigen::Index v = 0; v < n; ++v) {
+    u.values[static_cast<std::size_t>(3 * v)] = u2[2 * v];
+    u.values[static_cast<std::size_t>(3 * v + 1)] = u2[2 * v + 1];
+  }
+  io::DataArray state{"needle_state", 1, std::vector<double>(static_cast<std::size_t>(n), 0.0)};
+  for (const needle::NeedleNode& nd : insertion.needle_nodes())
+    state.values[static_cast<std::size_t>(nd.vertex)] =
+        nd.state == needle::NodeState::kStick ? 1.0 : 2.0;
+  return {u, state};
+}
+
+void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_updates,
+                                const needle::NeedleInsertion& insertion) {
+  const OutputSpec& outs = scene_.spec.outputs;
+  const long last = static_cast<long>(total_updates) - 1;
+  if (outs.vtu.empty() || outs.vtu_every <= 0 ||
+      (row.update % outs.vtu_every != 0 && row.update != last) ||
+      !insertion.displacement().allFinite())
+    return;
+  const std::size_t width = std::max<std::size_t>(4, std::to_string(std::max(last, 0L)).size());
+  std::string index = std::to_string(row.update);
+  index.insert(0, width > index.size() ? width - index.size() : 0, '0');
+  const std::string file = outs.vtu + "_" + index + ".vtu";
+  const mesh::MeshData m = insertion.mesh().to_mesh_data();
+  const std::vector<io::DataArray> data = needle_point_data(insertion);
+  write_atomically(file, [&](const std::string& tmp) { io::write_vtu(tmp, m, data); });
+  ++frames_;
+  pvd_.push_back(
+      {static_cast<double>(row.update), std::filesystem::path(file).filename().string()});
+  write_atomically(outs.vtu + ".pvd", [&](const std::string& tmp) { io::write_pvd(tmp, pvd_); });
+}
+
 std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunResult& result,
                                        const OutputOptions& options) {
   const OutputSpec& outs = scene.spec.outputs;
@@ -124,11 +180,18 @@ std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunRe
   }
   if (!outs.vtu.empty() && result.u.allFinite()) {  // else: summary "not_written"
     const std::string f = outs.vtu + ".vtu";
-    write_vtu_atomic(f, scene.mesh, result.u);
+    if (scene.needle) {
+      const std::vector<io::DataArray> data = needle_point_data(*scene.needle);
+      write_atomically(f, [&](const std::string& tmp) { io::write_vtu(tmp, scene.mesh, data); });
+    } else {
+      write_vtu_atomic(f, scene.mesh, result.u);
+    }
     written.push_back(f);
     if (options.frames > 0)
       written.push_back(std::to_string(options.frames) + " frames " + outs.vtu +
-                        (result.cut_steps.empty() ? "_<it>.vtu" : "_<step>.vtu"));
+                        (scene.needle               ? "_<update>.vtu, index " + outs.vtu + ".pvd"
+                         : result.cut_steps.empty() ? "_<it>.vtu"
+                                                    : "_<step>.vtu"));
   }
   if (!options.summary_json.empty()) {
     write_file_atomic(options.summary_json,
@@ -167,7 +230,7 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
   j["solver_seconds"] = rep.seconds;
   j["total_seconds"] = total_seconds;
   j["mesh"] = {{"nodes", scene.mesh.num_points()},
-               {"tetrahedra", scene.mesh.num_cells()},
+               {scene.mesh.dimension == 2 ? "triangles" : "tetrahedra", scene.mesh.num_cells()},
                {"fixed_nodes", scene.fixed_nodes.size()}};
   for (const auto& p : result.probes) {
     Json pj = {{"name", p.name}, {"displacement", vec_json(p.value)}};
@@ -211,6 +274,26 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
       cj["probes"][scene.probes[k].spec.name] = vec_json(c.probes[k]);
     j["cut_steps"].push_back(cj);
   }
+  for (const auto& r : result.needle_updates)
+    j["needle_updates"].push_back(
+        {{"update", r.update},
+         {"depth", num(r.depth)},
+         {"tip", Json::array({num(r.tip.x()), num(r.tip.y())})},
+         {"status", r.status},
+         {"sticking", r.sticking},
+         {"slipping", r.slipping},
+         {"rearrangements", r.rearrangements},
+         {"solves", r.solves},
+         {"cg_iterations", r.cg_iterations},
+         {"max_cg_iterations", r.max_cg_iterations},
+         {"bisections", r.bisections},
+         {"intercepted", r.intercepted},
+         {"released", r.released},
+         {"nodes", r.nodes},
+         {"triangles", r.triangles},
+         {"needle_force", Json::array({num(r.needle_force.x()), num(r.needle_force.y())})},
+         {"flops", r.flops},
+         {"update_seconds", r.seconds}});
   if (!result.cut_steps.empty()) {
     int dropped = 0;
     for (const auto& c : result.cut_steps) dropped += c.preconditioner_dropped ? 1 : 0;

@@ -2,6 +2,7 @@
 
 #include <incise/core/error.hpp>
 #include <incise/material/material.hpp>
+#include <incise/mesh/slab2d.hpp>
 
 #include <filesystem>
 #include <fstream>
@@ -9,6 +10,7 @@
 #include <map>
 #include <regex>
 #include <set>
+#include <sstream>
 
 #include "json_reader.hpp"
 
@@ -25,6 +27,12 @@ using detail::Range;
 // (1000³ cubes are 6e9 tets, refused under any budget below 1.1 TB).
 constexpr int kMaxCells = 1000;
 constexpr int kMaxIterations = 100000000;
+// Needle scenes: the thesis' levels h_k = 0.1 m·2⁻ᵏ (mesh::thesis_slab_spacing), at most 10
+// bisection levels between h_start and h_ref (the thesis spans 6, h1 → h7), and at most 10⁶
+// updates (the slowest §6.8 insertion, 0.01 h_ref at h7, has 9,000).
+constexpr int kMinSlabLevel = 1, kMaxSlabLevel = 7;
+constexpr double kMaxRefinementRatio = 1024;
+constexpr double kMaxNeedleUpdates = 1e6;
 
 const std::vector<std::string> kMeshExtensions = {".mesh", ".msh", ".node", ".off"};
 
@@ -67,6 +75,26 @@ Region parse_region(const Json& j, const std::string& path, const std::string& f
   return r;
 }
 
+// A grid spacing given as a length (key `key`, m, > 0) or as the thesis level k (key
+// `key_level`, h_k = 0.1 m·2⁻ᵏ): exactly one of the two. Returns the length; `level` is k or 0.
+double length_or_level(JsonObject& o, const std::string& key, int& level) {
+  const std::string level_key = key + "_level";
+  const bool has_length = o.has(key), has_level = o.has(level_key);
+  if (has_length == has_level)
+    fail(o.file(), o.path(),
+         "expected exactly one of \"" + key + "\" (a length in m) or \"" + level_key +
+             "\" (the thesis level k: h_k = 0.1 m * 2^-k, k in [" + std::to_string(kMinSlabLevel) +
+             ", " + std::to_string(kMaxSlabLevel) + "])");
+  if (has_length) {
+    level = 0;
+    o.get(level_key);
+    return o.number(key, detail::positive());
+  }
+  o.get(key);
+  level = o.integer(level_key, kMinSlabLevel, kMaxSlabLevel);
+  return mesh::thesis_slab_spacing(level);
+}
+
 MeshSpec parse_mesh(JsonObject o, const std::string& file, const std::string& base_dir) {
   MeshSpec m;
   m.source = o.choice("type", kMeshSourceNames);
@@ -94,11 +122,16 @@ MeshSpec parse_mesh(JsonObject o, const std::string& file, const std::string& ba
     m.ly = o.number("ly", detail::positive());
     m.lz = o.number("lz", detail::positive());
     m.split = o.choice("split", kCubeSplitNames, mesh::CubeSplit::kSix);
-  } else {
+  } else if (m.source == MeshSpec::Source::kCylinder) {
     m.radius = o.number("radius", detail::positive());
     m.length = o.number("length", detail::positive());
     m.rings = o.integer("rings", 1, kMaxCells);
     m.layers = o.integer("layers", 1, kMaxCells);
+  } else {
+    m.width = o.number("width", detail::positive());
+    m.height = o.number("height", detail::positive());
+    m.h_start = length_or_level(o, "h_start", m.h_start_level);
+    m.thickness = o.number("thickness", detail::positive());
   }
   o.finish();
   return m;
@@ -186,14 +219,35 @@ LoadSpec parse_load(const Json& j, const std::string& path, const std::string& f
   return l;
 }
 
-SolverSpec parse_solver(JsonObject o) {
+// `slab`: the scene's mesh is a slab2d, i.e. a needle scene (thesis ch. 6): linear or nonlinear
+// CG on the projected problem (6.7) of §6.6, stopped by (6.9) with ε_round, plain CG.
+SolverSpec parse_solver(JsonObject o, bool slab) {
   SolverSpec s;
   s.method = o.choice("method", kMethodNames);
+  if (slab && s.method != SolverSpec::Method::kCG && s.method != SolverSpec::Method::kNonlinearCG)
+    fail(o.file(), detail::child_path(o.path(), "method"),
+         "a slab2d (needle) scene is solved by \"cg\" or \"nonlinear-cg\" on the projected "
+         "problem (6.7) of thesis §6.6, got \"" +
+             std::string(to_string(s.method)) + "\"");
   s.tolerance = o.number("tolerance", Range{0.0, 1.0, true, true}, 1e-8);
   s.max_iterations = o.integer("max_iterations", 1, kMaxIterations, 10000);
-  s.time_budget = o.number("time_budget", detail::non_negative(), 0.0);
+  if (slab) {
+    o.forbid("time_budget",
+             "a needle run has no wall-clock budget (max_iterations caps each solve)");
+    s.tolerance_round = o.number("tolerance_round", Range{0.0, 1.0, false, true}, 1e-8);
+    o.forbid("preconditioner",
+             "the needle's projected problem (6.7) has no Jacobi diagonal; a needle scene runs "
+             "plain CG, as the thesis does");
+  } else {
+    s.time_budget = o.number("time_budget", detail::non_negative(), 0.0);
+    o.forbid("tolerance_round",
+             "only a needle scene (a \"slab2d\" mesh) has the rounding term epsilon_round of the "
+             "(6.9) stopping rule; this scene stops by (6.8), ||r|| <= tol ||f_ext||");
+  }
   const bool dynamic = s.method == SolverSpec::Method::kDynamicSS22;
-  if (s.method == SolverSpec::Method::kCG || s.method == SolverSpec::Method::kNewton) {
+  if (slab) {
+    // preconditioner: refused above
+  } else if (s.method == SolverSpec::Method::kCG || s.method == SolverSpec::Method::kNewton) {
     s.preconditioner =
         o.choice("preconditioner", solver::kPreconditionerNames, solver::Preconditioner::kNone);
   } else {
@@ -238,11 +292,59 @@ SolverSpec parse_solver(JsonObject o) {
   return s;
 }
 
+// The needle of a `slab2d` scene (docs/scenes.md, "Needle scenes"). The checks that need the
+// mesh (h_ref ≤ h_start, the path entering the body) are parse_root's.
+void parse_needle(JsonObject& o, ToolSpec& t) {
+  const std::string& file = o.file();
+  const std::string& path = t.path_json;
+  const std::string form = "an array of at least 2 points [[x, y], ...] (the tip's path)";
+  const Json* p = o.array("path", form, false);
+  if (p->size() < 2) detail::fail_expected(file, detail::child_path(path, "path"), form, *p);
+  double total = 0.0;
+  for (std::size_t i = 0; i < p->size(); ++i) {
+    const Vec2 x = detail::as_vec2((*p)[i], file, detail::child_path(path + "/path", i));
+    t.path.push_back(Vec3(x[0], x[1], 0.0));
+    if (i == 0) continue;
+    const double seg = (t.path[i] - t.path[i - 1]).stableNorm();
+    if (!(seg > 0.0))
+      fail(file, detail::child_path(path + "/path", i),
+           "the needle path segment from point " + std::to_string(i - 1) +
+               " has zero length (expected consecutive points to differ: the needle's direction "
+               "is that of the segment its tip is on)");
+    total += seg;
+  }
+  t.length = o.number("length", detail::positive(), total);
+  t.speed = o.number("speed", detail::positive());
+  t.h_ref = length_or_level(o, "h_ref", t.h_ref_level);
+  if (o.has("friction")) {
+    JsonObject f = o.object("friction",
+                            "a friction object {\"shaft_density\": N/m, \"tip_density\": N/m, "
+                            "\"bulge_length\": m, \"static_factor\": ...}");
+    const needle::FrictionProfile d;
+    t.friction.shaft_density = f.number("shaft_density", detail::non_negative(), d.shaft_density);
+    t.friction.tip_density = f.number("tip_density", detail::non_negative(), d.tip_density);
+    t.friction.bulge_length = f.number("bulge_length", detail::positive(), d.bulge_length);
+    t.friction.static_factor =
+        f.number("static_factor", Range{1.0, std::numeric_limits<double>::infinity(), false, true},
+                 d.static_factor);
+    f.finish();
+  } else {
+    o.get("friction");
+  }
+  t.relocate = o.boolean("relocate", false);
+  t.max_rearrangements = o.integer("max_rearrangements", 0, 100000, 100);
+}
+
 ToolSpec parse_tool(const Json& j, const std::string& path, const std::string& file) {
   JsonObject o(j, path, file, typed_object("tool", kToolKindNames));
   ToolSpec t;
   t.path_json = path;
   t.kind = o.choice("type", kToolKindNames);
+  if (t.kind == ToolSpec::Kind::kNeedle) {
+    parse_needle(o, t);
+    o.finish();
+    return t;
+  }
   const Json* p = o.array("path", "an array of at least 2 points [[x, y, z], ...]", false);
   if (p->size() < 2)
     detail::fail_expected(file, detail::child_path(path, "path"),
@@ -312,6 +414,116 @@ OutputSpec parse_outputs(JsonObject o) {
   return out;
 }
 
+// --- needle scenes (slab2d mesh + needle tool) ------------------------------------------------
+
+const char* mesh_kind(const MeshSpec& m) {
+  return m.source == MeshSpec::Source::kSlab2d ? "a 2D (plane-stress triangle)"
+                                               : "a tetrahedral (3D)";
+}
+
+// A needle needs the 2D slab, a scalpel a tetrahedral mesh.
+void check_tool_dimension(const ToolSpec& t, const MeshSpec& m, const std::string& file) {
+  const bool slab = m.source == MeshSpec::Source::kSlab2d;
+  const std::string at = detail::child_path(t.path_json, "type");
+  const std::string got = std::string(mesh_kind(m)) + " mesh of type \"" +
+                          kMeshSourceNames.name(m.source) + "\" at /mesh";
+  if (t.kind == ToolSpec::Kind::kNeedle && !slab)
+    fail(file, at,
+         "a needle is inserted into a 2D slab (thesis ch. 6): it needs a \"slab2d\" mesh, got " +
+             got);
+  if (t.kind == ToolSpec::Kind::kScalpel && slab)
+    fail(file, at,
+         "a scalpel cuts tetrahedral meshes (thesis ch. 3): it needs a \"box\", \"cylinder\" or "
+         "\"file\" mesh, got " +
+             got + "; a slab2d scene takes a \"needle\"");
+}
+
+// A fixed region of a slab2d scene: a line x = value or y = value (needle::FixedLine).
+void check_slab_fixed_line(const Region& r, const Json& j, const std::string& file) {
+  if (r.kind != Region::Kind::kPlane || r.axis == 2)
+    fail(file, r.path,
+         "a slab2d scene is held on straight lines: expected a region {\"type\": \"plane\", "
+         "\"axis\": \"x\"|\"y\", \"value\": ...}, got " +
+             detail::show(j));
+  if (j.contains("tolerance"))
+    fail(file, r.path + "/tolerance",
+         "not allowed here: a slab2d scene holds the nodes within 1e-9 m of the line "
+         "(needle::FixedLine), also those that refinement creates on it");
+}
+
+// Fraction interval [t0, t1] of the segment a → b inside the closed rectangle [0, w] × [0, h]
+// (Liang–Barsky); false when it misses it.
+bool clip_to_rectangle(const Vec3& a, const Vec3& b, double w, double h, double& t0, double& t1) {
+  t0 = 0.0;
+  t1 = 1.0;
+  const double d[2] = {b[0] - a[0], b[1] - a[1]};
+  const double lo[2] = {0.0, 0.0}, hi[2] = {w, h};
+  for (int k = 0; k < 2; ++k) {
+    if (d[k] == 0.0) {
+      if (a[k] < lo[k] || a[k] > hi[k]) return false;
+      continue;
+    }
+    double ta = (lo[k] - a[k]) / d[k], tb = (hi[k] - a[k]) / d[k];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  return t0 <= t1;
+}
+
+// The needle against the slab: one needle, h_ref ≤ h_start, the path entering the body, a
+// bounded number of updates.
+void check_needle(const SceneSpec& s, const std::string& file) {
+  if (s.tools.empty())
+    fail(file, "/tools",
+         "a slab2d mesh is driven by a needle: expected \"tools\": [{\"type\": \"needle\", "
+         "...}] (exactly one)");
+  if (s.tools.size() != 1)
+    fail(file, "/tools/1",
+         "a slab2d scene has exactly one needle (needle::NeedleInsertion drives one), got " +
+             std::to_string(s.tools.size()) + " tools");
+  const ToolSpec& t = s.tools[0];
+  const MeshSpec& m = s.mesh;
+  const std::string href = t.path_json + (t.h_ref_level ? "/h_ref_level" : "/h_ref");
+  std::ostringstream os;
+  os.precision(6);
+  // 1e-9 relative: a level and the same length written out are equal.
+  if (t.h_ref > m.h_start * (1 + 1e-9)) {
+    os << "h_ref = " << t.h_ref << " m is larger than the mesh's h_start = " << m.h_start
+       << " m (/mesh): refinement only makes triangles smaller (thesis §6.7); expected h_ref <= "
+          "h_start";
+    fail(file, href, os.str());
+  }
+  if (m.h_start / t.h_ref > kMaxRefinementRatio * (1 + 1e-9)) {
+    os << "h_start / h_ref = " << m.h_start / t.h_ref
+       << " is more than 1024 (10 bisection levels; the thesis spans 64, h1 to h7): expected "
+          "h_ref >= h_start / 1024";
+    fail(file, href, os.str());
+  }
+  bool enters = false;
+  double total = 0.0;
+  for (std::size_t i = 0; i + 1 < t.path.size(); ++i) {
+    total += (t.path[i + 1] - t.path[i]).stableNorm();
+    double t0 = 0, t1 = 0;
+    if (!clip_to_rectangle(t.path[i], t.path[i + 1], m.width, m.height, t0, t1) || !(t1 > t0))
+      continue;
+    const Vec3 mid = t.path[i] + 0.5 * (t0 + t1) * (t.path[i + 1] - t.path[i]);
+    enters = enters || (mid[0] > 0 && mid[0] < m.width && mid[1] > 0 && mid[1] < m.height);
+  }
+  if (!enters) {
+    os << "the needle's path never enters the body: expected a path through the interior of the "
+          "slab [0, "
+       << m.width << "] x [0, " << m.height << "] m (/mesh)";
+    fail(file, t.path_json + "/path", os.str());
+  }
+  const double updates = total / (t.speed * t.h_ref);
+  if (!(updates <= kMaxNeedleUpdates)) {
+    os << "the path of " << total << " m at " << t.speed << " h_ref per update (h_ref = " << t.h_ref
+       << " m) takes " << updates << " updates, more than the limit of 1e6";
+    fail(file, t.path_json + "/speed", os.str());
+  }
+}
+
 SceneSpec parse_root(const Json& root_json, const std::string& file, const std::string& base_dir) {
   JsonObject root(root_json, "", file, "a scene object {\"mesh\": ..., \"material\": ..., ...}");
   SceneSpec s;
@@ -320,18 +532,29 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
   s.name = root.string("name", "");
   s.description = root.string("description", "");
   s.mesh = parse_mesh(root.object("mesh", typed_object("mesh", kMeshSourceNames)), file, base_dir);
-  s.solver = parse_solver(root.object("solver", "a solver object {\"method\": ...}"));
+  // A slab2d mesh is the 2D (plane-stress) body of a needle insertion (thesis ch. 6); every
+  // other mesh is tetrahedral.
+  const bool slab = s.mesh.source == MeshSpec::Source::kSlab2d;
+  s.solver = parse_solver(root.object("solver", "a solver object {\"method\": ...}"), slab);
   const bool dynamic = s.solver.method == SolverSpec::Method::kDynamicSS22;
+  const Json* solver_json = root.get("solver");
 
-  const Json* loads = root.array("loads", "an array of load objects", false);
-  if (loads->empty())
-    fail(file, "/loads",
-         "expected at least one load (the stopping rule ||r|| <= tol ||f_ext|| needs f_ext != 0)");
   std::string rho_reason;
-  for (std::size_t i = 0; i < loads->size(); ++i) {
-    s.loads.push_back(parse_load((*loads)[i], detail::child_path("/loads", i), file));
-    if (s.loads.back().kind == LoadSpec::Kind::kGravity && rho_reason.empty())
-      rho_reason = "the gravity load at " + s.loads.back().path + " needs a density";
+  if (slab) {
+    root.forbid("loads",
+                "a slab2d scene is loaded by its needle only (the needle insertion applies no "
+                "other force); remove \"loads\"");
+  } else {
+    const Json* loads = root.array("loads", "an array of load objects", false);
+    if (loads->empty())
+      fail(file, "/loads",
+           "expected at least one load (the stopping rule ||r|| <= tol ||f_ext|| needs f_ext != "
+           "0)");
+    for (std::size_t i = 0; i < loads->size(); ++i) {
+      s.loads.push_back(parse_load((*loads)[i], detail::child_path("/loads", i), file));
+      if (s.loads.back().kind == LoadSpec::Kind::kGravity && rho_reason.empty())
+        rho_reason = "the gravity load at " + s.loads.back().path + " needs a density";
+    }
   }
   if (dynamic && rho_reason.empty())
     rho_reason = "the \"dynamic-ss22\" solver needs a density for the lumped mass";
@@ -349,19 +572,23 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
              "\" is nonlinear");
 
   const Json* fixed = root.array("fixed", "an array of region objects", false);
-  for (std::size_t i = 0; i < fixed->size(); ++i)
+  for (std::size_t i = 0; i < fixed->size(); ++i) {
     s.fixed.push_back(parse_region((*fixed)[i], detail::child_path("/fixed", i), file));
+    if (slab) check_slab_fixed_line(s.fixed.back(), (*fixed)[i], file);
+  }
   if (s.fixed.empty() && !dynamic)
     fail(file, "/fixed",
          "expected at least one fixed region: a static problem without constraints has a "
          "singular stiffness (rigid motions)");
 
   if (const Json* tools = root.array("tools", "an array of tool objects", true)) {
-    for (std::size_t i = 0; i < tools->size(); ++i)
+    for (std::size_t i = 0; i < tools->size(); ++i) {
       s.tools.push_back(parse_tool((*tools)[i], detail::child_path("/tools", i), file));
+      check_tool_dimension(s.tools.back(), s.mesh, file);
+    }
   }
+  if (slab) check_needle(s, file);
   // Keys of the interactive cutting run (augmented solver with a tool) in a scene without one.
-  const Json* solver_json = root.get("solver");
   if (s.tools.empty() && solver_json && solver_json->is_object()) {
     const std::pair<const char*, const char*> cut_only_keys[] = {
         {"cut_configuration", ""},
@@ -379,6 +606,10 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
   }
   if (root.has("outputs")) {
     s.outputs = parse_outputs(root.object("outputs", "an outputs object"));
+    if (slab && !s.outputs.probes.empty())
+      fail(file, "/outputs/probes",
+           "not allowed here: a needle scene refines its mesh at every update, so a probe has no "
+           "fixed node; its per-update CSV records the tip, the needle nodes and the needle force");
   } else {
     root.get("outputs");
   }

@@ -302,6 +302,110 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   scene.problem = std::move(check);
 }
 
+/// A slab2d scene: the needle insertion, one NeedleInsertion::step per planned update.
+void run_needle(BuiltScene& scene, SceneRunResult& res, const NeedleUpdateObserver& observer,
+                std::ostringstream& detail) {
+  const SceneSpec& spec = scene.spec;
+  needle::NeedleInsertion& sim = *scene.needle;
+  solver::SolverReport& rep = res.report;
+  double update_seconds = 0;  // the updates' own time, without the observer's (frame writing)
+  long cg = 0, rearrangements = 0;
+  std::uint64_t flops = 0;
+  rep.status = solver::StopReason::kConverged;
+  for (std::size_t k = 0; k < scene.needle_plan.size(); ++k) {
+    const NeedleUpdatePlan& plan = scene.needle_plan[k];
+    Timer t;
+    const needle::StepReport r = sim.step(plan.pose);
+    NeedleUpdateRow row;
+    row.seconds = t.seconds();
+    row.update = static_cast<long>(k);
+    row.depth = plan.depth;
+    row.tip = plan.pose.tip;
+    row.status = r.brief();
+    row.sticking = r.sticking;
+    row.slipping = r.slipping;
+    row.rearrangements = r.rearrangements;
+    row.solves = r.solves;
+    row.cg_iterations = r.cg_iterations;
+    row.max_cg_iterations = r.max_cg_iterations;
+    row.bisections = r.bisections;
+    row.intercepted = r.intercepted;
+    row.released = r.released;
+    row.nodes = sim.mesh().connectivity().num_vertices();
+    row.triangles = sim.mesh().connectivity().num_elements();
+    row.needle_force = r.needle_force;
+    row.flops = r.flops;
+    update_seconds += row.seconds;
+    cg += r.cg_iterations;
+    rearrangements += r.rearrangements;
+    flops += r.flops;
+    if (observer) observer(row, scene.needle_plan.size(), sim);
+    res.needle_updates.push_back(std::move(row));
+    if (!r.ok()) {
+      rep.status = r.status == needle::StepStatus::kSolverFailed
+                       ? (r.last_solver_status == solver::StopReason::kConverged
+                              ? solver::StopReason::kNonFinite  // the gradient at the solution
+                              : r.last_solver_status)
+                       : solver::StopReason::kMaxIterations;  // the stick–slip cap
+      std::ostringstream m;
+      m << "update " << k << " of " << scene.needle_plan.size() << " (depth " << plan.depth
+        << " m): " << r.brief();
+      rep.message = m.str();
+      break;
+    }
+  }
+  // The final refined slab and its displacement, three components per node (z = 0).
+  scene.mesh = sim.mesh().to_mesh_data();
+  const VecX& u2 = sim.displacement();
+  const Eigen::Index n = u2.size() / 2;
+  res.u = VecX::Zero(3 * n);
+  for (Eigen::Index v = 0; v < n; ++v) res.u.segment<2>(3 * v) = u2.segment<2>(2 * v);
+  double energy = std::numeric_limits<double>::quiet_NaN();
+  if (sim.problem().energy(u2, energy) != EvalStatus::kOk)
+    energy = std::numeric_limits<double>::quiet_NaN();
+  rep.iterations = static_cast<long>(res.needle_updates.size());
+  rep.inner_iterations = cg;
+  rep.flops = flops;
+  rep.energy = energy;
+  rep.residual_norm = std::numeric_limits<double>::quiet_NaN();
+  rep.seconds = update_seconds;
+  res.external_force_norm = std::numeric_limits<double>::quiet_NaN();
+  // Final checks (as check_final_state for tetrahedra): finite displacement, inverted triangles.
+  if (!u2.allFinite()) {
+    if (rep.ok()) {
+      rep.status = solver::StopReason::kNonFinite;
+      rep.message = "the needle run ended with a displacement that is not finite";
+    }
+  } else {
+    const Eigen::Matrix2Xd x = sim.deformed();
+    Index inverted = 0;
+    for (Eigen::Index c = 0; c < scene.mesh.cells.cols(); ++c) {
+      const Vec2 a = x.col(scene.mesh.cells(0, c)), b = x.col(scene.mesh.cells(1, c)),
+                 d = x.col(scene.mesh.cells(2, c));
+      const Vec2 e = b - a, f = d - a;
+      inverted += e.x() * f.y() - e.y() * f.x() <= 0.0 ? 1 : 0;
+    }
+    res.inverted_elements = inverted;
+    if (inverted > 0 && rep.ok() && !spec.material.allow_inversion) {
+      rep.status = solver::StopReason::kInverted;
+      rep.message = "the needle run ended with " + std::to_string(inverted) + " of " +
+                    std::to_string(scene.mesh.num_cells()) +
+                    " triangles inverted (deformed area <= 0): material \"" + spec.material.model +
+                    "\"; use a smaller speed, or set \"allow_inversion\": true under /material "
+                    "(linear, stvk) to accept it";
+    }
+  }
+  const needle::InsertionOptions& o = sim.options();
+  detail << "needle insertion (thesis §6.7): per update move the needle, refine to h_ref = "
+         << o.h_ref << " m around the tip (§6.5), intercept needle nodes (§6.4"
+         << (o.relocate ? ", relocated onto the shaft §6.8.6" : "") << "), solve (6.7) by "
+         << (o.relaxation == needle::Relaxation::kLinearCg ? "linear" : "nonlinear")
+         << " CG to (6.9) with eps = " << o.epsilon << ", eps_round = " << o.epsilon_round
+         << ", rearrange stick/slip (§6.3.2, at most " << o.max_rearrangements << " per update); "
+         << res.needle_updates.size() << " of " << scene.needle_plan.size() << " updates, "
+         << rearrangements << " rearrangements, " << cg << " CG iterations in all";
+}
+
 /// "the power iteration for lambda_max stopped with max_iterations after 2000 iterations
 /// (relative change 3e-05, tolerance 1e-06)" and the estimate's own message.
 std::string estimate_failure(const std::string& what, const solver::EigenEstimate& e,
@@ -434,10 +538,17 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
 }
 
 SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
-                         const CutStepObserver& cut_observer) {
+                         const CutStepObserver& cut_observer,
+                         const NeedleUpdateObserver& needle_observer) {
+  SceneRunResult res;
+  if (scene.needle) {
+    std::ostringstream detail;
+    run_needle(scene, res, needle_observer, detail);
+    res.method_detail = detail.str();
+    return res;
+  }
   INCISE_CHECK(scene.problem != nullptr, "run_scene needs a built problem");
   const SolverSpec& s = scene.spec.solver;
-  SceneRunResult res;
   auto evaluate_probes = [&] {
     for (const auto& pr : scene.probes) {
       ProbeResult r;

@@ -28,6 +28,17 @@ void write_vtu(const std::string& path, const mesh::MeshData& m,
                const std::vector<DataArray>& point_data = {},
                const std::vector<DataArray>& cell_data = {});
 
+/// One dataset of a ParaView collection (write_pvd): a file and its time.
+struct PvdFrame {
+  double timestep = 0;  ///< the DataSet's `timestep` attribute (ParaView's animation time)
+  std::string file;     ///< the dataset's path as written into the index (relative to it)
+};
+
+/// Writes a ParaView collection index (.pvd, VTK XML "Collection") listing `frames` in order,
+/// so that ParaView opens the files as one time series. Throws UsageError for a file name that
+/// is empty or holds one of " < > &, incise::Error when the file cannot be written.
+void write_pvd(const std::string& path, const std::vector<PvdFrame>& frames);
+
 /// Gmsh ASCII writer, version 2.2 or 4.1 (`version` = 22 or 41). Cells are written as
 /// tetrahedra (or triangles), facets as triangles; tags become physical tags (4.1: one entity
 /// per distinct tag, with $Entities). Nodes are numbered from 1.

@@ -4,7 +4,8 @@
 /// mesh, the fixed node set, the external loads, the elastic problem,
 /// sweep triangles only when a tool is named (with the "augmented" solver the builder leaves
 /// the cut to the run, which cuts one sweep triangle at a time; otherwise it cuts first),
-/// probe node sets only when probes are named. Every
+/// probe node sets only when probes are named; for a `slab2d` scene the starting slab and the
+/// needle insertion (needle::NeedleInsertion) with its planned updates instead. Every
 /// part built is recorded with its wall time and the memory it holds; every part deliberately
 /// not built is recorded with the reason, so a run summary can show both.
 
@@ -12,6 +13,7 @@
 #include <incise/fem/elastic_problem.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/mesh_data.hpp>
+#include <incise/needle/insertion.hpp>
 #include <incise/scene/scene_spec.hpp>
 
 #include <array>
@@ -36,6 +38,12 @@ struct ResolvedProbe {
   std::vector<Index> nodes;  ///< ≥ 1 node
 };
 
+/// One planned update of a needle scene: the needle's pose and how far its tip has come.
+struct NeedleUpdatePlan {
+  needle::NeedlePose pose;  ///< tip on the path, direction of the path segment it is on
+  double depth = 0;         ///< distance travelled by the tip along the path from its start (m)
+};
+
 /// The constructed scene. DOF numbering: node i has DOFs 3i, 3i+1, 3i+2 (x, y, z).
 struct BuiltScene {
   SceneSpec spec;
@@ -48,6 +56,10 @@ struct BuiltScene {
   std::unique_ptr<fem::ElasticProblem> problem;
   std::vector<std::array<Vec3, 3>> sweep_triangles;  ///< scalpel sweep (§3.2); empty w/o tools
   std::vector<ResolvedProbe> probes;
+  /// `slab2d` scenes: the needle insertion on the starting slab (thesis §6.7; `mesh` is that
+  /// slab, `problem` is null: the insertion holds its plane-stress problem) and its updates.
+  std::unique_ptr<needle::NeedleInsertion> needle;
+  std::vector<NeedleUpdatePlan> needle_plan;
   std::vector<BuildStep> steps;        ///< what was built, in order
   std::vector<std::string> not_built;  ///< parts skipped and why
 
@@ -63,7 +75,11 @@ struct BuiltScene {
 /// incise::default_memory_budget_bytes()), checked before a generated mesh is allocated and
 /// before a read mesh gets its problem; and when the loads give ‖f_ext‖ = 0 over the free DOFs
 /// (at /loads: zero forces, forces on fixed nodes only, every node fixed, or underflow). Throws the
-/// mesh reader's errors for bad mesh files. Nothing is written anywhere.
+/// mesh reader's errors for bad mesh files. A `slab2d` scene builds the right-triangle slab
+/// (mesh::make_right_triangle_slab; refused at /mesh/h_start or /mesh/h_start_level when width
+/// or height is no integer multiple of h_start, at /mesh when its estimate exceeds the budget),
+/// checks that every fixed line holds a node of it, and builds the needle::NeedleInsertion with
+/// the plan of needle_updates(); no ElasticProblem. Nothing is written anywhere.
 BuiltScene build_scene(const SceneSpec& spec);
 
 /// The memory budget of a scene's build (bytes): limits.memory_mb MiB when set (the scene key,
@@ -78,6 +94,12 @@ std::string memory_budget_origin(const SceneSpec& spec);
 
 /// Nodes of `mesh` in `region`, sorted. Plane tolerance 0 means 1e-9 × bounding-box diagonal.
 std::vector<Index> select_nodes(const mesh::MeshData& mesh, const Region& region);
+
+/// The updates of a needle (ToolSpec::Kind::kNeedle): update k puts the tip at distance
+/// min(k·speed·h_ref, ℓ) along the path (ℓ its length), k = 0 … ⌈ℓ/(speed·h_ref)⌉, pointing
+/// along the path segment the tip is on (the next one at a joint, the last one at the end),
+/// with the tool's length.
+std::vector<NeedleUpdatePlan> needle_updates(const ToolSpec& tool);
 
 /// Sweep triangles of a scalpel (thesis §3.2): for each path segment p_i → p_{i+1} the quad
 /// (p_i, p_{i+1}, p_{i+1}+b, p_i+b) split into two triangles, b the blade vector.

@@ -6,6 +6,7 @@
 /// temporary name and renamed into place (core/atomic_file.hpp), parent folders are created;
 /// paths are relative to the current directory. Nothing is printed.
 
+#include <incise/io/write_mesh.hpp>
 #include <incise/scene/scene_builder.hpp>
 #include <incise/scene/scene_runner.hpp>
 #include <incise/solver/report.hpp>
@@ -22,7 +23,11 @@ namespace incise::scene {
 /// Writes the VTU frames `outputs.vtu_every` asks for (none when it is 0 or `vtu` is empty):
 /// `<vtu>_<iteration>.vtu` of the scene's mesh with point array "displacement" (m) every
 /// vtu_every iterations, or in an interactive cutting run `<vtu>_<step>.vtu` of the cut mesh
-/// every vtu_every steps (step 0 = initial solve).
+/// every vtu_every steps (step 0 = initial solve). In a needle scene: `<vtu>_<update>.vtu` of
+/// the refined slab (triangles; point arrays "displacement", z = 0, and "needle_state", 0 no
+/// needle node, 1 sticking, 2 slipping) every vtu_every updates and at the last planned update,
+/// the update zero-padded to max(4, digits of the last update), each frame followed by
+/// `<vtu>.pvd`, the ParaView index of the frames so far (timestep = update).
 class FrameWriter {
  public:
   /// Keeps a reference to `scene`, which must outlive the writer.
@@ -31,13 +36,22 @@ class FrameWriter {
   void iteration(const solver::IterationInfo& info);
   /// For run_scene's CutStepObserver: writes the frame of this step when one is due.
   void cut_step(const CutStepRow& row, const interactive::AugmentedCutSession& session);
+  /// For run_scene's NeedleUpdateObserver: writes the frame of this update when one is due,
+  /// then the .pvd index.
+  void needle_update(const NeedleUpdateRow& row, std::size_t total_updates,
+                     const needle::NeedleInsertion& insertion);
   /// Frames written so far.
   long frames() const { return frames_; }
 
  private:
   const BuiltScene& scene_;
   long frames_ = 0;
+  std::vector<io::PvdFrame> pvd_;  ///< needle frames, for the .pvd index
 };
+
+/// The point arrays of a needle insertion's mesh: "displacement" (m, 3 components, z = 0) and
+/// "needle_state" (0: no needle node, 1: sticking, 2: slipping; needle::NodeState).
+std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion& insertion);
 
 /// Options of write_outputs().
 struct OutputOptions {
@@ -47,11 +61,12 @@ struct OutputOptions {
 };
 
 /// After run_scene(scene, ...): writes the CSV trace (`outputs.csv`: one row per iteration, or
-/// per solve of an interactive cutting run), the final state `<vtu>.vtu` and, when
+/// per solve of an interactive cutting run, or per update of a needle scene), the final state
+/// `<vtu>.vtu` (a needle scene's with needle_point_data()) and, when
 /// options.summary_json is set, summary_json() there. Returns what was written, in that order:
-/// the paths, with "<n> frames <vtu>_<it>.vtu" (or "_<step>.vtu") after the final VTU when
-/// options.frames > 0. Throws Error (or std::filesystem::filesystem_error) when a file cannot be
-/// written.
+/// the paths, with "<n> frames <vtu>_<it>.vtu" (or "_<step>.vtu"; a needle scene's
+/// "<n> frames <vtu>_<update>.vtu, index <vtu>.pvd") after the final VTU when options.frames > 0.
+/// Throws Error (or std::filesystem::filesystem_error) when a file cannot be written.
 std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunResult& result,
                                        const OutputOptions& options = {});
 

@@ -14,7 +14,12 @@
 /// triangle is cut (thesis §3.2) and the static solution updated by the augmented solver — element
 /// stiffness changes and new DOFs as replaced columns, GMRES on the Schur system — without
 /// refactorization; the per-step m, GMRES iterations and update times are returned as
-/// SceneRunResult::cut_steps. Parts built on the way (eigenvalue estimates, FFT, factorization) are
+/// SceneRunResult::cut_steps. A `slab2d` scene is a needle insertion (thesis §6.7): one
+/// needle::NeedleInsertion::step per planned update (BuiltScene::needle_plan), each a row of
+/// SceneRunResult::needle_updates; the run stops at the first update whose status is not ok
+/// (kSolverFailed: report status = the failed solve's StopReason; kRearrangementCycle:
+/// kMaxIterations, the stick–slip cap), the message naming the update and the needle status.
+/// Parts built on the way (eigenvalue estimates, FFT, factorization) are
 /// recorded in BuiltScene::steps with their cost.
 
 #include <incise/core/outcome.hpp>
@@ -88,6 +93,27 @@ struct CutStepRow {
   std::vector<Vec3> probes;              ///< probe values after the step (m)
 };
 
+/// One update of a needle scene (needle::StepReport with where the needle was).
+struct NeedleUpdateRow {
+  long update = 0;          ///< index into BuiltScene::needle_plan (0: the tip at the path's start)
+  double depth = 0;         ///< distance travelled by the tip along the path (m)
+  Vec2 tip = Vec2::Zero();  ///< tip position (m)
+  std::string status;       ///< "ok" or the needle::StepStatus name with the message
+  int sticking = 0, slipping = 0;     ///< needle nodes in each state after the update
+  int rearrangements = 0;             ///< stick–slip passes that changed a state (§6.3.2)
+  int solves = 0;                     ///< CG solves (rearrangements + 1 when ok)
+  long cg_iterations = 0;             ///< CG iterations over the update's solves
+  long max_cg_iterations = 0;         ///< of its longest solve
+  long bisections = 0;                ///< simple bisections of the refinement at the tip (§6.5)
+  int intercepted = 0, released = 0;  ///< needle nodes added, released (slid off)
+  Index nodes = 0, triangles = 0;     ///< mesh size after the update
+  /// Force the needle exerts on the material (N), needle::StepReport::needle_force; the needle
+  /// feels its negative
+  Vec2 needle_force = Vec2::Zero();
+  std::uint64_t flops = 0;  ///< counted flops of the solves
+  double seconds = 0;       ///< wall time of the update (move, refine, intercept, solves)
+};
+
 /// Outcome of run_scene().
 struct SceneRunResult {
   solver::SolverReport report;     ///< the solver's report (reason, iterations, flops, time)
@@ -100,6 +126,11 @@ struct SceneRunResult {
   /// holds iterations = number of solves, inner_iterations = total GMRES iterations and the
   /// residual ‖P(K u − f)‖ recomputed matrix-free on the final cut mesh (scene.problem).
   std::vector<CutStepRow> cut_steps;
+  /// Needle scenes only: one row per update run (the report then holds iterations = updates,
+  /// inner_iterations = CG iterations in all, flops summed, seconds = the summed update times
+  /// (without the observer's, e.g. frame writing), energy = the final elastic energy, residual
+  /// NaN: every solve met (6.9), which has no single ‖f_ext‖).
+  std::vector<NeedleUpdateRow> needle_updates;
   /// Elements with det F ≤ 0 at u (solver::check_inversion, §4.3.1, on scene.problem's mesh);
   /// −1 when u is not finite (not counted).
   Index inverted_elements = -1;
@@ -113,6 +144,11 @@ using RunObserver = std::function<void(const solver::IterationInfo&)>;
 /// step; valid during the call).
 using CutStepObserver = std::function<void(const CutStepRow&, std::size_t total_steps,
                                            const interactive::AugmentedCutSession& session)>;
+
+/// Called after every update of a needle scene, with the row, the number of planned updates
+/// and the insertion (its mesh, displacement and needle nodes those after the update).
+using NeedleUpdateObserver = std::function<void(const NeedleUpdateRow&, std::size_t total_updates,
+                                                const needle::NeedleInsertion& insertion)>;
 
 /// Δt and η of a "dynamic-ss22" run (thesis §4.1) and where each came from. ok(): both are
 /// usable; otherwise status is that of the estimate that failed, the message names it and
@@ -151,7 +187,11 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
 /// An interactive cutting run replaces scene.mesh, scene.fixed_nodes and scene.problem by the
 /// final cut mesh, its held nodes (fixed from the start, fixed by the cutter, unused) and an
 /// elastic problem on it carrying the same nodal forces (used to verify the residual).
+/// A needle scene replaces scene.mesh by the final refined slab (2D) and returns u with three
+/// components per node (z = 0); its final check counts inverted triangles (deformed area ≤ 0:
+/// kInverted unless material.allow_inversion) and non-finite displacements (kNonFinite).
 SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer = {},
-                         const CutStepObserver& cut_observer = {});
+                         const CutStepObserver& cut_observer = {},
+                         const NeedleUpdateObserver& needle_observer = {});
 
 }  // namespace incise::scene

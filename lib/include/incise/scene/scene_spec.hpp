@@ -15,6 +15,7 @@
 #include <incise/linalg/augmented_system.hpp>
 #include <incise/material/parameters.hpp>
 #include <incise/mesh/generators.hpp>
+#include <incise/needle/friction.hpp>
 #include <incise/scene/line_index.hpp>
 #include <incise/solver/linear_cg.hpp>
 
@@ -58,9 +59,10 @@ inline constexpr NameTable<Region::Kind, 4> kRegionKindNames{{{
 struct MeshSpec {
   /// Source of the mesh.
   enum class Source {
-    kFile,     ///< a mesh file (Medit .mesh, Gmsh .msh, TetGen .node/.ele, OFF)
-    kBox,      ///< mesh::make_box
-    kCylinder  ///< mesh::make_cylinder (structured O-grid along x)
+    kFile,      ///< a mesh file (Medit .mesh, Gmsh .msh, TetGen .node/.ele, OFF)
+    kBox,       ///< mesh::make_box
+    kCylinder,  ///< mesh::make_cylinder (structured O-grid along x)
+    kSlab2d     ///< mesh::make_right_triangle_slab: the plane-stress slab of thesis §6.5, §6.8
   };
   Source source = Source::kBox;
   std::string file;    ///< kFile: path, resolved relative to the scene file's folder
@@ -70,13 +72,22 @@ struct MeshSpec {
   mesh::CubeSplit split = mesh::CubeSplit::kSix;  ///< kBox: cube split
   double radius = 0, length = 0;  ///< kCylinder: radius and length (m); axis along x
   int rings = 1, layers = 1;      ///< kCylinder: rings across the disk, layers along x
+  /// kSlab2d: the rectangle [0, width] × [0, height] (m) in the z = 0 plane.
+  double width = 0, height = 0;
+  /// kSlab2d: starting grid spacing h_start (m), the leg of every right triangle; width and
+  /// height must be integer multiples of it. Given as a length (scene key `h_start`) or as the
+  /// thesis level k, h_k = 0.1 m · 2⁻ᵏ (key `h_start_level`, mesh::thesis_slab_spacing).
+  double h_start = 0;
+  int h_start_level = 0;  ///< kSlab2d: k when given as a level, 0 when given as a length
+  double thickness = 0;   ///< kSlab2d: plane-stress thickness d (m), > 0 (thesis §6.3)
 };
 
 /// Names of MeshSpec::Source (scene key `type` of the mesh).
-inline constexpr NameTable<MeshSpec::Source, 3> kMeshSourceNames{{{
+inline constexpr NameTable<MeshSpec::Source, 4> kMeshSourceNames{{{
     {MeshSpec::Source::kFile, "file"},
     {MeshSpec::Source::kBox, "box"},
     {MeshSpec::Source::kCylinder, "cylinder"},
+    {MeshSpec::Source::kSlab2d, "slab2d"},
 }}};
 
 /// Names of mesh::CubeSplit (scene key `split` of a box mesh; only scenes name the splits).
@@ -140,7 +151,11 @@ struct SolverSpec {
     kReference  ///< the reference configuration (the same cut as the builder's cut-first path)
   };
   Method method = Method::kCG;
-  double tolerance = 1e-8;  ///< stop when ‖r‖₂ ≤ tolerance·‖f_ext‖₂ (§3.1), in (0, 1)
+  /// Stop when ‖r‖₂ ≤ tolerance·‖f_ext‖₂ (§3.1), in (0, 1). In a needle scene: ε of the (6.9)
+  /// rule, ‖r‖₂ ≤ ε·√(‖f_ex‖² + ‖f_react‖²) + E·d·H/√n·ε_round (needle::InsertionOptions).
+  double tolerance = 1e-8;
+  /// Needle scenes only: ε_round of (6.9), in [0, 1) (scene key `tolerance_round`; §6.8.1).
+  double tolerance_round = 1e-8;
   int max_iterations = 10000;  ///< iteration (or time-step) budget, ≥ 1
   double time_budget = 0.0;    ///< wall-clock budget (s); 0 = unlimited
   /// CG and Newton's inner CG (scene key `preconditioner`).
@@ -188,20 +203,38 @@ inline constexpr NameTable<SolverSpec::CutConfiguration, 2> kCutConfigurationNam
 /// kDirectCached; its other values are the names in linalg::kSchurPreconditionerNames.
 inline constexpr const char* kExplicitSchurName = "explicit";
 
-/// A cutting tool. The scalpel is swept along a path; consecutive blade positions span the
-/// sweep triangles of thesis §3.2.
+/// A tool. The scalpel is swept along a path; consecutive blade positions span the sweep
+/// triangles of thesis §3.2. The needle (thesis ch. 6, 2D: a `slab2d` mesh only) is a rigid
+/// segment whose tip follows the path at `speed` × h_ref per update, pointing along the path
+/// segment it is on (scene_builder.hpp, needle_updates()).
 struct ToolSpec {
   /// Kind of tool.
-  enum class Kind { kScalpel };
+  enum class Kind {
+    kScalpel,  ///< 3D: a blade swept along the path (§3.2)
+    kNeedle    ///< 2D: a rigid needle inserted along the path (§6.4, §6.7)
+  };
   Kind kind = Kind::kScalpel;
-  std::vector<Vec3> path;     ///< blade tip positions (m), ≥ 2
-  Vec3 blade = Vec3::Zero();  ///< vector from tip to the blade's back end (m), non-zero
+  /// Scalpel: blade tip positions (m), ≥ 2. Needle: tip positions (m, z = 0; the scene gives
+  /// [x, y]), ≥ 2, consecutive points distinct.
+  std::vector<Vec3> path;
+  Vec3 blade = Vec3::Zero();  ///< scalpel: vector from tip to the blade's back end (m), non-zero
   std::string path_json;      ///< JSON path, for messages
+  /// Needle: length L (m) of the rigid shaft (the base is tip − L·t); default the path's length.
+  double length = 0;
+  double speed = 0;  ///< needle: tip advance per update, in units of h_ref (> 0)
+  /// Needle: refinement size around the tip h_ref (m), ≤ the mesh's h_start; given as a length
+  /// (key `h_ref`) or as the thesis level (key `h_ref_level`, h_k = 0.1 m · 2⁻ᵏ).
+  double h_ref = 0;
+  int h_ref_level = 0;               ///< needle: k when h_ref was given as a level, else 0
+  needle::FrictionProfile friction;  ///< needle: shaft friction profile (friction.hpp)
+  bool relocate = false;             ///< needle: §6.8.6 relocation of intercepted nodes
+  int max_rearrangements = 100;      ///< needle: stick–slip passes per update before a status
 };
 
 /// Names of ToolSpec::Kind (scene key `type` of a tool).
-inline constexpr NameTable<ToolSpec::Kind, 1> kToolKindNames{{{
+inline constexpr NameTable<ToolSpec::Kind, 2> kToolKindNames{{{
     {ToolSpec::Kind::kScalpel, "scalpel"},
+    {ToolSpec::Kind::kNeedle, "needle"},
 }}};
 
 /// A quantity recorded during and after the run.
@@ -252,6 +285,10 @@ struct SceneSpec {
   std::vector<ToolSpec> tools;
   OutputSpec outputs;
   LimitsSpec limits;
+  /// The scene's needle (the one tool of a `slab2d` scene), nullptr otherwise.
+  const ToolSpec* needle() const {
+    return tools.size() == 1 && tools[0].kind == ToolSpec::Kind::kNeedle ? &tools[0] : nullptr;
+  }
   /// Line (1-based) in `file` of each JSON value by JSON pointer ("/fixed/0"; an object member:
   /// the line of its key), so that errors found later (the builder's) can name it; empty for
   /// specs made in code.
