@@ -196,3 +196,53 @@ TEST(PlaneStressProblem, TractionIsTimesThickness) {
 }
 
 }  // namespace
+
+// The gradient memo (plane_stress_problem.hpp): for the linear model a gradient at a u that
+// differs from the last swept one at a few nodes is g + K·Δu (rounding of order ε‖K‖‖Δu‖:
+// 1e-12 relative to ‖g‖ leaves three digits of margin), a second update is never chained onto
+// the first (that call sweeps: bitwise equal to a fresh problem), and a bitwise-equal u
+// returns the stored result; nonlinear models always sweep.
+TEST(PlaneStressProblem, GradientReuseMatchesASweep) {
+  INCISE_SEEDED_RNG(rng, 2207);
+  const auto mesh = slab();
+  for (const std::string model : {"linear", "neohookean"}) {
+    SCOPED_TRACE(model);
+    const Material mat(model, parameters());
+    PlaneStressProblem p(mesh, mat, 0.01);
+    p.fix_nodes(left_nodes(mesh));
+    p.add_traction_on_line(0, 0.1, Vec2(100.0, -50.0));
+    const auto fresh = [&](const VecX& u, VecX& g, double& e) {
+      PlaneStressProblem q(mesh, mat, 0.01);
+      q.fix_nodes(left_nodes(mesh));
+      q.add_traction_on_line(0, 0.1, Vec2(100.0, -50.0));
+      ASSERT_EQ(q.gradient(u, g, &e), EvalStatus::kOk);
+    };
+    VecX u = incise::fixtures::random_vector(rng, p.size(), 1e-3);
+    VecX g, gf;
+    double e = 0, ef = 0;
+    ASSERT_EQ(p.gradient(u, g, &e), EvalStatus::kOk);
+    // A few nodes move (as the needle moves its nodes).
+    for (const Index v : {3, 7, 12}) u.segment<2>(2 * v) += Vec2(2e-4, -1e-4);
+    ASSERT_EQ(p.gradient(u, g, &e), EvalStatus::kOk);
+    fresh(u, gf, ef);
+    EXPECT_LE((g - gf).norm(), 1e-12 * gf.norm());
+    EXPECT_NEAR(e, ef, 1e-12 * (std::abs(ef) + g.norm() * u.norm()));
+    if (model != "linear") EXPECT_EQ(g, gf);  // swept
+    // Bitwise-equal u: the stored result.
+    VecX g2;
+    double e2 = 0;
+    ASSERT_EQ(p.gradient(u, g2, &e2), EvalStatus::kOk);
+    EXPECT_EQ(g2, g);
+    EXPECT_EQ(e2, e);
+    // A second change: not chained onto the update, swept, bitwise equal to a fresh problem.
+    u.segment<2>(2 * 5) += Vec2(-1e-4, 3e-4);
+    ASSERT_EQ(p.gradient(u, g, &e), EvalStatus::kOk);
+    fresh(u, gf, ef);
+    EXPECT_EQ(g, gf);
+    EXPECT_EQ(e, ef);
+    // A load added afterwards clears the memo.
+    p.add_point_load(9, Vec2(1.0, 2.0));
+    ASSERT_EQ(p.gradient(u, g2, &e2), EvalStatus::kOk);
+    EXPECT_LE((g2.segment<2>(18) - (g.segment<2>(18) - Vec2(1.0, 2.0))).norm(), 1e-12);
+  }
+}

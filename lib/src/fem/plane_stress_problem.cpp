@@ -122,6 +122,7 @@ void PlaneStressProblem::fix_dof(Eigen::Index dof) {
 
 void PlaneStressProblem::add_point_load(Index node, const Vec2& force) {
   INCISE_CHECK(node >= 0 && node < num_nodes(), "node index out of range: " + std::to_string(node));
+  memo_.valid = false;
   f_ext_.segment<2>(2 * node) += force;
 }
 
@@ -129,6 +130,7 @@ double PlaneStressProblem::add_traction_on_line(int axis, double value, const Ve
                                                 double tolerance) {
   INCISE_CHECK(axis == 0 || axis == 1, "axis must be 0 or 1");
   INCISE_CHECK(traction.allFinite(), "traction must be finite");
+  memo_.valid = false;
   // Boundary edges: edges of exactly one triangle.
   std::map<std::pair<Index, Index>, int> count;
   for (Index e = 0; e < num_elements(); ++e)
@@ -192,7 +194,55 @@ EvalStatus PlaneStressProblem::energy(const VecX& u, double& energy) {
   return std::isfinite(energy) ? EvalStatus::kOk : EvalStatus::kNonFinite;
 }
 
+bool PlaneStressProblem::reuse_gradient(const VecX& u, VecX& g, double* energy) {
+  if (!memo_.valid || memo_.u.size() != u.size() || (energy && !memo_.has_energy)) return false;
+  changed_.clear();
+  for (Index v = 0; v < num_nodes(); ++v)
+    if (u[2 * v] != memo_.u[2 * v] || u[2 * v + 1] != memo_.u[2 * v + 1]) changed_.push_back(v);
+  if (changed_.empty()) {
+    g = memo_.g;
+    if (energy) *energy = memo_.energy;
+    return true;
+  }
+  if (!constant_tangent_ || !memo_.swept ||
+      2 * static_cast<std::size_t>(changed_.size()) > static_cast<std::size_t>(num_nodes()))
+    return false;
+  if (k_blocks_.row.empty()) assemble_constant_tangent();
+  // g' = g + K·Δu. K is symmetric, so node j's column of blocks is its row transposed.
+  g = memo_.g;
+  std::uint64_t blocks = 0;
+  for (const Index j : changed_) {
+    const Vec2 dj = u.segment<2>(2 * j) - memo_.u.segment<2>(2 * j);
+    for (Index r = k_blocks_.row[static_cast<std::size_t>(j)];
+         r < k_blocks_.row[static_cast<std::size_t>(j) + 1]; ++r, ++blocks)
+      g.segment<2>(2 * k_blocks_.col[static_cast<std::size_t>(r)]).noalias() +=
+          Eigen::Map<const Mat2>(&k_blocks_.values[4 * static_cast<std::size_t>(r)]).transpose() *
+          dj;
+  }
+  // Π' = Π + Δuᵀ(g + ½K·Δu), with K·Δu = g' − g on the changed nodes.
+  double de = 0.0;
+  if (energy)
+    for (const Index j : changed_) {
+      const Vec2 dj = u.segment<2>(2 * j) - memo_.u.segment<2>(2 * j);
+      de += dj.dot(0.5 * (memo_.g.segment<2>(2 * j) + g.segment<2>(2 * j)));
+    }
+  flops_ += 10 * blocks + 8 * static_cast<std::uint64_t>(changed_.size());
+  if (!g.allFinite() || !std::isfinite(de)) return false;  // let a sweep name the failure
+  memo_.u = u;
+  memo_.g = g;
+  memo_.swept = false;
+  memo_.has_energy = energy != nullptr;
+  if (energy) *energy = memo_.energy = memo_.energy + de;
+  return true;
+}
+
 EvalStatus PlaneStressProblem::gradient(const VecX& u, VecX& g, double* energy) {
+  INCISE_CHECK(u.size() == size(), "displacement vector has the wrong size");
+  if (reuse_gradient(u, g, energy)) {
+    outcome_ = PlaneStressOutcome{};
+    return EvalStatus::kOk;
+  }
+  memo_.valid = false;
   const material::Lame p = material_.lame();
   g = -f_ext_;
   double sum = 0.0;
@@ -224,7 +274,13 @@ EvalStatus PlaneStressProblem::gradient(const VecX& u, VecX& g, double* energy) 
     flops_ += 2 * static_cast<std::uint64_t>(size());
     if (!std::isfinite(*energy)) return EvalStatus::kNonFinite;
   }
-  return g.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
+  if (!g.allFinite()) return EvalStatus::kNonFinite;
+  memo_.valid = memo_.swept = true;
+  memo_.has_energy = energy != nullptr;
+  memo_.energy = energy ? *energy : 0.0;
+  memo_.u = u;
+  memo_.g = g;
+  return EvalStatus::kOk;
 }
 
 void PlaneStressProblem::assemble_constant_tangent() {

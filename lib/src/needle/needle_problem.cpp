@@ -102,16 +102,9 @@ EvalStatus NeedleProblem::energy(const VecX& u, double& energy) {
 }
 
 EvalStatus NeedleProblem::gradient(const VecX& u, VecX& g, double* energy) {
-  // The solvers end by evaluating the gradient at their final iterate, and the interaction
-  // loop asks for it again (reactions, rearrangement): the last evaluation is kept and reused
-  // when u is bitwise the same (energy included if it was computed then).
-  if (memo_valid_ && u.size() == memo_u_.size() && u == memo_u_ &&
-      (energy == nullptr || memo_has_energy_)) {
-    g = memo_g_;
-    if (energy) *energy = memo_energy_;
-    return EvalStatus::kOk;
-  }
-  memo_valid_ = false;
+  // The base problem keeps its last gradient: the interaction loop's repeated requests at the
+  // solver's final iterate, and the next solve's start after the needle moved a few nodes, are
+  // answered without a sweep (PlaneStressProblem::gradient).
   x_ = u;
   rotate(x_, false);
   const EvalStatus s = base_.gradient(x_, g, energy);
@@ -120,11 +113,6 @@ EvalStatus NeedleProblem::gradient(const VecX& u, VecX& g, double* energy) {
   if (energy) *energy -= f_fric_.dot(x_);
   own_flops_ += 3 * static_cast<std::uint64_t>(size());
   rotate(g, true);
-  memo_u_ = u;
-  memo_g_ = g;
-  memo_has_energy_ = energy != nullptr;
-  memo_energy_ = energy ? *energy : 0.0;
-  memo_valid_ = true;
   return s;
 }
 

@@ -12,6 +12,13 @@
 /// test PlaneStressProblemProperty.EnergyGradientHessianChain checks it against the gradient
 /// (Taylor order) and the assembled tangent for every material.
 ///
+/// gradient() keeps its last result. Asked again at a bitwise-equal u it returns it; for the
+/// linear model, asked at a u that differs from a swept evaluation's at no more than half the
+/// nodes (a needle moved its nodes, §6.7), it returns g + K·Δu and Π + Δuᵀ(g + ½K·Δu) from
+/// the changed nodes' blocks — exact for a quadratic Π up to rounding of order ε‖K‖‖Δu‖ — and
+/// marks the result as not swept, so updates never chain. Loads added later clear it.
+/// Tests: PlaneStressProblem.GradientReuseMatchesASweep.
+///
 /// Fixed DOFs are handled as in ElasticProblem: gradient() and hessian_product() are not
 /// projected, project() zeroes fixed components, the assembled tangent gets unit diagonals at
 /// fixed DOFs.
@@ -145,6 +152,18 @@ class PlaneStressProblem : public Problem {
   PlaneStressOutcome outcome_;
   bool constant_tangent_ = false;  ///< the model's K is independent of u (kLinearGeometry)
   NodeBlocks k_blocks_;            ///< empty until the first product of a constant-tangent model
+
+  /// The last successful gradient evaluation (see gradient()): `swept` when it came from an
+  /// element sweep rather than from an update of an earlier one.
+  struct GradientMemo {
+    bool valid = false, swept = false, has_energy = false;
+    VecX u, g;
+    double energy = 0.0;
+  };
+  /// Answers gradient() from memo_ (see the class comment); false when it cannot.
+  bool reuse_gradient(const VecX& u, VecX& g, double* energy);
+  GradientMemo memo_;
+  std::vector<Index> changed_;  ///< scratch of reuse_gradient()
 };
 
 }  // namespace incise::fem

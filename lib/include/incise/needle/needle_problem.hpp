@@ -55,8 +55,6 @@ class NeedleProblem : public Problem {
   // --- incise::Problem (in rotated unknowns) --------------------------------------------
   Eigen::Index size() const override { return base_.size(); }
   [[nodiscard]] EvalStatus energy(const VecX& u, double& energy) override;
-  /// Reuses the previous evaluation when u is bitwise equal to its argument (the base problem
-  /// must not change while this object lives).
   [[nodiscard]] EvalStatus gradient(const VecX& u, VecX& g, double* energy = nullptr) override;
   [[nodiscard]] EvalStatus hessian_product(const VecX& u, const VecX& d, VecX& out) override;
   void project(VecX& v) const override;
@@ -76,10 +74,6 @@ class NeedleProblem : public Problem {
   VecX f_fric_;
   mutable std::uint64_t own_flops_ = 0;
   VecX x_, dx_;  ///< scratch: the arguments rotated back to the original frame
-  // The last gradient evaluation (see gradient()).
-  bool memo_valid_ = false, memo_has_energy_ = false;
-  VecX memo_u_, memo_g_;
-  double memo_energy_ = 0.0;
 };
 
 /// Status of direct_solve().
