@@ -2,6 +2,7 @@
 
 #include <incise/delaunay/predicates.hpp>
 #include "boundary_grid.hpp"
+#include "topology.hpp"
 
 #include <incise/core/error.hpp>
 
@@ -12,6 +13,7 @@
 namespace incise::delaunay {
 namespace {
 
+using detail::starting_at;
 using mesh::ElementHandle;
 
 double cross(const Vec2& a, const Vec2& b) {
@@ -29,12 +31,6 @@ bool segment_intersection(const Vec2& p0, const Vec2& p1, const Vec2& q0, const 
   t = cross(q0 - p0, d) / den;
   s = cross(q0 - p0, r) / den;
   return t >= 0 && t <= 1 && s >= 0 && s <= 1;
-}
-
-/// Rotates a counter-clockwise triple so that v comes first.
-std::array<Index, 3> starting_at(std::array<Index, 3> t, Index v) {
-  while (t[0] != v) std::rotate(t.begin(), t.begin() + 1, t.end());
-  return t;
 }
 
 }  // namespace

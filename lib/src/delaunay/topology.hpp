@@ -1,0 +1,159 @@
+#pragma once
+// Topology shared by the planar Triangulation and the 3D Surface (thesis ch. 5 on the ch. 7
+// connectivity): oriented triangles, edge incidence, and the two local algorithms whose logic
+// does not depend on the geometry — Lawson legalization (§5.2.1) and node removal by ear flips
+// (§5.3.1, Fig. 5.10). The geometry enters only through the mesh's flip() and
+// is_locally_delaunay() (exact orient2d/incircle in the plane; the unfolded criterion on a
+// surface), so one definition of each algorithm serves both.
+
+#include <incise/delaunay/edge.hpp>
+#include <incise/mesh/connectivity.hpp>
+
+#include <algorithm>
+#include <array>
+#include <vector>
+
+namespace incise::delaunay::detail {
+
+/// The vertices of triangle s in the order of its orientation (§7.2: the sorted sequence for
+/// sign +1, one swap for −1): counter-clockwise in the plane, right-handed about the surface
+/// normal on a surface.
+inline std::array<Index, 3> oriented(const mesh::Simplex& s) {
+  if (s.sign() > 0) return {s.vertex(0), s.vertex(1), s.vertex(2)};
+  return {s.vertex(0), s.vertex(2), s.vertex(1)};
+}
+
+/// Rotates an oriented triple so that v comes first.
+inline std::array<Index, 3> starting_at(std::array<Index, 3> t, Index v) {
+  while (t[0] != v) std::rotate(t.begin(), t.begin() + 1, t.end());
+  return t;
+}
+
+/// The live triangles incident with edge {p, q}.
+inline std::vector<mesh::ElementHandle> incident(const mesh::Connectivity& c, Index p, Index q) {
+  std::vector<mesh::ElementHandle> out;
+  if (p < 0 || p >= c.num_vertices()) return out;
+  for (const mesh::ElementHandle e : c.star(p))
+    if (c.simplex(e).contains(q)) out.push_back(e);
+  return out;
+}
+
+/// The triangle containing the directed edge p→q, or an invalid handle.
+inline mesh::ElementHandle left_of(const mesh::Connectivity& c, Index p, Index q) {
+  for (const mesh::ElementHandle e : incident(c, p, q)) {
+    const auto t = oriented(c.simplex(e));
+    for (size_t i = 0; i < 3; ++i)
+      if (t[i] == p && t[(i + 1) % 3] == q) return e;
+  }
+  return {};
+}
+
+/// The vertex of triangle e other than p and q.
+inline Index third(const mesh::Connectivity& c, mesh::ElementHandle e, Index p, Index q) {
+  for (const Index w : oriented(c.simplex(e)))
+    if (w != p && w != q) return w;
+  return -1;
+}
+
+/// Whether vertex v has a triangle and every edge at v has two triangles.
+inline bool is_interior_vertex(const mesh::Connectivity& c, Index v) {
+  if (v < 0 || v >= c.num_vertices() || c.star_size(v) == 0) return false;
+  for (const mesh::ElementHandle e : c.star(v))
+    for (const Index w : oriented(c.simplex(e)))
+      if (w != v && incident(c, v, w).size() != 2) return false;
+  return true;
+}
+
+/// All edges, each once, sorted.
+inline std::vector<Edge> edges(const mesh::Connectivity& c) {
+  std::vector<Edge> out;
+  for (const mesh::ElementHandle e : c.elements()) {
+    const auto t = oriented(c.simplex(e));
+    for (size_t i = 0; i < 3; ++i) out.push_back(make_edge(t[i], t[(i + 1) % 3]));
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+/// The vertices sharing an edge with v, sorted.
+inline std::vector<Index> neighbours(const mesh::Connectivity& c, Index v) {
+  std::vector<Index> out;
+  if (v < 0 || v >= c.num_vertices()) return out;
+  for (const mesh::ElementHandle e : c.star(v))
+    for (const Index w : oriented(c.simplex(e)))
+      if (w != v) out.push_back(w);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+/// Lawson legalization (§5.2.1): flips edges that are not locally Delaunay, starting from
+/// `edges` and continuing with the four outer edges of every flip, at most `max_flips` flips.
+/// Returns the number made. Mesh needs is_locally_delaunay(p, q), flip(p, q), connectivity().
+template <class Mesh>
+long lawson_legalize(Mesh& m, std::vector<Edge> edges, long max_flips) {
+  long made = 0;
+  while (!edges.empty() && made < max_flips) {
+    const Edge e = edges.back();
+    edges.pop_back();
+    if (m.is_locally_delaunay(e.first, e.second)) continue;
+    const auto& c = m.connectivity();
+    const mesh::ElementHandle l = left_of(c, e.first, e.second), r = left_of(c, e.second, e.first);
+    const Index o1 = third(c, l, e.first, e.second), o2 = third(c, r, e.second, e.first);
+    if (!m.flip(e.first, e.second)) continue;
+    ++made;
+    for (const Edge& o : {make_edge(e.first, o1), make_edge(o1, e.second), make_edge(e.second, o2),
+                          make_edge(o2, e.first)})
+      edges.push_back(o);
+  }
+  return made;
+}
+
+/// Removes interior vertex v by ear flips (§5.3.1, Fig. 5.10): an ear is an edge (v, w) that
+/// m.flip accepts; ears are flipped until v has degree 3, the three triangles become one, and
+/// the former link polygon is legalized. Returns false (mesh unchanged when refused before the
+/// first flip) when v is not interior, an edge at v is constrained, or no ear can be flipped
+/// (then the flips made so far stay: the mesh is valid, v keeps its triangles). Mesh needs
+/// connectivity(), is_constrained(p, q), flip(p, q), replace(remove, add),
+/// legalize(edges).
+template <class Mesh>
+bool remove_by_ears(Mesh& m, Index v) {
+  const mesh::Connectivity& c = m.connectivity();
+  if (!is_interior_vertex(c, v)) return false;
+  for (const Index w : neighbours(c, v))
+    if (m.is_constrained(v, w)) return false;
+  std::vector<Edge> link;  // link polygon edges and ear diagonals, legalized at the end
+  while (c.star_size(v) > 3) {
+    bool flipped = false;
+    for (const mesh::ElementHandle e : c.star(v)) {
+      const auto t = starting_at(oriented(c.simplex(e)), v);
+      const mesh::ElementHandle r = left_of(c, t[1], v);
+      if (!r.valid()) continue;
+      const Index prev = third(c, r, t[1], v);
+      link.push_back(make_edge(prev, t[1]));
+      link.push_back(make_edge(t[1], t[2]));
+      if (m.flip(v, t[1])) {
+        link.push_back(make_edge(prev, t[2]));  // the ear's diagonal
+        flipped = true;
+        break;
+      }
+    }
+    if (!flipped) {
+      m.legalize(link);
+      return false;
+    }
+  }
+  const std::vector<mesh::ElementHandle> star = c.star(v);
+  const auto t = starting_at(oriented(c.simplex(star[0])), v);
+  const std::array<Index, 3> outer{t[1], t[2], third(c, left_of(c, v, t[2]), v, t[2])};
+  if (!m.replace(star, {outer})) {
+    m.legalize(link);
+    return false;
+  }
+  for (size_t i = 0; i < 3; ++i) link.push_back(make_edge(outer[i], outer[(i + 1) % 3]));
+  m.legalize(link);
+  return true;
+}
+
+}  // namespace incise::delaunay::detail
