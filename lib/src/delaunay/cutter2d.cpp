@@ -354,54 +354,9 @@ bool Cutter2D::exit_at(Index p, Index q, const Vec2& x, CutMove2DReport& r) {
     }
     if (!flipped) break;
   }
-  const ElementHandle t1 = mesh_.left_of(active_, n), t2 = mesh_.left_of(n, active_);
-  if (!t1.valid() || !t2.valid()) {
+  const Index n2 = detail::dissect_and_contract(mesh_, active_, n);
+  if (n2 < 0) {
     ++r.refused;  // n stays a boundary node; the incision goes on
-    return false;
-  }
-  // Fans around a (from its outgoing boundary edge, counter-clockwise) and around n.
-  auto fan = [&](Index v) {
-    std::vector<ElementHandle> out;
-    ElementHandle start;
-    for (const ElementHandle e : mesh_.connectivity().star(v)) {
-      const auto t = starting_at(mesh_.triangle(e), v);
-      if (mesh_.is_boundary_edge(v, t[1])) start = e;
-    }
-    for (ElementHandle e = start; e.valid() && out.size() <= mesh_.connectivity().star(v).size();) {
-      out.push_back(e);
-      const auto t = starting_at(mesh_.triangle(e), v);
-      e = mesh_.left_of(v, t[2]);
-    }
-    return out;
-  };
-  const std::vector<ElementHandle> fa = fan(active_), fn = fan(n);
-  const auto ia1 = std::find(fa.begin(), fa.end(), t1), ia2 = std::find(fa.begin(), fa.end(), t2);
-  const auto in1 = std::find(fn.begin(), fn.end(), t1), in2 = std::find(fn.begin(), fn.end(), t2);
-  if (ia1 == fa.end() || ia2 == fa.end() || in1 == fn.end() || in2 == fn.end()) {
-    ++r.refused;
-    return false;
-  }
-  const Index n2 = mesh_.add_vertex(mesh_.point(n));
-  std::vector<ElementHandle> remove;
-  std::vector<std::array<Index, 3>> add;
-  auto substituted = [&](ElementHandle e, Index from, Index to) {
-    auto t = mesh_.triangle(e);
-    for (Index& v : t)
-      if (v == from) v = to;
-    return t;
-  };
-  for (auto it = fa.begin(); it != fa.end(); ++it) {
-    remove.push_back(*it);
-    if (*it == t1 || *it == t2) continue;
-    // Before t2 (counter-clockwise from the outgoing edge a → c_r): the c_r side, copy n2.
-    add.push_back(substituted(*it, active_, it < ia2 ? n2 : n));
-  }
-  for (auto it = in2 + 1; it != fn.end(); ++it) {  // n's fan after t2: the c_r side
-    remove.push_back(*it);
-    add.push_back(substituted(*it, n, n2));
-  }
-  if (!mesh_.replace(remove, add)) {
-    ++r.refused;
     return false;
   }
   r.exited = true;

@@ -156,4 +156,57 @@ bool remove_by_ears(Mesh& m, Index v) {
   return true;
 }
 
+/// The exit of an incision (§5.2.2, Fig. 5.7 (c)–(d)): the interior edge a–n between the active
+/// node a and the boundary node n is dissected and contracted into n. The triangles at a–n go;
+/// a's other triangles take n (the c_l side) or a new copy n2 of n (the c_r side), and so do
+/// n's triangles on the c_r side. Returns n2, or −1 with the mesh unchanged when a–n is not an
+/// interior edge, a or n is not a boundary fan, or m.replace refuses (n2 then stays unused).
+/// Mesh needs connectivity(), triangle(e), left_of, is_boundary_edge, point, add_vertex, replace.
+template <class Mesh>
+Index dissect_and_contract(Mesh& m, Index a, Index n) {
+  const mesh::Connectivity& c = m.connectivity();
+  const mesh::ElementHandle t1 = left_of(c, a, n), t2 = left_of(c, n, a);
+  if (!t1.valid() || !t2.valid()) return -1;
+  // Fans around v from its outgoing boundary edge, in orientation order.
+  auto fan = [&](Index v) {
+    std::vector<mesh::ElementHandle> out;
+    mesh::ElementHandle start;
+    for (const mesh::ElementHandle e : c.star(v)) {
+      const auto t = starting_at(m.triangle(e), v);
+      if (m.is_boundary_edge(v, t[1])) start = e;
+    }
+    for (mesh::ElementHandle e = start; e.valid() && out.size() <= c.star(v).size();) {
+      out.push_back(e);
+      e = left_of(c, v, starting_at(m.triangle(e), v)[2]);
+    }
+    return out;
+  };
+  const std::vector<mesh::ElementHandle> fa = fan(a), fn = fan(n);
+  const auto ia2 = std::find(fa.begin(), fa.end(), t2), in2 = std::find(fn.begin(), fn.end(), t2);
+  if (std::find(fa.begin(), fa.end(), t1) == fa.end() || ia2 == fa.end() ||
+      std::find(fn.begin(), fn.end(), t1) == fn.end() || in2 == fn.end())
+    return -1;
+  const Index n2 = m.add_vertex(m.point(n));
+  std::vector<mesh::ElementHandle> remove;
+  std::vector<std::array<Index, 3>> add;
+  auto substituted = [&](mesh::ElementHandle e, Index from, Index to) {
+    auto t = m.triangle(e);
+    for (Index& v : t)
+      if (v == from) v = to;
+    return t;
+  };
+  for (auto it = fa.begin(); it != fa.end(); ++it) {
+    remove.push_back(*it);
+    if (*it == t1 || *it == t2) continue;
+    // Before t2 (from the outgoing edge a → c_r): the c_r side, copy n2.
+    add.push_back(substituted(*it, a, it < ia2 ? n2 : n));
+  }
+  for (auto it = in2 + 1; it != fn.end(); ++it) {  // n's fan after t2: the c_r side
+    remove.push_back(*it);
+    add.push_back(substituted(*it, n, n2));
+  }
+  if (!m.replace(remove, add)) return -1;
+  return n2;
+}
+
 }  // namespace incise::delaunay::detail
