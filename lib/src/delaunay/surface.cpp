@@ -25,6 +25,25 @@ bool shaped(const Vec3& a, const Vec3& b, const Vec3& c) {
   return area2 >= kSurfaceMinShape * longest && longest > 0;
 }
 
+/// cos of the angle between u and w (1 when either is zero).
+double cosine(const Vec3& u, const Vec3& w) {
+  const double l = u.norm() * w.norm();
+  return l > 0 ? u.dot(w) / l : 1.0;
+}
+
+/// The crease between a new triangle normal n and a neighbour normal m is admissible when it is
+/// no sharper than 60° (cos ≥ kCreaseCos), or no sharper than the crease it replaces, between
+/// old_n and old_m. 60°: the shapes cut here have neighbouring normals within ~15° (h̄/R), so a
+/// sharper crease is made by the cutter, not by the surface; an existing sharp crease is kept
+/// from getting worse but does not block the cutter.
+constexpr double kCreaseCos = 0.5;
+bool crease_ok(const Vec3& n, const Vec3& m, const Vec3& old_n, const Vec3& old_m) {
+  return cosine(n, m) >= std::min(kCreaseCos, cosine(old_n, old_m));
+}
+bool crease_ok(const Vec3& n, const Vec3& m, const Vec3& old_n) {
+  return crease_ok(n, m, old_n, m);
+}
+
 /// The unfolding of §5.3.1: planar coordinates of p, q, c, d with p = 0, q on the x-axis, c
 /// above and d below, at their true distances from p and q.
 std::array<Vec2, 4> unfold(const Vec3& p, const Vec3& q, const Vec3& c, const Vec3& d) {
@@ -152,9 +171,53 @@ bool Surface::is_locally_delaunay(Index p, Index q) const {
   return unfolded_incircle(point(p), point(q), point(c), point(d)) <= 0;
 }
 
-bool Surface::acceptable(const std::array<Index, 3>& t, const Vec3& reference) const {
-  const Vec3 a = point(t[0]), b = point(t[1]), c = point(t[2]);
-  return shaped(a, b, c) && (b - a).cross(c - a).dot(reference) > 0;
+bool Surface::admissible(const std::vector<ElementHandle>& remove,
+                         const std::vector<std::array<Index, 3>>& add) const {
+  auto removed = [&](ElementHandle e) {
+    return std::find(remove.begin(), remove.end(), e) != remove.end();
+  };
+  Vec3 all = Vec3::Zero();
+  for (const ElementHandle e : remove) all += area_normal(e);
+  std::vector<Vec3> normal(add.size()), origin(add.size());
+  for (size_t k = 0; k < add.size(); ++k) {
+    const auto& t = add[k];
+    for (const Index v : t)
+      if (v < 0 || v >= conn_.num_vertices()) return false;
+    const Vec3 a = point(t[0]), b = point(t[1]), c = point(t[2]);
+    if (!shaped(a, b, c)) return false;
+    normal[k] = (b - a).cross(c - a);
+    // Its origin: the removed triangles it shares an edge with (a substituted or split
+    // triangle's), else all removed, else (pure addition) the triangles at its vertices.
+    Vec3 ref = Vec3::Zero();
+    for (const ElementHandle e : remove) {
+      const auto o = triangle(e);
+      int shared = 0;
+      for (const Index v : t) shared += std::count(o.begin(), o.end(), v) > 0;
+      if (shared >= 2) ref += area_normal(e);
+    }
+    if (ref.isZero()) ref = all;
+    if (remove.empty())
+      for (const Index v : t)
+        for (const ElementHandle e : conn_.star(v)) ref += area_normal(e);
+    origin[k] = ref;
+    if (!(normal[k].dot(ref) > 0)) return false;  // turned over
+    // Creases with the staying triangles across its edges.
+    for (size_t i = 0; i < 3; ++i) {
+      const ElementHandle beyond = left_of(t[(i + 1) % 3], t[i]);
+      if (!beyond.valid() || removed(beyond)) continue;
+      const ElementHandle before = left_of(t[i], t[(i + 1) % 3]);
+      const Vec3 old = before.valid() && removed(before) ? area_normal(before) : ref;
+      if (!crease_ok(normal[k], area_normal(beyond), old)) return false;
+    }
+  }
+  // Creases between new triangles sharing an edge.
+  for (size_t k = 0; k < add.size(); ++k)
+    for (size_t l = k + 1; l < add.size(); ++l) {
+      int shared = 0;
+      for (const Index v : add[k]) shared += std::count(add[l].begin(), add[l].end(), v) > 0;
+      if (shared >= 2 && !crease_ok(normal[k], normal[l], origin[k], origin[l])) return false;
+    }
+  return true;
 }
 
 FlipStatus Surface::try_flip(Index p, Index q) {
@@ -170,16 +233,23 @@ FlipStatus Surface::try_flip(Index p, Index q) {
   const auto u = unfold(point(p), point(q), point(c), point(d));
   if (orient2d(u[2], u[3], u[1]) <= 0 || orient2d(u[3], u[2], u[0]) <= 0)
     return FlipStatus::kNotConvex;
-  const Vec3 reference = area_normal(l) + area_normal(r);
-  if (!acceptable({c, d, q}, reference) || !acceptable({d, c, p}, reference))
-    return FlipStatus::kShape;
+  if (!admissible({l, r}, {{c, d, q}, {d, c, p}})) return FlipStatus::kShape;
   conn_.replace_elements({l, r}, {Simplex({c, d, q}), Simplex({d, c, p})});
   ++flips_;
   return FlipStatus::kFlipped;
 }
 
 long Surface::legalize(std::vector<Edge> edges) {
-  const long made = detail::lawson_legalize(*this, std::move(edges), kMaxFlipsPerLegalize);
+  // Whether a flip is admissible depends on the creases with the triangles around the
+  // quadrilateral (admissible()), so an edge refused early may become flippable after later
+  // flips: the refused edges are retried until a pass flips nothing.
+  long made = 0;
+  for (long pass = -1; pass != 0 && made < kMaxFlipsPerLegalize;) {
+    std::vector<Edge> refused;
+    pass = detail::lawson_legalize(*this, std::move(edges), kMaxFlipsPerLegalize - made, &refused);
+    made += pass;
+    edges = std::move(refused);
+  }
   if (made >= kMaxFlipsPerLegalize) ++capped_;
   return made;
 }
@@ -200,10 +270,28 @@ Index Surface::add_vertex(const Vec3& x) {
 
 bool Surface::move_vertex(Index v, const Vec3& x) {
   if (!x.allFinite()) return false;
-  for (const ElementHandle e : conn_.star(v)) {
-    const auto t = detail::starting_at(triangle(e), v);
-    const Vec3 b = point(t[1]), c = point(t[2]);
-    if (!shaped(x, b, c) || (b - x).cross(c - x).dot(area_normal(e)) <= 0) return false;
+  // Each star triangle (v, b, c) at x: above the shape floor, not turned over, and no crease
+  // made sharper than 60° (unless it was, then not sharper than it was) with the triangle
+  // beyond bc — which does not move, so no triangle folds over in several small turns — nor
+  // with its star neighbour across v–c.
+  const std::vector<ElementHandle> star = conn_.star(v);
+  std::vector<std::array<Vec3, 2>> after(star.size());  // new and old normal
+  std::vector<Index> second(star.size());
+  for (size_t k = 0; k < star.size(); ++k) {
+    const auto t = detail::starting_at(triangle(star[k]), v);
+    const Vec3 b = point(t[1]), c = point(t[2]), old = area_normal(star[k]);
+    const Vec3 n = (b - x).cross(c - x);
+    if (!shaped(x, b, c) || !(n.dot(old) > 0)) return false;
+    const ElementHandle beyond = left_of(t[2], t[1]);
+    if (beyond.valid() && !crease_ok(n, area_normal(beyond), old)) return false;
+    after[k] = {n, old};
+    second[k] = t[1];
+  }
+  for (size_t k = 0; k < star.size(); ++k) {
+    const Index c = detail::starting_at(triangle(star[k]), v)[2];
+    for (size_t l = 0; l < star.size(); ++l)
+      if (second[l] == c && !crease_ok(after[k][0], after[l][0], after[k][1], after[l][1]))
+        return false;
   }
   points_.col(v) = x;
   return true;
@@ -211,19 +299,9 @@ bool Surface::move_vertex(Index v, const Vec3& x) {
 
 bool Surface::replace(const std::vector<ElementHandle>& remove,
                       const std::vector<std::array<Index, 3>>& add) {
-  Vec3 reference = Vec3::Zero();
-  for (const ElementHandle e : remove) reference += area_normal(e);
+  if (!admissible(remove, add)) return false;
   std::vector<Simplex> simplices;
-  for (const auto& t : add) {
-    for (const Index v : t)
-      if (v < 0 || v >= conn_.num_vertices()) return false;
-    Vec3 ref = reference;
-    if (remove.empty())
-      for (const Index v : t)
-        for (const ElementHandle e : conn_.star(v)) ref += area_normal(e);
-    if (!acceptable(t, ref)) return false;
-    simplices.emplace_back(Simplex({t[0], t[1], t[2]}));
-  }
+  for (const auto& t : add) simplices.emplace_back(Simplex({t[0], t[1], t[2]}));
   conn_.replace_elements(remove, simplices);
   return true;
 }

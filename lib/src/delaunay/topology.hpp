@@ -90,9 +90,11 @@ inline std::vector<Index> neighbours(const mesh::Connectivity& c, Index v) {
 
 /// Lawson legalization (§5.2.1): flips edges that are not locally Delaunay, starting from
 /// `edges` and continuing with the four outer edges of every flip, at most `max_flips` flips.
-/// Returns the number made. Mesh needs is_locally_delaunay(p, q), flip(p, q), connectivity().
+/// Returns the number made; illegal edges whose flip m refused go to `refused` when given.
+/// Mesh needs is_locally_delaunay(p, q), flip(p, q), connectivity().
 template <class Mesh>
-long lawson_legalize(Mesh& m, std::vector<Edge> edges, long max_flips) {
+long lawson_legalize(Mesh& m, std::vector<Edge> edges, long max_flips,
+                     std::vector<Edge>* refused = nullptr) {
   long made = 0;
   while (!edges.empty() && made < max_flips) {
     const Edge e = edges.back();
@@ -101,7 +103,10 @@ long lawson_legalize(Mesh& m, std::vector<Edge> edges, long max_flips) {
     const auto& c = m.connectivity();
     const mesh::ElementHandle l = left_of(c, e.first, e.second), r = left_of(c, e.second, e.first);
     const Index o1 = third(c, l, e.first, e.second), o2 = third(c, r, e.second, e.first);
-    if (!m.flip(e.first, e.second)) continue;
+    if (!m.flip(e.first, e.second)) {
+      if (refused) refused->push_back(e);
+      continue;
+    }
     ++made;
     for (const Edge& o : {make_edge(e.first, o1), make_edge(o1, e.second), make_edge(e.second, o2),
                           make_edge(o2, e.first)})

@@ -138,7 +138,8 @@ class Surface {
   /// A new vertex at x without triangles. Throws ParameterError for a non-finite x.
   Index add_vertex(const Vec3& x);
   /// Moves v to x when every triangle of its star passes the shape floor and keeps its normal
-  /// within 90° of the current one; false (unchanged) otherwise.
+  /// within 90° of its current one, of the triangle beyond its edge opposite v, and of its star
+  /// neighbours; false (unchanged) otherwise.
   bool move_vertex(Index v, const Vec3& x);
   /// Replaces the triangles `remove` by `add` (vertex triples in orientation order) in one
   /// replace_elements call when every new triangle passes the shape floor and its normal makes
@@ -165,7 +166,8 @@ class Surface {
   std::pair<double, double> angle_range() const;
 
  private:
-  bool acceptable(const std::array<Index, 3>& t, const Vec3& reference) const;
+  bool admissible(const std::vector<mesh::ElementHandle>& remove,
+                  const std::vector<std::array<Index, 3>>& add) const;
 
   mesh::Connectivity conn_;
   Eigen::Matrix3Xd points_;

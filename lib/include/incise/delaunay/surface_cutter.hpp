@@ -1,0 +1,126 @@
+#pragma once
+/// \file surface_cutter.hpp
+/// Delaunay cutting of a triangle surface in 3D by a line-segment scalpel, one incision at a
+/// time (thesis §5.3.1, Figs. 5.9–5.11; the planar scheme of §5.2.2 carried to the surface).
+///
+/// The scalpel is a segment whose ends move at constant velocity between the sampled positions
+/// given to move_to. Each movement:
+///  0. outside the surface: the sweep is intersected with every boundary edge (eq. (5.1),
+///     sweep.hpp); at the earliest contact the scalpel enters (Fig. 5.12, first case): the active
+///     node is the edge's end within ε_entry, or a new node on the edge. The rest of the movement
+///     is processed as below;
+///  1. the movement is subdivided so that neither scalpel end moves by d_max or more per
+///     sub-movement (Fig. 5.11: d_max = the smallest distance from the scalpel to an edge
+///     opposite the active node; floored at 10⁻³ h̄, see the .cpp);
+///  2. per sub-movement, a sweep that crosses a boundary edge opposite the active node (eq. (5.1))
+///     is an exit there; otherwise the scalpel segment is intersected with the active triangles
+///     (the star of the active node) and the active node moves to the intersection — in halving
+///     steps when a star triangle would fold or flatten (surface.hpp guards), with the active
+///     triangles legalized by the unfolded criterion and interior nodes closer than ε_edge
+///     removed by ear flips (Fig. 5.10) after each step;
+///  3. the incision is split behind the active node as in Fig. 5.5 when the cut edges fail the
+///     unfolded empty-circle test (new nodes where the path is closest to the line between the
+///     opposite nodes, dilated by δ);
+///  4. entry fix-up (Fig. 5.6) once the active node is ε_entry from the entry point; exit
+///     (Fig. 5.7) when the sweep crosses a boundary edge of the star or the active node comes
+///     within ε_exit of one: a node on that edge, the edge to it dissected and contracted.
+/// A scalpel that no longer meets the active triangles (lifted off the surface, or a jump past
+/// the d_max floor) ends the incision where it is (status kLost: the slit stays, the mesh is
+/// valid). Only one incision is active at a time: tip entry, entry through an interior edge,
+/// several active nodes, annihilation and branching (§5.3.2) are not built (docs/delaunay.md).
+/// Thresholds are fractions of the starting mesh's mean edge length h̄ (Cutter2DOptions, §5.4
+/// defaults). Boundary edges are found by a scan of the connectivity's boundary map: the cost of
+/// an outside movement grows with the boundary (no spatial index yet).
+
+#include <incise/core/outcome.hpp>
+#include <incise/delaunay/cutter2d.hpp>
+#include <incise/delaunay/incision_track.hpp>
+#include <incise/delaunay/surface.hpp>
+#include <incise/delaunay/sweep.hpp>
+
+#include <functional>
+#include <vector>
+
+namespace incise::delaunay {
+
+/// Outcome of one surface scalpel movement.
+enum class SurfaceMoveStatus {
+  kOk,       ///< the active node reached the scalpel (or the scalpel is outside the surface)
+  kBlocked,  ///< the active node stopped short (a fold or flat triangle ahead, sub-step cap)
+  kLost,     ///< the scalpel left the active triangles other than by an exit: incision ended
+};
+
+/// Name of a SurfaceMoveStatus ("ok", "blocked", "lost").
+const char* to_string(SurfaceMoveStatus status);
+
+/// Report of one surface movement (counts of this movement).
+struct [[nodiscard]] SurfaceMoveReport
+    : Outcome<SurfaceMoveStatus, SurfaceMoveStatus::kOk, SurfaceMoveStatus::kOk> {
+  CutPhase phase = CutPhase::kOutside;  ///< the phase after the movement
+  bool entered = false;                 ///< the scalpel entered the surface
+  bool fixed_up = false;                ///< the entry fix-up was made
+  bool exited = false;                  ///< the incision reached the boundary (exit)
+  int submovements = 0;                 ///< d_max sub-movements (Fig. 5.11)
+  int substeps = 0;                     ///< moves of the active node
+  long flips = 0;                       ///< edge flips
+  long topological_refusals = 0;        ///< flips refused as in Fig. 5.9
+  int removals = 0;                     ///< interior nodes removed
+  int splits = 0;                       ///< incision splits (new node pairs)
+  int refused = 0;                      ///< splits, fix-ups or exits the guards refused
+  int extra_intersections = 0;          ///< further scalpel–star intersections (not followed)
+};
+
+/// Delaunay cutter of a triangle surface (see file comment).
+class SurfaceCutter {
+ public:
+  /// Takes the surface to cut; thresholds from `options` (the fields edge, entry, exit,
+  /// dilation, max_substeps; short_edge must be kDistance) times its mean edge length. Throws
+  /// ParameterError for thresholds ≤ 0 or non-finite, dilation outside (0, 0.1],
+  /// max_substeps < 1, or short_edge = kAngle.
+  explicit SurfaceCutter(Surface& surface, Cutter2DOptions options = {});
+
+  /// Moves the scalpel to s (m). The first call only places it. Throws ParameterError for a
+  /// non-finite position or a zero-length scalpel.
+  SurfaceMoveReport move_to(const ScalpelSegment& s);
+
+  /// Current phase.
+  CutPhase phase() const { return phase_; }
+  /// The active node, −1 outside.
+  Index active() const { return active_; }
+  /// Mean edge length h̄ of the starting surface (m).
+  double mean_edge() const { return h_; }
+  /// The incision nodes of the current and finished incisions, in path order per side.
+  const std::vector<std::vector<Index>>& incision_sides() const { return track_.sides; }
+
+ private:
+  bool find_entry(const ScalpelSegment& from, const ScalpelSegment& to, Index& p, Index& q,
+                  SweepHit& hit) const;
+  bool star_intersection(const ScalpelSegment& s, Vec3& x, SurfaceMoveReport& r) const;
+  bool sweep_exit(const ScalpelSegment& from, const ScalpelSegment& to, Index& p, Index& q,
+                  Vec3& x) const;
+  bool near_exit(Index& p, Index& q, Vec3& x) const;
+  bool pick_exit_edge(const std::function<double(const Vec3&, const Vec3&, Vec3&)>& key,
+                      double limit, Index& p, Index& q, Vec3& x) const;
+  double d_max(const ScalpelSegment& s) const;
+  void move_active(const Vec3& target, SurfaceMoveReport& r);
+  void remove_close_nodes(SurfaceMoveReport& r);
+  void fix_up(SurfaceMoveReport& r);
+  void split_incision(SurfaceMoveReport& r);
+  bool exit_at(Index p, Index q, const Vec3& x, SurfaceMoveReport& r);
+  bool is_forbidden(Index p, Index q) const;
+  void end_incision();
+
+  Surface& mesh_;
+  Cutter2DOptions options_;
+  double h_ = 0, eps_edge_ = 0, eps_entry_ = 0, eps_exit_ = 0, delta_ = 0;
+  CutPhase phase_ = CutPhase::kOutside;
+  bool placed_ = false;
+  ScalpelSegment scalpel_;
+  Index active_ = -1;
+  Vec3 entry_ = Vec3::Zero();
+  IncisionTrack<Vec3> track_;  // last node pair, active-node path since it, all sides
+  std::vector<Edge> forbidden_;
+  Vec3 forbidden_near_ = Vec3::Zero();
+};
+
+}  // namespace incise::delaunay

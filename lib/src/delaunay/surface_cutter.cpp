@@ -1,0 +1,412 @@
+#include <incise/delaunay/surface_cutter.hpp>
+
+#include "incision.hpp"
+#include "topology.hpp"
+
+#include <incise/core/error.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <string>
+
+namespace incise::delaunay {
+namespace {
+
+using detail::starting_at;
+using mesh::ElementHandle;
+
+/// Closest point of segment pq to x.
+Vec3 closest_on(const Vec3& p, const Vec3& q, const Vec3& x) {
+  const Vec3 d = q - p;
+  const double l2 = d.squaredNorm();
+  return l2 > 0 ? Vec3(p + std::clamp((x - p).dot(d) / l2, 0.0, 1.0) * d) : p;
+}
+
+/// Intersection of the segment tail → head with triangle (a, b, c) (Möller–Trumbore), closed
+/// within a relative 1e-9 (a scalpel through a shared edge or vertex is found in every triangle
+/// there; double-precision barycentrics are good to ~1e-15, 1e-9 keeps the closed test stable).
+bool segment_triangle(const ScalpelSegment& s, const Vec3& a, const Vec3& b, const Vec3& c,
+                      Vec3& x) {
+  constexpr double kTol = 1e-9;
+  const Vec3 d = s.head - s.tail, e1 = b - a, e2 = c - a;
+  const Vec3 pv = d.cross(e2);
+  const double det = e1.dot(pv);
+  if (!(std::abs(det) > 1e-14 * d.norm() * e1.norm() * e2.norm())) return false;
+  const Vec3 tv = s.tail - a, qv = tv.cross(e1);
+  const double u = tv.dot(pv) / det, v = d.dot(qv) / det, t = e2.dot(qv) / det;
+  if (u < -kTol || v < -kTol || u + v > 1 + kTol || t < -kTol || t > 1 + kTol) return false;
+  const double uc = std::clamp(u, 0.0, 1.0), vc = std::clamp(v, 0.0, 1.0 - uc);
+  x = a + uc * e1 + vc * e2;
+  return true;
+}
+
+}  // namespace
+
+const char* to_string(SurfaceMoveStatus status) {
+  switch (status) {
+    case SurfaceMoveStatus::kOk: return "ok";
+    case SurfaceMoveStatus::kBlocked: return "blocked";
+    case SurfaceMoveStatus::kLost: return "lost";
+  }
+  return "?";
+}
+
+SurfaceCutter::SurfaceCutter(Surface& surface, Cutter2DOptions options)
+    : mesh_(surface), options_(options) {
+  auto positive = [](double x) { return std::isfinite(x) && x > 0; };
+  INCISE_CHECK_PARAM(positive(options.edge) && positive(options.entry) && positive(options.exit),
+                     "SurfaceCutter: thresholds edge, entry and exit must be finite and > 0");
+  INCISE_CHECK_PARAM(positive(options.dilation) && options.dilation <= 0.1,
+                     "SurfaceCutter: dilation must be in (0, 0.1] (a fraction of the mean edge)");
+  INCISE_CHECK_PARAM(options.max_substeps >= 1, "SurfaceCutter: max_substeps must be >= 1");
+  INCISE_CHECK_PARAM(options.short_edge == ShortEdgeRule::kDistance,
+                     "SurfaceCutter: only the distance rule (kDistance) is built for surfaces");
+  const std::vector<Edge> edges = mesh_.edges();
+  INCISE_CHECK_PARAM(!edges.empty(), "SurfaceCutter: the surface has no edges");
+  double sum = 0;
+  for (const Edge& e : edges) sum += (mesh_.point(e.first) - mesh_.point(e.second)).norm();
+  h_ = sum / static_cast<double>(edges.size());
+  eps_edge_ = options.edge * h_;
+  eps_entry_ = options.entry * h_;
+  eps_exit_ = options.exit * h_;
+  delta_ = options.dilation * h_;
+}
+
+bool SurfaceCutter::is_forbidden(Index p, Index q) const {
+  return std::find(forbidden_.begin(), forbidden_.end(), make_edge(p, q)) != forbidden_.end();
+}
+
+bool SurfaceCutter::find_entry(const ScalpelSegment& from, const ScalpelSegment& to, Index& p,
+                               Index& q, SweepHit& hit) const {
+  // Eq. (5.1) against every boundary edge; the earliest entering contact wins, ties broken by
+  // the edge's vertex numbers (deterministic order of coinciding events).
+  const mesh::Connectivity& c = mesh_.connectivity();
+  bool found = false;
+  for (const mesh::FaceHandle f : c.boundary()) {
+    const mesh::Simplex& s = c.simplex(f);
+    const Index u = s.vertex(0), w = s.vertex(1);
+    if (is_forbidden(u, w)) continue;
+    const Vec3 pu = mesh_.point(u), pw = mesh_.point(w);
+    for (const SweepHit& h : intersect_sweep_edge(from, to, pu, pw).hits) {
+      // Entering: the contact point moves towards the triangle's side of the edge.
+      const ElementHandle e = c.element(f);
+      const Vec3 pr = mesh_.point(detail::third(c, e, u, w));
+      const Vec3 along = (pw - pu).normalized();
+      Vec3 inward = pr - pu;
+      inward -= inward.dot(along) * along;
+      const Vec3 velocity =
+          h.lambda * (to.head - from.head) + (1 - h.lambda) * (to.tail - from.tail);
+      if (!(velocity.dot(inward) > 0)) continue;
+      if (!found || h.time < hit.time ||
+          (h.time == hit.time && make_edge(u, w) < make_edge(p, q))) {
+        found = true;
+        hit = h;
+        p = u;
+        q = w;
+      }
+      break;  // the earliest contact with this edge
+    }
+  }
+  return found;
+}
+
+bool SurfaceCutter::star_intersection(const ScalpelSegment& s, Vec3& x,
+                                      SurfaceMoveReport& r) const {
+  const Vec3 a = mesh_.point(active_);
+  std::vector<Vec3> hits;
+  for (const ElementHandle e : mesh_.connectivity().star(active_)) {
+    const auto t = mesh_.triangle(e);
+    Vec3 y;
+    if (!segment_triangle(s, mesh_.point(t[0]), mesh_.point(t[1]), mesh_.point(t[2]), y)) continue;
+    bool known = false;
+    for (const Vec3& z : hits) known = known || (z - y).norm() <= 1e-9 * h_;
+    if (!known) hits.push_back(y);
+  }
+  if (hits.empty()) return false;
+  // §5.3.1 follows a single intersection; more (a folded star, Fig. 5.14) would branch, which
+  // is not built: the one nearest the active node is followed and the rest counted.
+  std::sort(hits.begin(), hits.end(), [&](const Vec3& u, const Vec3& w) {
+    return (u - a).squaredNorm() < (w - a).squaredNorm();
+  });
+  r.extra_intersections += static_cast<int>(hits.size()) - 1;
+  x = hits.front();
+  return true;
+}
+
+double SurfaceCutter::d_max(const ScalpelSegment& s) const {
+  // Fig. 5.11: the smallest distance from the scalpel to an edge opposite the active node.
+  double d = std::numeric_limits<double>::infinity();
+  for (const ElementHandle e : mesh_.connectivity().star(active_)) {
+    const auto t = starting_at(mesh_.triangle(e), active_);
+    d = std::min(d, max_movement(s, mesh_.point(t[1]), mesh_.point(t[2])));
+  }
+  return d;
+}
+
+bool SurfaceCutter::pick_exit_edge(
+    const std::function<double(const Vec3&, const Vec3&, Vec3&)>& key, double limit, Index& p,
+    Index& q, Vec3& x) const {
+  // Over the boundary edges opposite the active node (not forbidden): the smallest key below
+  // `limit`, ties broken by the edge's vertex numbers (coinciding events in a fixed order).
+  bool found = false;
+  double best = limit;
+  for (const ElementHandle e : mesh_.connectivity().star(active_)) {
+    const auto t = starting_at(mesh_.triangle(e), active_);
+    if (!mesh_.is_boundary_edge(t[1], t[2]) || is_forbidden(t[1], t[2])) continue;
+    Vec3 y;
+    const double k = key(mesh_.point(t[1]), mesh_.point(t[2]), y);
+    if (k < best || (found && k == best && make_edge(t[1], t[2]) < make_edge(p, q))) {
+      best = k;
+      found = true;
+      p = t[1];
+      q = t[2];
+      x = y;
+    }
+  }
+  return found;
+}
+
+bool SurfaceCutter::sweep_exit(const ScalpelSegment& from, const ScalpelSegment& to, Index& p,
+                               Index& q, Vec3& x) const {
+  // The earliest contact of the sweep with such an edge (eq. (5.1)).
+  auto first_contact = [&](const Vec3& pu, const Vec3& pw, Vec3& y) {
+    const SweepEdgeResult res = intersect_sweep_edge(from, to, pu, pw);
+    if (res.hits.empty()) return std::numeric_limits<double>::infinity();
+    y = res.hits.front().mu * pu + (1 - res.hits.front().mu) * pw;
+    return res.hits.front().time;
+  };
+  return pick_exit_edge(first_contact, 2.0, p, q, x);
+}
+
+bool SurfaceCutter::near_exit(Index& p, Index& q, Vec3& x) const {
+  // Fig. 5.7, predicted exit: such an edge within ε_exit of the active node.
+  const Vec3 a = mesh_.point(active_);
+  auto distance = [&](const Vec3& pu, const Vec3& pw, Vec3& y) {
+    y = closest_on(pu, pw, a);
+    return (y - a).norm();
+  };
+  return pick_exit_edge(distance, eps_exit_, p, q, x);
+}
+
+void SurfaceCutter::remove_close_nodes(SurfaceMoveReport& r) {
+  const Vec3 a = mesh_.point(active_);
+  r.removals += detail::remove_close_nodes(
+      mesh_, active_, [&](Index v) { return (mesh_.point(v) - a).norm() < eps_edge_; },
+      [](Index) { return false; });
+}
+
+void SurfaceCutter::move_active(const Vec3& target, SurfaceMoveReport& r) {
+  int stalled = 0;  // consecutive partial steps without a mesh change
+  for (int step = 0; step < options_.max_substeps; ++step) {
+    const Vec3 a = mesh_.point(active_);
+    const Vec3 d = target - a;
+    if (d.norm() <= 1e-12 * h_) return;
+    // The whole way, else halves: a star triangle that would fold or flatten (surface.hpp
+    // guards) is approached, and the flips after the step may clear the way.
+    double s = 1;
+    bool moved = false;
+    for (int k = 0; k < 12 && !moved; ++k, s *= 0.5) moved = mesh_.move_vertex(active_, a + s * d);
+    s *= 2;  // the fraction taken
+    ++r.substeps;
+    if (!moved) {
+      r.status = SurfaceMoveStatus::kBlocked;
+      r.message =
+          "the active node cannot move towards the scalpel without folding or "
+          "flattening a triangle";
+      return;
+    }
+    const long changes = mesh_.num_flips() + r.removals + r.splits;
+    detail::legalize_star(mesh_, active_);
+    remove_close_nodes(r);
+    detail::legalize_star(mesh_, active_);
+    if (phase_ == CutPhase::kCutting) {
+      track_.path.push_back(mesh_.point(active_));
+      split_incision(r);
+    }
+    const bool changed = mesh_.num_flips() + r.removals + r.splits != changes;
+    stalled = (s < 1 && !changed) ? stalled + 1 : 0;
+    if (stalled >= 10) {
+      r.status = SurfaceMoveStatus::kBlocked;
+      r.message = "the active node stopped " +
+                  std::to_string((mesh_.point(active_) - target).norm() / h_) +
+                  " mean edge lengths short of the scalpel: a triangle ahead would fold or "
+                  "flatten against an edge that cannot be flipped";
+      return;
+    }
+  }
+  if ((mesh_.point(active_) - target).norm() > 1e-12 * h_) {
+    r.status = SurfaceMoveStatus::kBlocked;
+    r.message = "the active node stopped short of the scalpel after max_substeps steps";
+  }
+}
+
+void SurfaceCutter::fix_up(SurfaceMoveReport& r) {
+  // Fig. 5.6 on the surface (incision.hpp): the dent is filled, the incision starts.
+  if (!detail::fix_up(track_, mesh_, active_, entry_, delta_)) {
+    ++r.refused;  // the new vertices, if any, stay unused
+    return;
+  }
+  r.fixed_up = true;
+  phase_ = CutPhase::kCutting;
+}
+
+void SurfaceCutter::split_incision(SurfaceMoveReport& r) {
+  for (int k = 0; k < 16; ++k) {
+    ElementHandle tl, tr;
+    Index ol, orr;
+    if (!detail::cut_edge_triangles(track_, mesh_, active_, tl, tr, ol, orr)) return;
+    const Vec3 a = mesh_.point(active_),
+               c = 0.5 * (mesh_.point(track_.left) + mesh_.point(track_.right));
+    const Vec3 pl = mesh_.point(ol), pr = mesh_.point(orr);
+    // Fig. 5.5 by the unfolded criterion: the incision as the edge c–a between (c, a, o_l) and
+    // (a, c, o_r).
+    if (unfolded_incircle(c, a, pl, pr) <= 0) return;
+    // The path point closest to o_l o_r (§5.3.1); the later one on ties (nearer the tip).
+    double best = std::numeric_limits<double>::infinity();
+    Vec3 x = Vec3::Zero();
+    size_t seg = 0;
+    for (size_t i = 0; i + 1 < track_.path.size(); ++i) {
+      double s, u;
+      const double d = segment_distance(track_.path[i], track_.path[i + 1], pl, pr, s, u);
+      if (d <= best) {
+        best = d;
+        x = track_.path[i] + s * (track_.path[i + 1] - track_.path[i]);
+        seg = i;
+      }
+    }
+    if (!std::isfinite(best)) return;
+    if (!detail::split(track_, mesh_, active_, tl, tr, ol, orr, x, seg, delta_)) {
+      ++r.refused;  // two new vertices stay unused
+      return;
+    }
+    ++r.splits;
+  }
+}
+
+bool SurfaceCutter::exit_at(Index p, Index q, const Vec3& x, SurfaceMoveReport& r) {
+  const Index n = detail::boundary_node_at(mesh_, p, q, x, eps_exit_);
+  if (n < 0 || n == track_.left || n == track_.right ||
+      !detail::exit(track_, mesh_, active_, n, forbidden_)) {
+    ++r.refused;  // the incision goes on
+    return false;
+  }
+  r.exited = true;
+  forbidden_near_ = x;
+  phase_ = CutPhase::kOutside;
+  active_ = -1;
+  return true;
+}
+
+void SurfaceCutter::end_incision() {
+  phase_ = CutPhase::kOutside;
+  active_ = -1;
+  track_.path.clear();
+}
+
+SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
+  INCISE_CHECK_PARAM(s.head.allFinite() && s.tail.allFinite() &&
+                         s.head.cwiseAbs().maxCoeff() <= 1e60 &&
+                         s.tail.cwiseAbs().maxCoeff() <= 1e60,
+                     "SurfaceCutter::move_to: scalpel ends must be finite, |x| <= 1e60 m");
+  INCISE_CHECK_PARAM((s.head - s.tail).norm() > 0,
+                     "SurfaceCutter::move_to: the scalpel must have a positive length");
+  SurfaceMoveReport r;
+  const long flips_before = mesh_.num_flips(), topo_before = mesh_.num_topological_refusals();
+  auto finish = [&]() -> SurfaceMoveReport {
+    r.flips = mesh_.num_flips() - flips_before;
+    r.topological_refusals = mesh_.num_topological_refusals() - topo_before;
+    r.phase = phase_;
+    return r;
+  };
+  if (!placed_) {
+    placed_ = true;
+    scalpel_ = s;
+    return finish();
+  }
+  const ScalpelSegment from = scalpel_;
+  scalpel_ = s;
+  if (!forbidden_.empty()) {
+    const double away = (closest_on(s.tail, s.head, forbidden_near_) - forbidden_near_).norm();
+    if (away > 2 * eps_exit_) forbidden_.clear();
+  }
+  double tau = 0;
+  if (phase_ == CutPhase::kOutside) {
+    Index p, q;
+    SweepHit hit;
+    if (!find_entry(from, s, p, q, hit)) return finish();
+    const Vec3 x = hit.mu * mesh_.point(p) + (1 - hit.mu) * mesh_.point(q);
+    const Index a = detail::boundary_node_at(mesh_, p, q, x, eps_entry_);
+    if (a < 0) {
+      ++r.refused;
+      return finish();
+    }
+    r.entered = true;
+    active_ = a;
+    entry_ = mesh_.point(a);
+    phase_ = CutPhase::kDent;
+    tau = hit.time;
+  }
+  const double span =
+      std::max((s.head - from.head).norm(), (s.tail - from.tail).norm());  // per unit τ
+  ScalpelSegment cur = interpolate(from, s, tau);
+  const int cap = 4 * options_.max_substeps;
+  while (phase_ != CutPhase::kOutside) {
+    if (r.submovements >= cap) {
+      r.status = SurfaceMoveStatus::kBlocked;
+      r.message = "the movement needed more than " + std::to_string(cap) + " sub-movements";
+      break;
+    }
+    ++r.submovements;
+    // Fig. 5.11, floored at 10⁻³ h̄ (a scalpel that grazes an opposite edge would otherwise
+    // stall; the jump past it is then caught by the sweep and the intersection tests below).
+    const double dm = std::max(d_max(cur), 1e-3 * h_);
+    const double next_tau = span > 0 ? std::min(1.0, tau + dm / span) : 1.0;
+    const ScalpelSegment next = interpolate(from, s, next_tau);
+    Index p, q;
+    Vec3 x;
+    if (sweep_exit(cur, next, p, q, x)) {
+      if (phase_ == CutPhase::kDent) {
+        end_incision();  // through the surface before the fix-up: the dent stays
+        break;
+      }
+      // Stop ε_exit short of the crossing, then exit at the nearest boundary edge of the star.
+      const Vec3 a = mesh_.point(active_);
+      const double len = (x - a).norm();
+      move_active(len > eps_exit_ ? Vec3(x - eps_exit_ * (x - a) / len) : a, r);
+      Index pp, qq;
+      Vec3 xx;
+      if (phase_ == CutPhase::kCutting && near_exit(pp, qq, xx)) exit_at(pp, qq, xx, r);
+      if (phase_ != CutPhase::kOutside) {
+        r.status = SurfaceMoveStatus::kLost;
+        r.message =
+            "the scalpel left the surface across a boundary edge where no exit could "
+            "be made; the incision ends at the active node";
+        end_incision();
+      }
+      break;
+    }
+    Vec3 target;
+    if (!star_intersection(next, target, r)) {
+      r.status = SurfaceMoveStatus::kLost;
+      r.message =
+          "the scalpel no longer meets the active triangles; the incision ends at the "
+          "active node";
+      end_incision();
+      break;
+    }
+    move_active(target, r);
+    if (phase_ == CutPhase::kDent && (mesh_.point(active_) - entry_).norm() > eps_entry_) fix_up(r);
+    if (phase_ == CutPhase::kCutting) {
+      split_incision(r);
+      if (near_exit(p, q, x)) exit_at(p, q, x, r);
+    }
+    if (r.status != SurfaceMoveStatus::kOk || next_tau >= 1) break;
+    cur = next;
+    tau = next_tau;
+  }
+  return finish();
+}
+
+}  // namespace incise::delaunay
