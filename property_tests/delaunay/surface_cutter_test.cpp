@@ -4,6 +4,7 @@
 // active node, Fig. 5.7 exit) with validate() after every movement; seeded random paths; what
 // could not be done is a status, never a corrupt mesh.
 #include <incise/delaunay/surface_cutter.hpp>
+#include <incise/io/read_mesh.hpp>
 #include <incise/mesh/validate.hpp>
 #include <incise_test/delaunay_support.hpp>
 #include <incise_test/seed.hpp>
@@ -13,16 +14,26 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
+#include <functional>
 #include <iostream>
 #include <random>
 
 namespace incise::delaunay {
 namespace {
 
+/// A surface to cut in the tests: its starting mesh, the scalpel at a point (u, v) of the
+/// parameter square (and beyond), and the outward side of the shape at a point near it.
+struct TestSurface {
+  std::function<mesh::MeshData()> mesh;
+  std::function<ScalpelSegment(double, double)> scalpel;
+  std::function<Vec3(const Vec3&)> up;
+};
+
 /// validate() (ch. 7 invariants), and the geometry the cutter promises (surface.hpp guards):
 /// every triangle keeps 2·area ≥ kSurfaceMinShape · longest edge² and does not face away from
 /// the side the shape faces at its centroid (no triangle folded over).
-::testing::AssertionResult valid(const Surface& s, SurfaceShape shape) {
+::testing::AssertionResult valid(const Surface& s, const TestSurface& shape) {
   const auto r = mesh::validate(s.connectivity());
   if (!r.ok())
     return ::testing::AssertionFailure()
@@ -30,16 +41,11 @@ namespace {
   for (const mesh::ElementHandle e : s.connectivity().elements()) {
     const auto t = s.triangle(e);
     const Vec3 a = s.point(t[0]), b = s.point(t[1]), c = s.point(t[2]);
-    const Vec3 g = (a + b + c) / 3, n = s.area_normal(e);
+    const Vec3 n = s.area_normal(e), up = shape.up((a + b + c) / 3);
     const double longest =
         std::max({(b - a).squaredNorm(), (c - a).squaredNorm(), (c - b).squaredNorm()});
     if (!(n.norm() >= kSurfaceMinShape * longest))
       return ::testing::AssertionFailure() << "triangle " << e.index << " below the shape floor";
-    Vec3 up;
-    if (shape == SurfaceShape::kCylinder)
-      up = Vec3(g.x(), 0, g.z());
-    else
-      surface_point(shape, (g.x() + 1) / 2, (g.y() + 1) / 2, &up);
     // Strictly negative beyond round-off: a triangle cut off from three nodes of the cylinder's
     // straight end (all in its end plane y = ±1) stands at exactly 90°, which is no fold.
     if (n.dot(up) < -1e-9 * n.norm() * up.norm())
@@ -55,6 +61,18 @@ ScalpelSegment scalpel_at(SurfaceShape shape, double u, double v) {
   Vec3 n;
   const Vec3 p = surface_point(shape, u, v, &n);
   return {p + 0.3 * n, p - 0.3 * n};
+}
+
+/// The generated shapes (surface.hpp), 10 × 10 grids.
+TestSurface generated(SurfaceShape shape) {
+  return {[shape] { return make_surface(shape, 10); },
+          [shape](double u, double v) { return scalpel_at(shape, u, v); },
+          [shape](const Vec3& g) {
+            Vec3 up(g.x(), 0, g.z());  // cylinder: radial
+            if (shape == SurfaceShape::kBell)
+              surface_point(shape, (g.x() + 1) / 2, (g.y() + 1) / 2, &up);
+            return up;
+          }};
 }
 
 struct Tally {
@@ -117,7 +135,7 @@ TEST(DelaunaySurfaceCutter, StraightCutAcrossTheCylinderPatchSeparatesIt) {
     t.add(r);
     ++t.validations;
     EXPECT_TRUE(r.ok()) << "movement " << k << ": " << r.message;
-    ASSERT_TRUE(valid(s, SurfaceShape::kCylinder)) << "after movement " << k;
+    ASSERT_TRUE(valid(s, generated(SurfaceShape::kCylinder))) << "after movement " << k;
   }
   EXPECT_EQ(t.entered, 1) << t;
   EXPECT_EQ(t.fixed, 1) << t;
@@ -140,12 +158,12 @@ TEST(DelaunaySurfaceCutter, StraightCutAcrossTheCylinderPatchSeparatesIt) {
 /// Random paths in the parameter square: each starts outside at a random side, heads inwards
 /// within ±45°, turns by up to ±`turn` rad per step of `step`, and ends when it leaves
 /// [−0.2, 1.2]² or after 200 steps. Several paths cut the same surface one after the other.
-Tally random_paths(SurfaceShape shape, int meshes, int paths_per_mesh, double turn, double step,
-                   std::mt19937_64& rng) {
+Tally random_paths(const TestSurface& shape, int meshes, int paths_per_mesh, double turn,
+                   double step, std::mt19937_64& rng) {
   std::uniform_real_distribution<double> U(0, 1);
   Tally t;
   for (int m = 0; m < meshes; ++m) {
-    Surface s(make_surface(shape, 10));
+    Surface s(shape.mesh());
     SurfaceCutter cutter(s);
     for (int p = 0; p < paths_per_mesh; ++p) {
       const int side = static_cast<int>(U(rng) * 4) % 4;
@@ -160,7 +178,7 @@ Tally random_paths(SurfaceShape shape, int meshes, int paths_per_mesh, double tu
       double y = side == 3 ? 1 + back : (side == 2 ? -back : v);
       if (side >= 2) x = u;
       for (int k = 0; k < 200; ++k) {
-        const auto r = cutter.move_to(scalpel_at(shape, x, y));
+        const auto r = cutter.move_to(shape.scalpel(x, y));
         t.add(r);
         const auto ok = valid(s, shape);
         ++t.validations;
@@ -178,8 +196,8 @@ Tally random_paths(SurfaceShape shape, int meshes, int paths_per_mesh, double tu
 
 TEST(DelaunaySurfaceCutter, RandomPathsThroughACylinderPatchKeepItValid) {
   INCISE_SEEDED_RNG(rng, 5301);
-  const Tally t =
-      random_paths(SurfaceShape::kCylinder, test::scaled_for_checks(6, 3), 3, 0.35, 0.03, rng);
+  const Tally t = random_paths(generated(SurfaceShape::kCylinder), test::scaled_for_checks(6, 3), 3,
+                               0.35, 0.03, rng);
   std::cout << "cylinder: " << t << "\n";
   EXPECT_GE(t.moves, test::scaled_for_checks(300, 3)) << t;
   EXPECT_GT(t.entered, 0) << t;
@@ -188,8 +206,8 @@ TEST(DelaunaySurfaceCutter, RandomPathsThroughACylinderPatchKeepItValid) {
 
 TEST(DelaunaySurfaceCutter, RandomPathsOverTheFig5_19BellKeepItValid) {
   INCISE_SEEDED_RNG(rng, 5319);
-  const Tally t =
-      random_paths(SurfaceShape::kBell, test::scaled_for_checks(6, 3), 3, 0.35, 0.03, rng);
+  const Tally t = random_paths(generated(SurfaceShape::kBell), test::scaled_for_checks(6, 3), 3,
+                               0.35, 0.03, rng);
   std::cout << "bell: " << t << "\n";
   EXPECT_GE(t.moves, test::scaled_for_checks(300, 3)) << t;
   EXPECT_GT(t.entered, 0) << t;
@@ -208,7 +226,7 @@ TEST(DelaunaySurfaceCutter, Fig5_11LargeMovementsAndSharpTurnsOnBothShapesKeepTh
   for (const double step : {0.03, 0.06, 0.12})
     for (const double turn : {0.35, 1.0, 2.0})
       for (const SurfaceShape shape : {SurfaceShape::kCylinder, SurfaceShape::kBell}) {
-        const Tally t = random_paths(shape, meshes, 3, turn, step, rng);
+        const Tally t = random_paths(generated(shape), meshes, 3, turn, step, rng);
         all.merge(t);
         if (::testing::Test::HasFailure()) {
           std::cout << "failed at step " << step << " turn " << turn << ": " << t << "\n";
@@ -220,6 +238,68 @@ TEST(DelaunaySurfaceCutter, Fig5_11LargeMovementsAndSharpTurnsOnBothShapesKeepTh
   EXPECT_GT(all.subdivided, all.moves / 10) << all;  // d_max subdivided the large movements
   EXPECT_GT(all.entered, 0) << all;
   EXPECT_GT(all.exited, 0) << all;
+}
+
+/// A spherical cap of radius 1 and polar angle 60° (a third shape, with the irregular valences
+/// of a ring triangulation: 6k nodes on ring k of `rings`, a fan at the pole), written as an
+/// OFF file and read back with io::read_off. Parameter (u, v) ↦ the gnomonic point
+/// normalize(x, y, 1), x, y = 4.4 (u − ½), 4.4 (v − ½): the cap's rim tan 60° = 1.73 lies
+/// inside the square, which runs to 2.2.
+TestSurface off_cap(const std::string& path, int rings) {
+  auto at = [](double x, double y) { return Vec3(x, y, 1).normalized(); };
+  {
+    std::vector<Vec3> points{Vec3(0, 0, 1)};
+    std::vector<std::array<int, 3>> tris;
+    std::vector<int> inner{0};
+    for (int k = 1; k <= rings; ++k) {
+      std::vector<int> outer;
+      const double r = std::tan(M_PI / 3) * k / rings;
+      for (int j = 0; j < 6 * k; ++j) {
+        const double phi = 2 * M_PI * j / (6 * k);
+        outer.push_back(static_cast<int>(points.size()));
+        points.push_back(at(r * std::cos(phi), r * std::sin(phi)));
+      }
+      // Merge the two rings by angle (counter-clockwise seen from outside the sphere).
+      const int ni = static_cast<int>(inner.size()), no = static_cast<int>(outer.size());
+      for (int i = 0, j = 0; i < (k == 1 ? 0 : ni) || j < no;) {
+        const double next_in = k == 1 ? 10.0 : (i + 1.0) / ni, next_out = (j + 1.0) / no;
+        if (j < no && (i >= ni || next_out <= next_in)) {
+          tris.push_back({inner[static_cast<size_t>(i % ni)], outer[static_cast<size_t>(j)],
+                          outer[static_cast<size_t>((j + 1) % no)]});
+          ++j;
+        } else {
+          tris.push_back({inner[static_cast<size_t>(i % ni)], outer[static_cast<size_t>(j % no)],
+                          inner[static_cast<size_t>((i + 1) % ni)]});
+          ++i;
+        }
+      }
+      inner = outer;
+    }
+    std::ofstream f(path);
+    f << "OFF\n" << points.size() << " " << tris.size() << " 0\n";
+    f.precision(17);
+    for (const Vec3& p : points) f << p.x() << " " << p.y() << " " << p.z() << "\n";
+    for (const auto& t : tris) f << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
+  }
+  return {[path] { return io::read_off(path).mesh; },
+          [at](double u, double v) {
+            const Vec3 p = at(4.4 * (u - 0.5), 4.4 * (v - 0.5));
+            return ScalpelSegment{1.3 * p, 0.7 * p};
+          },
+          [](const Vec3& g) { return g; }};
+}
+
+TEST(DelaunaySurfaceCutter, RandomPathsOverASphericalCapReadFromOffKeepItValid) {
+  const TestSurface cap = off_cap(::testing::TempDir() + "incise_surface_cap.off", 6);
+  const io::LoadedMesh loaded = io::read_off(::testing::TempDir() + "incise_surface_cap.off");
+  EXPECT_TRUE(loaded.report.surface);
+  EXPECT_EQ(loaded.mesh.num_cells(), 6 * 36);  // 6 k² triangles within ring k
+  INCISE_SEEDED_RNG(rng, 5312);
+  const Tally t = random_paths(cap, test::scaled_for_checks(4, 2), 6, 0.5, 0.02, rng);
+  std::cout << "spherical cap (OFF): " << t << "\n";
+  EXPECT_GE(t.moves, test::scaled_for_checks(200, 2)) << t;
+  EXPECT_GT(t.entered, 0) << t;
+  EXPECT_GT(t.exited, 0) << t;
 }
 
 TEST(DelaunaySurfaceCutter, RejectsBadScalpelsAndOptions) {
