@@ -311,8 +311,8 @@ TEST(DelaunaySurfaceCutter, RejectsBadScalpelsAndOptions) {
   angle.short_edge = ShortEdgeRule::kAngle;
   EXPECT_THROW(SurfaceCutter(s, angle), ParameterError);
   SurfaceCutter cutter(s);
-  EXPECT_THROW(cutter.move_to({Vec3(0, 0, 1), Vec3(0, 0, 1)}), ParameterError);
-  EXPECT_THROW(cutter.move_to({Vec3(0, 0, NAN), Vec3(0, 0, 1)}), ParameterError);
+  EXPECT_THROW((void)cutter.move_to({Vec3(0, 0, 1), Vec3(0, 0, 1)}), ParameterError);
+  EXPECT_THROW((void)cutter.move_to({Vec3(0, 0, NAN), Vec3(0, 0, 1)}), ParameterError);
 }
 
 }  // namespace
