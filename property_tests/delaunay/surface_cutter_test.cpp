@@ -68,7 +68,7 @@ TestSurface generated(SurfaceShape shape) {
   return {[shape] { return make_surface(shape, 10); },
           [shape](double u, double v) { return scalpel_at(shape, u, v); },
           [shape](const Vec3& g) {
-            Vec3 up(g.x(), 0, g.z());  // cylinder: radial
+            Vec3 up(g.x(), 0, g.z());  // cylinder and fold: radial
             if (shape == SurfaceShape::kBell)
               surface_point(shape, (g.x() + 1) / 2, (g.y() + 1) / 2, &up);
             return up;
@@ -79,7 +79,7 @@ struct Tally {
   int moves = 0, submovements = 0, subdivided = 0, validations = 0, entered = 0, fixed = 0,
       exited = 0, splits = 0, removals = 0;
   int blocked = 0, lost = 0, refused = 0;
-  long flips = 0, topological = 0;
+  long flips = 0, topological = 0, restricted = 0;
   void add(const SurfaceMoveReport& r) {
     ++moves;
     submovements += r.submovements;
@@ -91,6 +91,7 @@ struct Tally {
     removals += r.removals;
     flips += r.flips;
     topological += r.topological_refusals;
+    restricted += r.restricted;
     refused += r.refused;
     blocked += r.status == SurfaceMoveStatus::kBlocked;
     lost += r.status == SurfaceMoveStatus::kLost;
@@ -110,6 +111,7 @@ struct Tally {
     refused += o.refused;
     flips += o.flips;
     topological += o.topological;
+    restricted += o.restricted;
   }
 };
 
@@ -118,8 +120,8 @@ std::ostream& operator<<(std::ostream& o, const Tally& t) {
            << " d_max sub-movements in all, " << t.validations << " validations), " << t.entered
            << " entries, " << t.fixed << " fix-ups, " << t.exited << " exits, " << t.splits
            << " splits, " << t.removals << " removals, " << t.flips << " flips, " << t.topological
-           << " Fig. 5.9 refusals, " << t.refused << " refused, " << t.blocked << " blocked, "
-           << t.lost << " lost";
+           << " Fig. 5.9 refusals, " << t.restricted << " §5.3.2 restrictions, " << t.refused
+           << " refused, " << t.blocked << " blocked, " << t.lost << " lost";
 }
 
 TEST(DelaunaySurfaceCutter, StraightCutAcrossTheCylinderPatchSeparatesIt) {
@@ -300,6 +302,72 @@ TEST(DelaunaySurfaceCutter, RandomPathsOverASphericalCapReadFromOffKeepItValid) 
   EXPECT_GE(t.moves, test::scaled_for_checks(200, 2)) << t;
   EXPECT_GT(t.entered, 0) << t;
   EXPECT_GT(t.exited, 0) << t;
+}
+
+/// Whether some live triangle has two of the cutter's active nodes (§5.3.2 forbids it).
+bool two_active_in_a_triangle(const Surface& s, const SurfaceCutter& cutter) {
+  const std::vector<Index> act = cutter.active_nodes();
+  for (const mesh::ElementHandle e : s.connectivity().elements()) {
+    int n = 0;
+    for (const Index v : s.triangle(e)) n += std::count(act.begin(), act.end(), v) > 0;
+    if (n > 1) return true;
+  }
+  return false;
+}
+
+/// The fold (270° of a unit cylinder, axis y, open below) cut by a horizontal scalpel
+/// x ∈ [−1.5, 1.5] at height z(y) moved along the axis from y = −1.2 to 1.2 in steps of 0.04:
+/// the scalpel meets the fold twice, so the movement that crosses the end y = −1 makes two
+/// incisions at the same time (coinciding events, taken in vertex-number order).
+Tally cut_the_fold(Surface& s, SurfaceCutter& cutter, const std::function<double(double)>& z,
+                   int& most_incisions) {
+  Tally t;
+  most_incisions = 0;
+  for (int k = 0; k <= 60; ++k) {
+    const double y = -1.2 + 0.04 * k;
+    const auto r = cutter.move_to({Vec3(1.5, y, z(y)), Vec3(-1.5, y, z(y))});
+    t.add(r);
+    ++t.validations;
+    most_incisions = std::max(most_incisions, r.incisions);
+    EXPECT_TRUE(valid(s, generated(SurfaceShape::kFold))) << "after movement " << k;
+    EXPECT_FALSE(two_active_in_a_triangle(s, cutter)) << "after movement " << k;
+    if (::testing::Test::HasFailure()) break;
+  }
+  return t;
+}
+
+TEST(DelaunaySurfaceCutter, Sec5_3_2TwoIncisionsAtOnceCutTheFoldIntoThreePieces) {
+  // At height z = 0.3 the scalpel meets the fold at x = ±0.95, 145° apart on the circle: two
+  // independent incisions from end to end separate the top strip from the rest.
+  Surface s(make_surface(SurfaceShape::kFold, 24, 10));
+  SurfaceCutter cutter(s);
+  int most = 0;
+  const Tally t = cut_the_fold(
+      s, cutter, [](double) { return 0.3; }, most);
+  std::cout << "fold, two incisions: " << t << "\n";
+  EXPECT_EQ(most, 2) << t;
+  EXPECT_EQ(t.entered, 1) << t;  // one movement made both (r.entered is per movement)
+  EXPECT_EQ(t.exited, 1) << t;   // and one movement ended both
+  EXPECT_EQ(t.blocked + t.lost, 0) << t;
+  EXPECT_EQ(cutter.incision_sides().size(), 4u);
+  // The top strip between the cuts and the two flanks (the fold is open below): three pieces.
+  EXPECT_EQ(test::components(s), 3);
+}
+
+TEST(DelaunaySurfaceCutter, Sec5_3_2IncisionsMeetingOnTheFoldAreKeptApart) {
+  // The scalpel rises from z = 0.3 to 1.1 along the way: the two crossings x = ±√(1 − z²)
+  // approach each other and meet at the top. Annihilation (Fig. 5.13) is not built: the
+  // restrictions keep every triangle to one active node, and the incisions end as blocked or
+  // lost where the scalpel leaves them — never a corrupt mesh.
+  Surface s(make_surface(SurfaceShape::kFold, 24, 10));
+  SurfaceCutter cutter(s);
+  int most = 0;
+  const Tally t = cut_the_fold(
+      s, cutter, [](double y) { return 0.3 + 0.8 * std::clamp((y + 1) / 2, 0.0, 1.0); }, most);
+  std::cout << "fold, meeting incisions: " << t << "\n";
+  EXPECT_EQ(most, 2) << t;
+  EXPECT_GT(t.restricted, 0) << t;                   // the restrictions did act
+  EXPECT_EQ(cutter.active_nodes().size(), 0u) << t;  // the scalpel passed above the fold
 }
 
 TEST(DelaunaySurfaceCutter, RejectsBadScalpelsAndOptions) {

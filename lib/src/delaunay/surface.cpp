@@ -75,13 +75,14 @@ const char* to_string(FlipStatus s) {
     case FlipStatus::kNotConvex: return "not convex";
     case FlipStatus::kTopological: return "topologically impossible";
     case FlipStatus::kShape: return "shape";
+    case FlipStatus::kRestricted: return "restricted";
   }
   return "?";
 }
 
 Vec3 surface_point(SurfaceShape shape, double u, double v, Vec3* normal) {
-  if (shape == SurfaceShape::kCylinder) {
-    const double theta = (u - 0.5) * (2 * M_PI / 3);
+  if (shape == SurfaceShape::kCylinder || shape == SurfaceShape::kFold) {
+    const double theta = (u - 0.5) * (shape == SurfaceShape::kFold ? 1.5 * M_PI : 2 * M_PI / 3);
     if (normal) *normal = Vec3(std::sin(theta), 0, std::cos(theta));
     return Vec3(std::sin(theta), 2 * v - 1, std::cos(theta));
   }
@@ -94,12 +95,13 @@ Vec3 surface_point(SurfaceShape shape, double u, double v, Vec3* normal) {
   return Vec3(x, y, z);
 }
 
-mesh::MeshData make_surface(SurfaceShape shape, int n) {
-  INCISE_CHECK_PARAM(n >= 2, "make_surface: n must be >= 2");
-  mesh::MeshData m = mesh::make_rectangle(n, n, 1.0, 1.0, mesh::GridDiagonal::kAlternating);
-  for (Index v = 0; v < m.num_points(); ++v)
-    m.points.col(v) = surface_point(shape, m.points(0, v), m.points(1, v));
-  return m;
+mesh::MeshData make_surface(SurfaceShape shape, int n, int m) {
+  INCISE_CHECK_PARAM(n >= 2 && (m <= 0 || m >= 2), "make_surface: n and m must be >= 2");
+  mesh::MeshData g =
+      mesh::make_rectangle(n, m > 0 ? m : n, 1.0, 1.0, mesh::GridDiagonal::kAlternating);
+  for (Index v = 0; v < g.num_points(); ++v)
+    g.points.col(v) = surface_point(shape, g.points(0, v), g.points(1, v));
+  return g;
 }
 
 Surface::Surface(const mesh::MeshData& mesh) : conn_(2), points_(mesh.points) {
@@ -163,6 +165,14 @@ void Surface::set_constrained(Index p, Index q, bool constrained) {
     constrained_.erase(make_edge(p, q));
 }
 
+void Surface::set_active_node(Index v, bool active) {
+  if (v < 0) return;
+  if (active)
+    active_.insert(v);
+  else
+    active_.erase(v);
+}
+
 bool Surface::is_locally_delaunay(Index p, Index q) const {
   if (is_constrained(p, q)) return true;
   const ElementHandle l = left_of(p, q), r = left_of(q, p);
@@ -183,6 +193,10 @@ bool Surface::admissible(const std::vector<ElementHandle>& remove,
     const auto& t = add[k];
     for (const Index v : t)
       if (v < 0 || v >= conn_.num_vertices()) return false;
+    if (is_active_node(t[0]) + is_active_node(t[1]) + is_active_node(t[2]) > 1) {
+      ++restricted_;  // §5.3.2: at most one active node per triangle
+      return false;
+    }
     const Vec3 a = point(t[0]), b = point(t[1]), c = point(t[2]);
     if (!shaped(a, b, c)) return false;
     normal[k] = (b - a).cross(c - a);
@@ -233,6 +247,11 @@ FlipStatus Surface::try_flip(Index p, Index q) {
   const auto u = unfold(point(p), point(q), point(c), point(d));
   if (orient2d(u[2], u[3], u[1]) <= 0 || orient2d(u[3], u[2], u[0]) <= 0)
     return FlipStatus::kNotConvex;
+  if ((is_active_node(c) && is_active_node(d)) ||
+      ((is_active_node(c) || is_active_node(d)) && (is_active_node(p) || is_active_node(q)))) {
+    ++restricted_;
+    return FlipStatus::kRestricted;  // §5.3.2: the edge separates two active nodes
+  }
   if (!admissible({l, r}, {{c, d, q}, {d, c, p}})) return FlipStatus::kShape;
   conn_.replace_elements({l, r}, {Simplex({c, d, q}), Simplex({d, c, p})});
   ++flips_;

@@ -75,41 +75,40 @@ SurfaceCutter::SurfaceCutter(Surface& surface, Cutter2DOptions options)
 }
 
 bool SurfaceCutter::is_forbidden(Index p, Index q) const {
-  return std::find(forbidden_.begin(), forbidden_.end(), make_edge(p, q)) != forbidden_.end();
+  for (const ForbiddenZone& z : forbidden_)
+    if (std::find(z.edges.begin(), z.edges.end(), make_edge(p, q)) != z.edges.end()) return true;
+  return false;
 }
 
-bool SurfaceCutter::find_entry(const ScalpelSegment& from, const ScalpelSegment& to, Index& p,
-                               Index& q, SweepHit& hit) const {
-  // Eq. (5.1) against every boundary edge; the earliest entering contact wins, ties broken by
-  // the edge's vertex numbers (deterministic order of coinciding events).
+std::vector<SurfaceCutter::EntryHit> SurfaceCutter::find_entries(const ScalpelSegment& from,
+                                                                 const ScalpelSegment& to) const {
+  // Eq. (5.1) against every boundary edge; each edge's earliest entering contact (the contact
+  // point moving towards the edge's triangle), earliest first, ties by the edge's vertex
+  // numbers (deterministic order of coinciding events).
   const mesh::Connectivity& c = mesh_.connectivity();
-  bool found = false;
+  std::vector<EntryHit> out;
   for (const mesh::FaceHandle f : c.boundary()) {
     const mesh::Simplex& s = c.simplex(f);
     const Index u = s.vertex(0), w = s.vertex(1);
     if (is_forbidden(u, w)) continue;
     const Vec3 pu = mesh_.point(u), pw = mesh_.point(w);
     for (const SweepHit& h : intersect_sweep_edge(from, to, pu, pw).hits) {
-      // Entering: the contact point moves towards the triangle's side of the edge.
-      const ElementHandle e = c.element(f);
-      const Vec3 pr = mesh_.point(detail::third(c, e, u, w));
+      const Vec3 pr = mesh_.point(detail::third(c, c.element(f), u, w));
       const Vec3 along = (pw - pu).normalized();
       Vec3 inward = pr - pu;
       inward -= inward.dot(along) * along;
       const Vec3 velocity =
           h.lambda * (to.head - from.head) + (1 - h.lambda) * (to.tail - from.tail);
       if (!(velocity.dot(inward) > 0)) continue;
-      if (!found || h.time < hit.time ||
-          (h.time == hit.time && make_edge(u, w) < make_edge(p, q))) {
-        found = true;
-        hit = h;
-        p = u;
-        q = w;
-      }
-      break;  // the earliest contact with this edge
+      out.push_back({u, w, h});
+      break;
     }
   }
-  return found;
+  std::sort(out.begin(), out.end(), [](const EntryHit& x, const EntryHit& y) {
+    if (x.hit.time != y.hit.time) return x.hit.time < y.hit.time;
+    return make_edge(x.p, x.q) < make_edge(y.p, y.q);
+  });
+  return out;
 }
 
 bool SurfaceCutter::star_intersection(const ScalpelSegment& s, Vec3& x,
@@ -194,7 +193,12 @@ void SurfaceCutter::remove_close_nodes(SurfaceMoveReport& r) {
   const Vec3 a = mesh_.point(active_);
   r.removals += detail::remove_close_nodes(
       mesh_, active_, [&](Index v) { return (mesh_.point(v) - a).norm() < eps_edge_; },
-      [](Index) { return false; });
+      [&](Index v) {
+        // Restriction 2 of §5.3.2: a node next to another active node separates incisions.
+        for (const Index w : mesh_.neighbours(v))
+          if (w != active_ && mesh_.is_active_node(w)) return true;
+        return false;
+      });
 }
 
 void SurfaceCutter::move_active(const Vec3& target, SurfaceMoveReport& r) {
@@ -287,13 +291,14 @@ void SurfaceCutter::split_incision(SurfaceMoveReport& r) {
 
 bool SurfaceCutter::exit_at(Index p, Index q, const Vec3& x, SurfaceMoveReport& r) {
   const Index n = detail::boundary_node_at(mesh_, p, q, x, eps_exit_);
+  std::vector<Edge> closed;
   if (n < 0 || n == track_.left || n == track_.right ||
-      !detail::exit(track_, mesh_, active_, n, forbidden_)) {
+      !detail::exit(track_, mesh_, active_, n, closed)) {
     ++r.refused;  // the incision goes on
     return false;
   }
   r.exited = true;
-  forbidden_near_ = x;
+  forbidden_.push_back({closed, x});
   phase_ = CutPhase::kOutside;
   active_ = -1;
   return true;
@@ -305,52 +310,11 @@ void SurfaceCutter::end_incision() {
   track_.path.clear();
 }
 
-SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
-  INCISE_CHECK_PARAM(s.head.allFinite() && s.tail.allFinite() &&
-                         s.head.cwiseAbs().maxCoeff() <= 1e60 &&
-                         s.tail.cwiseAbs().maxCoeff() <= 1e60,
-                     "SurfaceCutter::move_to: scalpel ends must be finite, |x| <= 1e60 m");
-  INCISE_CHECK_PARAM((s.head - s.tail).norm() > 0,
-                     "SurfaceCutter::move_to: the scalpel must have a positive length");
-  SurfaceMoveReport r;
-  const long flips_before = mesh_.num_flips(), topo_before = mesh_.num_topological_refusals();
-  auto finish = [&]() -> SurfaceMoveReport {
-    r.flips = mesh_.num_flips() - flips_before;
-    r.topological_refusals = mesh_.num_topological_refusals() - topo_before;
-    r.phase = phase_;
-    return r;
-  };
-  if (!placed_) {
-    placed_ = true;
-    scalpel_ = s;
-    return finish();
-  }
-  const ScalpelSegment from = scalpel_;
-  scalpel_ = s;
-  if (!forbidden_.empty()) {
-    const double away = (closest_on(s.tail, s.head, forbidden_near_) - forbidden_near_).norm();
-    if (away > 2 * eps_exit_) forbidden_.clear();
-  }
-  double tau = 0;
-  if (phase_ == CutPhase::kOutside) {
-    Index p, q;
-    SweepHit hit;
-    if (!find_entry(from, s, p, q, hit)) return finish();
-    const Vec3 x = hit.mu * mesh_.point(p) + (1 - hit.mu) * mesh_.point(q);
-    const Index a = detail::boundary_node_at(mesh_, p, q, x, eps_entry_);
-    if (a < 0) {
-      ++r.refused;
-      return finish();
-    }
-    r.entered = true;
-    active_ = a;
-    entry_ = mesh_.point(a);
-    phase_ = CutPhase::kDent;
-    tau = hit.time;
-  }
+void SurfaceCutter::advance(const ScalpelSegment& from, const ScalpelSegment& to, double tau,
+                            SurfaceMoveReport& r) {
   const double span =
-      std::max((s.head - from.head).norm(), (s.tail - from.tail).norm());  // per unit τ
-  ScalpelSegment cur = interpolate(from, s, tau);
+      std::max((to.head - from.head).norm(), (to.tail - from.tail).norm());  // per unit τ
+  ScalpelSegment cur = interpolate(from, to, tau);
   const int cap = 4 * options_.max_substeps;
   while (phase_ != CutPhase::kOutside) {
     if (r.submovements >= cap) {
@@ -363,7 +327,7 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
     // stall; the jump past it is then caught by the sweep and the intersection tests below).
     const double dm = std::max(d_max(cur), 1e-3 * h_);
     const double next_tau = span > 0 ? std::min(1.0, tau + dm / span) : 1.0;
-    const ScalpelSegment next = interpolate(from, s, next_tau);
+    const ScalpelSegment next = interpolate(from, to, next_tau);
     Index p, q;
     Vec3 x;
     if (sweep_exit(cur, next, p, q, x)) {
@@ -406,7 +370,152 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
     cur = next;
     tau = next_tau;
   }
-  return finish();
+}
+
+void SurfaceCutter::load(const Incision& i) {
+  // The working incision in active_, phase_, entry_, track_; every live active node (this one
+  // included) marked on the surface, which then refuses any triangle with two (§5.3.2).
+  active_ = i.active;
+  phase_ = i.phase;
+  entry_ = i.entry;
+  track_ = i.track;
+  for (const Incision& o : incisions_)
+    mesh_.set_active_node(o.active, o.phase != CutPhase::kOutside);
+  mesh_.set_active_node(active_, true);
+}
+
+SurfaceCutter::Incision SurfaceCutter::store() {
+  for (const Incision& o : incisions_) mesh_.set_active_node(o.active, false);
+  if (active_ >= 0) mesh_.set_active_node(active_, false);
+  return {active_, phase_, entry_, track_};
+}
+
+void SurfaceCutter::merge(SurfaceMoveReport& r, const SurfaceMoveReport& sub) {
+  r.entered = r.entered || sub.entered;
+  r.fixed_up = r.fixed_up || sub.fixed_up;
+  r.exited = r.exited || sub.exited;
+  r.submovements += sub.submovements;
+  r.substeps += sub.substeps;
+  r.removals += sub.removals;
+  r.splits += sub.splits;
+  r.refused += sub.refused;
+  r.extra_intersections += sub.extra_intersections;
+  if (r.status == SurfaceMoveStatus::kOk && sub.status != SurfaceMoveStatus::kOk) {
+    r.status = sub.status;
+    r.message = sub.message;
+  }
+}
+
+SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
+  INCISE_CHECK_PARAM(s.head.allFinite() && s.tail.allFinite() &&
+                         s.head.cwiseAbs().maxCoeff() <= 1e60 &&
+                         s.tail.cwiseAbs().maxCoeff() <= 1e60,
+                     "SurfaceCutter::move_to: scalpel ends must be finite, |x| <= 1e60 m");
+  INCISE_CHECK_PARAM((s.head - s.tail).norm() > 0,
+                     "SurfaceCutter::move_to: the scalpel must have a positive length");
+  SurfaceMoveReport r;
+  const long flips_before = mesh_.num_flips(), topo_before = mesh_.num_topological_refusals(),
+             restricted_before = mesh_.num_restricted();
+  if (!placed_) {
+    placed_ = true;
+    scalpel_ = s;
+    r.phase = phase();
+    return r;
+  }
+  const ScalpelSegment from = scalpel_;
+  scalpel_ = s;
+  // Exits stay closed for entry until the scalpel is 2 ε_exit away from them.
+  forbidden_.erase(std::remove_if(forbidden_.begin(), forbidden_.end(),
+                                  [&](const ForbiddenZone& z) {
+                                    return (closest_on(s.tail, s.head, z.near) - z.near).norm() >
+                                           2 * eps_exit_;
+                                  }),
+                   forbidden_.end());
+  // The live incisions, one after the other in the order they were made (they share no
+  // triangle, §5.3.2), each over the whole movement; the others' active nodes are marked on the
+  // surface meanwhile, so no change makes a triangle with two active nodes.
+  for (size_t k = 0; k < incisions_.size(); ++k) {
+    load(incisions_[k]);
+    SurfaceMoveReport sub;
+    advance(from, s, 0.0, sub);
+    incisions_[k] = store();
+    merge(r, sub);
+  }
+  // New incisions (Fig. 5.12, first case): every entering contact of the sweep with a boundary
+  // edge, earliest first (ties by vertex numbers), each then cut over the rest of the movement.
+  for (const EntryHit& e : find_entries(from, s)) {
+    // Restriction 1 of §5.3.2: no incision in an edge or triangle that is already active, and
+    // none within ε_entry of an incision made in this movement.
+    const std::vector<ElementHandle> inc = mesh_.incident(e.p, e.q);
+    bool active = inc.size() != 1;
+    for (const ElementHandle t : inc)
+      for (const Index v : mesh_.triangle(t)) active = active || is_active(v);
+    const Vec3 x = e.hit.mu * mesh_.point(e.p) + (1 - e.hit.mu) * mesh_.point(e.q);
+    for (const Incision& i : incisions_) active = active || (i.entry - x).norm() < eps_entry_;
+    if (active) {
+      ++r.rejected_entries;  // mostly the scalpel at its own active node's edges
+      continue;
+    }
+    const Index a = detail::boundary_node_at(mesh_, e.p, e.q, x, eps_entry_);
+    if (a < 0 || is_active(a)) {
+      ++r.refused;
+      continue;
+    }
+    load({a, CutPhase::kDent, mesh_.point(a), IncisionTrack<Vec3>{}});
+    SurfaceMoveReport sub;
+    sub.entered = true;
+    advance(from, s, e.hit.time, sub);
+    incisions_.push_back(store());
+    merge(r, sub);
+  }
+  // Incisions that ended (exit, or the scalpel lost) keep only their sides.
+  for (auto it = incisions_.begin(); it != incisions_.end();) {
+    if (it->phase != CutPhase::kOutside) {
+      ++it;
+      continue;
+    }
+    finished_.push_back(*it);
+    it = incisions_.erase(it);
+  }
+  active_ = -1;
+  phase_ = CutPhase::kOutside;
+  r.flips = mesh_.num_flips() - flips_before;
+  r.topological_refusals = mesh_.num_topological_refusals() - topo_before;
+  r.restricted = mesh_.num_restricted() - restricted_before;
+  r.incisions = static_cast<int>(incisions_.size());
+  r.phase = phase();
+  return r;
+}
+
+bool SurfaceCutter::is_active(Index v) const {
+  for (const Incision& i : incisions_)
+    if (i.active == v && i.phase != CutPhase::kOutside) return true;
+  return false;
+}
+
+CutPhase SurfaceCutter::phase() const {
+  CutPhase p = CutPhase::kOutside;
+  for (const Incision& i : incisions_)
+    if (i.phase == CutPhase::kCutting || p == CutPhase::kOutside) p = i.phase;
+  return p;
+}
+
+Index SurfaceCutter::active() const {
+  return incisions_.empty() ? -1 : incisions_.front().active;
+}
+
+std::vector<Index> SurfaceCutter::active_nodes() const {
+  std::vector<Index> out;
+  for (const Incision& i : incisions_) out.push_back(i.active);
+  return out;
+}
+
+std::vector<std::vector<Index>> SurfaceCutter::incision_sides() const {
+  std::vector<std::vector<Index>> out;
+  for (const std::vector<Incision>* list : {&finished_, &incisions_})
+    for (const Incision& i : *list)
+      for (const auto& side : i.track.sides) out.push_back(side);
+  return out;
 }
 
 }  // namespace incise::delaunay

@@ -45,6 +45,7 @@ enum class FlipStatus {
   kNotConvex,    ///< the unfolded quadrilateral is not strictly convex
   kTopological,  ///< Fig. 5.9: the new edge already exists (it would occur twice)
   kShape,        ///< a new triangle would be flatter than the floor or fold over
+  kRestricted,   ///< a new triangle would have two active nodes (§5.3.2)
 };
 
 /// Name of a FlipStatus ("flipped", "not an edge", …).
@@ -60,16 +61,17 @@ int unfolded_incircle(const Vec3& p, const Vec3& q, const Vec3& c, const Vec3& d
 enum class SurfaceShape {
   kCylinder,  ///< a 120° patch of a unit-radius cylinder, 2 long
   kBell,  ///< the Gaussian bell of Fig. 5.19: z = 0.4 exp(−(x² + y²)/0.5²) over [−1, 1]²
+  kFold,  ///< a 270° patch of a unit-radius cylinder, 2 long: a scalpel meets it twice
 };
 
 /// Maps the parameter point (u, v) (the unit square and its continuation beyond it) onto the
 /// shape; `normal` receives the unit normal there (the side the generated triangles face).
 Vec3 surface_point(SurfaceShape shape, double u, double v, Vec3* normal = nullptr);
 
-/// A regular n × n grid of the unit parameter square (mesh::make_rectangle, alternating
-/// diagonals) mapped onto `shape`: 2n² triangles, a disc with boundary. Throws ParameterError
-/// for n < 2.
-mesh::MeshData make_surface(SurfaceShape shape, int n);
+/// A regular n × m grid of the unit parameter square (mesh::make_rectangle, alternating
+/// diagonals; m = n when m ≤ 0) mapped onto `shape`: 2nm triangles, a disc with boundary.
+/// Throws ParameterError for n < 2 or 0 < m < 2.
+mesh::MeshData make_surface(SurfaceShape shape, int n, int m = 0);
 
 /// Triangle surface in 3D (see file comment).
 class Surface {
@@ -113,6 +115,13 @@ class Surface {
   /// Whether {p, q} is marked constrained.
   bool is_constrained(Index p, Index q) const { return constrained_.count(make_edge(p, q)) != 0; }
 
+  /// Marks (or unmarks) v as an active node (§5.3.2): no flip or replace makes a triangle with
+  /// two marked nodes (so a cutter that marks its active nodes keeps at most one per triangle).
+  /// Negative v is ignored.
+  void set_active_node(Index v, bool active = true);
+  /// Whether v is marked as an active node.
+  bool is_active_node(Index v) const { return active_.count(v) != 0; }
+
   /// The unfolded empty-circle criterion (§5.3.1, file comment): true for a boundary,
   /// constrained or missing edge, and for an interior edge whose unfolded opposite vertex d is
   /// not strictly inside the circumcircle of the unfolded (p, q, c).
@@ -142,9 +151,8 @@ class Surface {
   /// neighbours; false (unchanged) otherwise.
   bool move_vertex(Index v, const Vec3& x);
   /// Replaces the triangles `remove` by `add` (vertex triples in orientation order) in one
-  /// replace_elements call when every new triangle passes the shape floor and its normal makes
-  /// an acute angle with the summed normal of `remove` (or, when `remove` is empty, of the
-  /// triangles at its vertices); false (unchanged) otherwise.
+  /// replace_elements call when every new triangle passes the shape floor and the fold and
+  /// crease guards (file comment) and has at most one active node; false (unchanged) otherwise.
   bool replace(const std::vector<mesh::ElementHandle>& remove,
                const std::vector<std::array<Index, 3>>& add);
   /// Inserts a vertex at x on the boundary edge {p, q}: its triangle (p, q, r) becomes two.
@@ -160,6 +168,8 @@ class Surface {
   long num_flips() const { return flips_; }
   /// Flips refused as topologically impossible (Fig. 5.9) so far.
   long num_topological_refusals() const { return topological_; }
+  /// Flips and replacements refused because a triangle would get two active nodes (§5.3.2).
+  long num_restricted() const { return restricted_; }
   /// legalize() calls that stopped at the flip cap so far.
   long num_capped_legalizations() const { return capped_; }
   /// Smallest and largest interior angle over live triangles (radians).
@@ -172,7 +182,9 @@ class Surface {
   mesh::Connectivity conn_;
   Eigen::Matrix3Xd points_;
   std::set<Edge> constrained_;
+  std::set<Index> active_;
   long flips_ = 0, topological_ = 0, capped_ = 0;
+  mutable long restricted_ = 0;  // counted by the const admissibility test
 };
 
 }  // namespace incise::delaunay

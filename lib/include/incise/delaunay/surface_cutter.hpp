@@ -68,6 +68,12 @@ struct [[nodiscard]] SurfaceMoveReport
   int splits = 0;                       ///< incision splits (new node pairs)
   int refused = 0;                      ///< splits, fix-ups or exits the guards refused
   int extra_intersections = 0;          ///< further scalpel–star intersections (not followed)
+  int incisions = 0;                    ///< live incisions after the movement
+  long restricted = 0;  ///< changes refused: a triangle would get two active nodes (§5.3.2)
+  /// Contacts with boundary edges not taken as entries (restriction 1 of §5.3.2: the edge or its
+  /// triangle is active — mostly the scalpel at its own incision — or within ε_entry of an entry
+  /// of this movement).
+  int rejected_entries = 0;
 };
 
 /// Delaunay cutter of a triangle surface (see file comment).
@@ -83,18 +89,38 @@ class SurfaceCutter {
   /// non-finite position or a zero-length scalpel.
   SurfaceMoveReport move_to(const ScalpelSegment& s);
 
-  /// Current phase.
-  CutPhase phase() const { return phase_; }
-  /// The active node, −1 outside.
-  Index active() const { return active_; }
+  /// The most advanced phase over the live incisions (kCutting before kDent before kOutside).
+  CutPhase phase() const;
+  /// The active node of the oldest live incision, −1 when there is none.
+  Index active() const;
+  /// The active nodes of the live incisions, oldest first.
+  std::vector<Index> active_nodes() const;
   /// Mean edge length h̄ of the starting surface (m).
   double mean_edge() const { return h_; }
-  /// The incision nodes of the current and finished incisions, in path order per side.
-  const std::vector<std::vector<Index>>& incision_sides() const { return track_.sides; }
+  /// The incision nodes of the finished and the live incisions, two lists (sides) per incision
+  /// in path order.
+  std::vector<std::vector<Index>> incision_sides() const;
 
  private:
-  bool find_entry(const ScalpelSegment& from, const ScalpelSegment& to, Index& p, Index& q,
-                  SweepHit& hit) const;
+  /// One incision: its active node, phase, entry point and node track.
+  struct Incision {
+    Index active = -1;
+    CutPhase phase = CutPhase::kOutside;
+    Vec3 entry = Vec3::Zero();
+    IncisionTrack<Vec3> track;
+  };
+  /// An entering contact of the sweep with the boundary edge {p, q}.
+  struct EntryHit {
+    Index p = -1, q = -1;
+    SweepHit hit;
+  };
+  std::vector<EntryHit> find_entries(const ScalpelSegment& from, const ScalpelSegment& to) const;
+  void advance(const ScalpelSegment& from, const ScalpelSegment& to, double tau,
+               SurfaceMoveReport& r);
+  void load(const Incision& i);
+  Incision store();
+  static void merge(SurfaceMoveReport& r, const SurfaceMoveReport& sub);
+  bool is_active(Index v) const;
   bool star_intersection(const ScalpelSegment& s, Vec3& x, SurfaceMoveReport& r) const;
   bool sweep_exit(const ScalpelSegment& from, const ScalpelSegment& to, Index& p, Index& q,
                   Vec3& x) const;
@@ -118,9 +144,13 @@ class SurfaceCutter {
   ScalpelSegment scalpel_;
   Index active_ = -1;
   Vec3 entry_ = Vec3::Zero();
-  IncisionTrack<Vec3> track_;  // last node pair, active-node path since it, all sides
-  std::vector<Edge> forbidden_;
-  Vec3 forbidden_near_ = Vec3::Zero();
+  IncisionTrack<Vec3> track_;                   // the working incision's node pair, path and sides
+  std::vector<Incision> incisions_, finished_;  // live (oldest first) and ended incisions
+  struct ForbiddenZone {  // the boundary edges at an exit, closed for entry near it
+    std::vector<Edge> edges;
+    Vec3 near = Vec3::Zero();
+  };
+  std::vector<ForbiddenZone> forbidden_;
 };
 
 }  // namespace incise::delaunay
