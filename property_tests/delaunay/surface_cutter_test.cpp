@@ -76,8 +76,8 @@ TestSurface generated(SurfaceShape shape) {
 }
 
 struct Tally {
-  int moves = 0, submovements = 0, subdivided = 0, validations = 0, entered = 0, fixed = 0,
-      exited = 0, splits = 0, removals = 0;
+  int moves = 0, submovements = 0, subdivided = 0, validations = 0, annihilated = 0, entered = 0,
+      fixed = 0, exited = 0, splits = 0, removals = 0;
   int blocked = 0, lost = 0, refused = 0;
   long flips = 0, topological = 0, restricted = 0;
   void add(const SurfaceMoveReport& r) {
@@ -87,6 +87,7 @@ struct Tally {
     entered += r.entered;
     fixed += r.fixed_up;
     exited += r.exited;
+    annihilated += r.annihilated;
     splits += r.splits;
     removals += r.removals;
     flips += r.flips;
@@ -104,6 +105,7 @@ struct Tally {
     entered += o.entered;
     fixed += o.fixed;
     exited += o.exited;
+    annihilated += o.annihilated;
     splits += o.splits;
     removals += o.removals;
     blocked += o.blocked;
@@ -118,10 +120,11 @@ struct Tally {
 std::ostream& operator<<(std::ostream& o, const Tally& t) {
   return o << t.moves << " movements (" << t.subdivided << " subdivided into " << t.submovements
            << " d_max sub-movements in all, " << t.validations << " validations), " << t.entered
-           << " entries, " << t.fixed << " fix-ups, " << t.exited << " exits, " << t.splits
-           << " splits, " << t.removals << " removals, " << t.flips << " flips, " << t.topological
-           << " Fig. 5.9 refusals, " << t.restricted << " §5.3.2 restrictions, " << t.refused
-           << " refused, " << t.blocked << " blocked, " << t.lost << " lost";
+           << " entries, " << t.fixed << " fix-ups, " << t.exited << " exits, " << t.annihilated
+           << " annihilations, " << t.splits << " splits, " << t.removals << " removals, "
+           << t.flips << " flips, " << t.topological << " Fig. 5.9 refusals, " << t.restricted
+           << " §5.3.2 restrictions, " << t.refused << " refused, " << t.blocked << " blocked, "
+           << t.lost << " lost";
 }
 
 TEST(DelaunaySurfaceCutter, StraightCutAcrossTheCylinderPatchSeparatesIt) {
@@ -354,11 +357,12 @@ TEST(DelaunaySurfaceCutter, Sec5_3_2TwoIncisionsAtOnceCutTheFoldIntoThreePieces)
   EXPECT_EQ(test::components(s), 3);
 }
 
-TEST(DelaunaySurfaceCutter, Sec5_3_2IncisionsMeetingOnTheFoldAreKeptApart) {
+TEST(DelaunaySurfaceCutter, Sec5_3_2Fig5_13IncisionsMeetingOnTheFoldAnnihilate) {
   // The scalpel rises from z = 0.3 to 1.1 along the way: the two crossings x = ±√(1 − z²)
-  // approach each other and meet at the top. Annihilation (Fig. 5.13) is not built: the
-  // restrictions keep every triangle to one active node, and the incisions end as blocked or
-  // lost where the scalpel leaves them — never a corrupt mesh.
+  // approach each other and meet at the top (z = 1 at y = 0.75). Until they meet, the
+  // restrictions keep every triangle to one active node; when one active node comes within
+  // ε_edge of a node next to the other, the two incisions annihilate (Fig. 5.13): the cut then
+  // runs from one end of the fold over the top and back, and cuts off the strip between.
   Surface s(make_surface(SurfaceShape::kFold, 24, 10));
   SurfaceCutter cutter(s);
   int most = 0;
@@ -366,8 +370,11 @@ TEST(DelaunaySurfaceCutter, Sec5_3_2IncisionsMeetingOnTheFoldAreKeptApart) {
       s, cutter, [](double y) { return 0.3 + 0.8 * std::clamp((y + 1) / 2, 0.0, 1.0); }, most);
   std::cout << "fold, meeting incisions: " << t << "\n";
   EXPECT_EQ(most, 2) << t;
-  EXPECT_GT(t.restricted, 0) << t;                   // the restrictions did act
-  EXPECT_EQ(cutter.active_nodes().size(), 0u) << t;  // the scalpel passed above the fold
+  EXPECT_GT(t.restricted, 0) << t;  // the restrictions did act before the meeting
+  EXPECT_EQ(t.annihilated, 1) << t;
+  EXPECT_EQ(t.blocked + t.lost + t.exited, 0) << t;
+  EXPECT_EQ(cutter.active_nodes().size(), 0u) << t;
+  EXPECT_EQ(test::components(s), 2);
 }
 
 TEST(DelaunaySurfaceCutter, RejectsBadScalpelsAndOptions) {

@@ -304,6 +304,68 @@ bool SurfaceCutter::exit_at(Index p, Index q, const Vec3& x, SurfaceMoveReport& 
   return true;
 }
 
+bool SurfaceCutter::annihilate(SurfaceMoveReport& r) {
+  // Fig. 5.13: the nearest interior node s within ε_edge of the active node a that separates it
+  // from another active node b (restriction 2 keeps s from being removed).
+  const Vec3 pa = mesh_.point(active_);
+  Index s = -1, b = -1;
+  double best = eps_edge_;
+  for (const Index v : mesh_.neighbours(active_)) {
+    if (!mesh_.is_interior_vertex(v)) continue;
+    Index w = -1;
+    for (const Index u : mesh_.neighbours(v))
+      if (u != active_ && mesh_.is_active_node(u)) w = u;
+    const double d = (mesh_.point(v) - pa).norm();
+    if (w >= 0 && d < best) {
+      best = d;
+      s = v;
+      b = w;
+    }
+  }
+  if (s < 0) return false;
+  // The edge a–s collapses into s (a's triangles take s; the two at a–s go), so the incision
+  // reaches s; then the edge s–b is dissected and contracted as at an exit: the two incisions
+  // join through b and both end. Link condition of the collapse: a and s have no common
+  // neighbour but the two opposite the edge (else an edge would occur twice).
+  const std::vector<ElementHandle> star = mesh_.connectivity().star(active_);
+  std::vector<Index> common;
+  const std::vector<Index> ns = mesh_.neighbours(s);
+  for (const Index v : mesh_.neighbours(active_))
+    if (std::binary_search(ns.begin(), ns.end(), v)) common.push_back(v);
+  std::vector<std::array<Index, 3>> add;
+  for (const ElementHandle e : star) {
+    auto t = mesh_.triangle(e);
+    if (std::find(t.begin(), t.end(), s) != t.end()) continue;
+    for (Index& v : t)
+      if (v == active_) v = s;
+    add.push_back(t);
+  }
+  if (common.size() != 2 || add.size() + 2 != star.size() || !mesh_.replace(star, add)) {
+    ++r.refused;
+    return false;
+  }
+  mesh_.set_active_node(active_, false);
+  active_ = s;  // the incision now ends at s
+  mesh_.set_active_node(b, false);
+  std::vector<Edge> closed;
+  if (!detail::exit(track_, mesh_, s, b, closed)) {
+    mesh_.set_active_node(b, true);
+    mesh_.set_active_node(s, true);
+    ++r.refused;  // the incision goes on from s
+    return false;
+  }
+  r.annihilated = true;
+  forbidden_.push_back({closed, mesh_.point(b)});
+  for (Incision& i : incisions_)
+    if (i.active == b) {
+      i.phase = CutPhase::kOutside;
+      i.active = -1;
+    }
+  phase_ = CutPhase::kOutside;
+  active_ = -1;
+  return true;
+}
+
 void SurfaceCutter::end_incision() {
   phase_ = CutPhase::kOutside;
   active_ = -1;
@@ -364,7 +426,7 @@ void SurfaceCutter::advance(const ScalpelSegment& from, const ScalpelSegment& to
     if (phase_ == CutPhase::kDent && (mesh_.point(active_) - entry_).norm() > eps_entry_) fix_up(r);
     if (phase_ == CutPhase::kCutting) {
       split_incision(r);
-      if (near_exit(p, q, x)) exit_at(p, q, x, r);
+      if (!annihilate(r) && near_exit(p, q, x)) exit_at(p, q, x, r);
     }
     if (r.status != SurfaceMoveStatus::kOk || next_tau >= 1) break;
     cur = next;
@@ -394,6 +456,7 @@ void SurfaceCutter::merge(SurfaceMoveReport& r, const SurfaceMoveReport& sub) {
   r.entered = r.entered || sub.entered;
   r.fixed_up = r.fixed_up || sub.fixed_up;
   r.exited = r.exited || sub.exited;
+  r.annihilated = r.annihilated || sub.annihilated;
   r.submovements += sub.submovements;
   r.substeps += sub.substeps;
   r.removals += sub.removals;

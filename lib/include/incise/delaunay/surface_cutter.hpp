@@ -60,6 +60,7 @@ struct [[nodiscard]] SurfaceMoveReport
   bool entered = false;                 ///< the scalpel entered the surface
   bool fixed_up = false;                ///< the entry fix-up was made
   bool exited = false;                  ///< the incision reached the boundary (exit)
+  bool annihilated = false;             ///< two incisions met and ended (Fig. 5.13)
   int submovements = 0;                 ///< d_max sub-movements (Fig. 5.11)
   int substeps = 0;                     ///< moves of the active node
   long flips = 0;                       ///< edge flips
@@ -133,6 +134,7 @@ class SurfaceCutter {
   void fix_up(SurfaceMoveReport& r);
   void split_incision(SurfaceMoveReport& r);
   bool exit_at(Index p, Index q, const Vec3& x, SurfaceMoveReport& r);
+  bool annihilate(SurfaceMoveReport& r);
   bool is_forbidden(Index p, Index q) const;
   void end_incision();
 
