@@ -378,6 +378,41 @@ TEST(DelaunaySurfaceCutter, Sec5_3_2Fig5_13IncisionsMeetingOnTheFoldAnnihilate) 
   EXPECT_EQ(test::components(s), 2);
 }
 
+TEST(DelaunaySurfaceCutter, CoincidingContactsAtABoundaryNodeAreOrderedAndRepeatable) {
+  // The scalpel (u = 1/2 + 0.3 v) enters the cylinder patch exactly through the boundary node
+  // at u = 1/2 of the end v = 0 (the sample at v = 0 is that node to the last bit): it touches
+  // both boundary edges there at the same time. The contacts are taken in
+  // (time, vertex numbers) order; the first snaps to the node, the second is then an edge of
+  // the active node and is rejected (restriction 1). The cut goes on to the far end. The same
+  // run on a fresh copy gives the same mesh, node for node.
+  auto run = [](Tally& t) {
+    Surface s(make_surface(SurfaceShape::kCylinder, 10));
+    SurfaceCutter cutter(s);
+    int rejected_at_entry = -1;
+    for (int k = 0; k <= 60; ++k) {
+      const double v = -0.1 + 0.02 * k;
+      const auto r = cutter.move_to(scalpel_at(SurfaceShape::kCylinder, 0.5 + 0.3 * v, v));
+      t.add(r);
+      ++t.validations;
+      if (r.entered) rejected_at_entry = r.rejected_entries;
+      EXPECT_TRUE(r.ok()) << "movement " << k << ": " << r.message;
+      EXPECT_LE(r.incisions, 1);
+      EXPECT_TRUE(valid(s, generated(SurfaceShape::kCylinder))) << "after movement " << k;
+    }
+    EXPECT_GE(rejected_at_entry, 1);
+    EXPECT_EQ(test::components(s), 2);
+    return s.to_mesh_data();
+  };
+  Tally first, second;
+  const mesh::MeshData a = run(first), b = run(second);
+  std::cout << "through a boundary node: " << first << "\n";
+  EXPECT_EQ(first.entered, 1) << first;
+  EXPECT_EQ(first.exited, 1) << first;
+  ASSERT_EQ(a.cells.cols(), b.cells.cols());
+  EXPECT_TRUE(a.cells == b.cells);
+  EXPECT_TRUE(a.points == b.points);
+}
+
 TEST(DelaunaySurfaceCutter, RejectsBadScalpelsAndOptions) {
   Surface s(make_surface(SurfaceShape::kBell, 4));
   Cutter2DOptions bad;
