@@ -413,6 +413,50 @@ TEST(DelaunaySurfaceCutter, CoincidingContactsAtABoundaryNodeAreOrderedAndRepeat
   EXPECT_TRUE(a.points == b.points);
 }
 
+TEST(DelaunaySurfaceCutter, Fig5_12TipEntryThroughATriangleGrowsAnIncisionToTheBoundary) {
+  // Fig. 5.12, second case: the scalpel, held along the normal of the cylinder patch at
+  // (u, v) = (0.48, 0.33), is lowered until its tip pierces the surface, then drawn along
+  // u = 0.45 + 0.1 v to beyond the end v = 1. A node appears inside the pierced triangle; ε_entry
+  // later the entry node and a constrained edge to it; the first split opens it into a slit; the
+  // exit brings the slit to the boundary. A slit from inside to the edge separates nothing.
+  const SurfaceShape shape = SurfaceShape::kCylinder;
+  Surface s(make_surface(shape, 10));
+  SurfaceCutter cutter(s);
+  Tally t;
+  auto held = [&](double u, double v, double lift) {
+    Vec3 n;
+    const Vec3 p = surface_point(shape, u, v, &n);
+    return ScalpelSegment{p + (lift + 0.3) * n, p + (lift - 0.3) * n};
+  };
+  std::vector<ScalpelSegment> samples;
+  for (int k = 0; k <= 10; ++k) samples.push_back(held(0.48, 0.33, 0.6 - 0.06 * k));  // lowering
+  for (int k = 1; k <= 45; ++k) {
+    const double v = 0.33 + 0.02 * k;
+    samples.push_back(held(0.45 + 0.1 * v, v, 0.0));
+  }
+  int tip_entries = 0;
+  for (size_t k = 0; k < samples.size(); ++k) {
+    const auto r = cutter.move_to(samples[k]);
+    t.add(r);
+    ++t.validations;
+    tip_entries += r.tip_entered;
+    EXPECT_TRUE(r.ok()) << "movement " << k << ": " << r.message;
+    EXPECT_TRUE(valid(s, generated(shape))) << "after movement " << k;
+    if (::testing::Test::HasFailure()) break;
+  }
+  std::cout << "tip entry: " << t << "\n";
+  EXPECT_EQ(tip_entries, 1) << t;
+  EXPECT_EQ(t.entered, 0) << t;  // no boundary entry
+  EXPECT_EQ(t.fixed, 1) << t;    // the entry node and its constrained edge
+  EXPECT_GT(t.splits, 0) << t;
+  EXPECT_EQ(t.exited, 1) << t;
+  EXPECT_EQ(test::components(s), 1);
+  const auto sides = cutter.incision_sides();
+  ASSERT_EQ(sides.size(), 2u);
+  EXPECT_EQ(sides[0].front(), sides[1].front());  // both sides start at the entry node
+  EXPECT_GT(sides[0].size(), 2u);
+}
+
 TEST(DelaunaySurfaceCutter, RejectsBadScalpelsAndOptions) {
   Surface s(make_surface(SurfaceShape::kBell, 4));
   Cutter2DOptions bad;

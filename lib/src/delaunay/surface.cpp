@@ -336,6 +336,14 @@ Index Surface::split_boundary_edge(Index p, Index q, const Vec3& x) {
   return n;
 }
 
+Index Surface::split_triangle(ElementHandle e, const Vec3& x) {
+  if (!conn_.is_alive(e) || !x.allFinite()) return -1;
+  const auto t = triangle(e);
+  const Index n = add_vertex(x);
+  if (!replace({e}, {{t[0], t[1], n}, {t[1], t[2], n}, {t[2], t[0], n}})) return -1;
+  return n;
+}
+
 std::pair<double, double> Surface::angle_range() const {
   double lo = 4, hi = 0;
   for (const ElementHandle e : conn_.elements()) {

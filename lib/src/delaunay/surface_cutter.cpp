@@ -195,6 +195,7 @@ void SurfaceCutter::remove_close_nodes(SurfaceMoveReport& r) {
       mesh_, active_, [&](Index v) { return (mesh_.point(v) - a).norm() < eps_edge_; },
       [&](Index v) {
         // Restriction 2 of §5.3.2: a node next to another active node separates incisions.
+        if (v == track_.left || v == track_.right) return true;  // a tip incision's entry node
         for (const Index w : mesh_.neighbours(v))
           if (w != active_ && mesh_.is_active_node(w)) return true;
         return false;
@@ -281,10 +282,12 @@ void SurfaceCutter::split_incision(SurfaceMoveReport& r) {
       }
     }
     if (!std::isfinite(best)) return;
+    const Index before = track_.left;
     if (!detail::split(track_, mesh_, active_, tl, tr, ol, orr, x, seg, delta_)) {
       ++r.refused;  // two new vertices stay unused
       return;
     }
+    mesh_.set_constrained(before, active_, false);  // a tip incision's edge is now a slit
     ++r.splits;
   }
 }
@@ -423,7 +426,8 @@ void SurfaceCutter::advance(const ScalpelSegment& from, const ScalpelSegment& to
       break;
     }
     move_active(target, r);
-    if (phase_ == CutPhase::kDent && (mesh_.point(active_) - entry_).norm() > eps_entry_) fix_up(r);
+    if (phase_ == CutPhase::kDent && (mesh_.point(active_) - entry_).norm() > eps_entry_)
+      tip_ ? tip_fix_up(r) : fix_up(r);
     if (phase_ == CutPhase::kCutting) {
       split_incision(r);
       if (!annihilate(r) && near_exit(p, q, x)) exit_at(p, q, x, r);
@@ -441,6 +445,7 @@ void SurfaceCutter::load(const Incision& i) {
   phase_ = i.phase;
   entry_ = i.entry;
   track_ = i.track;
+  tip_ = i.tip;
   for (const Incision& o : incisions_)
     mesh_.set_active_node(o.active, o.phase != CutPhase::kOutside);
   mesh_.set_active_node(active_, true);
@@ -449,13 +454,14 @@ void SurfaceCutter::load(const Incision& i) {
 SurfaceCutter::Incision SurfaceCutter::store() {
   for (const Incision& o : incisions_) mesh_.set_active_node(o.active, false);
   if (active_ >= 0) mesh_.set_active_node(active_, false);
-  return {active_, phase_, entry_, track_};
+  return {active_, phase_, entry_, track_, tip_};
 }
 
 void SurfaceCutter::merge(SurfaceMoveReport& r, const SurfaceMoveReport& sub) {
   r.entered = r.entered || sub.entered;
   r.fixed_up = r.fixed_up || sub.fixed_up;
   r.exited = r.exited || sub.exited;
+  r.tip_entered = r.tip_entered || sub.tip_entered;
   r.annihilated = r.annihilated || sub.annihilated;
   r.submovements += sub.submovements;
   r.substeps += sub.substeps;
@@ -524,12 +530,27 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
       ++r.refused;
       continue;
     }
-    load({a, CutPhase::kDent, mesh_.point(a), IncisionTrack<Vec3>{}});
-    SurfaceMoveReport sub;
-    sub.entered = true;
-    advance(from, s, e.hit.time, sub);
-    incisions_.push_back(store());
-    merge(r, sub);
+    start(a, false, e.hit.time, from, s, r);
+  }
+  // Tip entries (Fig. 5.12, second case): the tip's path through a triangle without an active
+  // node (restriction 1) makes an active node inside it.
+  for (const TipHit& h : find_tip_entries(from, s)) {
+    if (!mesh_.connectivity().is_alive(h.triangle)) {
+      ++r.rejected_entries;  // changed by an earlier entry of this movement
+      continue;
+    }
+    bool active = false;
+    for (const Index v : mesh_.triangle(h.triangle)) active = active || is_active(v);
+    if (active) {
+      ++r.rejected_entries;
+      continue;
+    }
+    const Index a = mesh_.split_triangle(h.triangle, h.point);
+    if (a < 0) {
+      ++r.refused;
+      continue;
+    }
+    start(a, true, h.time, from, s, r);
   }
   // Incisions that ended (exit, or the scalpel lost) keep only their sides.
   for (auto it = incisions_.begin(); it != incisions_.end();) {
@@ -548,6 +569,73 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
   r.incisions = static_cast<int>(incisions_.size());
   r.phase = phase();
   return r;
+}
+
+void SurfaceCutter::start(Index a, bool tip, double tau, const ScalpelSegment& from,
+                          const ScalpelSegment& to, SurfaceMoveReport& r) {
+  load({a, CutPhase::kDent, mesh_.point(a), IncisionTrack<Vec3>{}, tip});
+  SurfaceMoveReport sub;
+  (tip ? sub.tip_entered : sub.entered) = true;
+  advance(from, to, tau, sub);
+  incisions_.push_back(store());
+  merge(r, sub);
+}
+
+std::vector<SurfaceCutter::TipHit> SurfaceCutter::find_tip_entries(const ScalpelSegment& from,
+                                                                   const ScalpelSegment& to) const {
+  // The tip (the tail end) moving from → to through a live triangle, earliest first, ties by
+  // the triangle's smallest vertex number. A scan of all triangles (no spatial index yet).
+  std::vector<TipHit> out;
+  const ScalpelSegment path{to.tail, from.tail};  // as a segment tail → head: from → to
+  if (!((to.tail - from.tail).norm() > 0)) return out;
+  for (const ElementHandle e : mesh_.connectivity().elements()) {
+    const auto t = mesh_.triangle(e);
+    Vec3 x;
+    if (!segment_triangle(path, mesh_.point(t[0]), mesh_.point(t[1]), mesh_.point(t[2]), x))
+      continue;
+    // Strictly inside (a crossing through an edge or a node is left to the other entries).
+    const Vec3 n = mesh_.area_normal(e);
+    bool inside = true;
+    for (size_t i = 0; i < 3; ++i) {
+      const Vec3 p = mesh_.point(t[i]), q = mesh_.point(t[(i + 1) % 3]);
+      inside = inside && (q - p).cross(x - p).dot(n) > 1e-6 * n.squaredNorm();
+    }
+    if (!inside) continue;
+    out.push_back({(x - from.tail).norm() / (to.tail - from.tail).norm(), e, x});
+  }
+  std::sort(out.begin(), out.end(), [&](const TipHit& x, const TipHit& y) {
+    if (x.time != y.time) return x.time < y.time;
+    const auto tx = mesh_.triangle(x.triangle), ty = mesh_.triangle(y.triangle);
+    return *std::min_element(tx.begin(), tx.end()) < *std::min_element(ty.begin(), ty.end());
+  });
+  return out;
+}
+
+void SurfaceCutter::tip_fix_up(SurfaceMoveReport& r) {
+  // Fig. 5.12, second case: once the active node is ε_entry from where the tip entered, a node
+  // goes in at the entry point, in the active triangle that holds it, and the edge from it to
+  // the active node is constrained; it becomes an incision at the first split (Fig. 5.5), which
+  // with c_l = c_r = the entry node opens the edge into a slit.
+  for (const ElementHandle e : mesh_.connectivity().star(active_)) {
+    const auto t = mesh_.triangle(e);
+    const Vec3 a = mesh_.point(t[0]), u = mesh_.point(t[1]) - a, w = mesh_.point(t[2]) - a;
+    const Vec3 n = u.cross(w);
+    // Barycentric coordinates of the entry point projected onto the triangle's plane.
+    const Vec3 d = entry_ - a;
+    const double s1 = d.cross(w).dot(n) / n.squaredNorm(), s2 = u.cross(d).dot(n) / n.squaredNorm();
+    if (s1 <= 1e-3 || s2 <= 1e-3 || s1 + s2 >= 1 - 1e-3) continue;  // inside, off the edges
+    const Index c = mesh_.split_triangle(e, a + s1 * u + s2 * w);
+    if (c < 0) break;
+    mesh_.set_constrained(c, active_);
+    track_.left = track_.right = c;
+    track_.sides.push_back({c});
+    track_.sides.push_back({c});
+    track_.path = {entry_, mesh_.point(active_)};
+    phase_ = CutPhase::kCutting;
+    r.fixed_up = true;
+    return;
+  }
+  ++r.refused;  // tried again after the next step
 }
 
 bool SurfaceCutter::is_active(Index v) const {

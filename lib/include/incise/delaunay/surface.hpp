@@ -159,6 +159,10 @@ class Surface {
   /// Returns it, or −1 (unchanged) when {p, q} is not a boundary edge or replace refuses.
   Index split_boundary_edge(Index p, Index q, const Vec3& x);
 
+  /// Inserts a vertex at x in live triangle e: (a, b, c) becomes (a, b, x), (b, c, x), (c, a, x)
+  /// when replace accepts them. Returns it, or −1 (x stays an unused vertex) otherwise.
+  Index split_triangle(mesh::ElementHandle e, const Vec3& x);
+
   /// Registers / unregisters an observer of the connectivity's changes (§7.4).
   void add_watcher(mesh::ConnectivityWatcher* w) { conn_.add_watcher(w); }
   /// See add_watcher.

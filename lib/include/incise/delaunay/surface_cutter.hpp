@@ -57,7 +57,8 @@ const char* to_string(SurfaceMoveStatus status);
 struct [[nodiscard]] SurfaceMoveReport
     : Outcome<SurfaceMoveStatus, SurfaceMoveStatus::kOk, SurfaceMoveStatus::kOk> {
   CutPhase phase = CutPhase::kOutside;  ///< the phase after the movement
-  bool entered = false;                 ///< the scalpel entered the surface
+  bool entered = false;                 ///< the scalpel entered the surface (at an edge)
+  bool tip_entered = false;             ///< the scalpel's tip pierced a triangle (Fig. 5.12)
   bool fixed_up = false;                ///< the entry fix-up was made
   bool exited = false;                  ///< the incision reached the boundary (exit)
   bool annihilated = false;             ///< two incisions met and ended (Fig. 5.13)
@@ -109,6 +110,7 @@ class SurfaceCutter {
     CutPhase phase = CutPhase::kOutside;
     Vec3 entry = Vec3::Zero();
     IncisionTrack<Vec3> track;
+    bool tip = false;  ///< entered with the tip through a triangle (Fig. 5.12, second case)
   };
   /// An entering contact of the sweep with the boundary edge {p, q}.
   struct EntryHit {
@@ -116,6 +118,16 @@ class SurfaceCutter {
     SweepHit hit;
   };
   std::vector<EntryHit> find_entries(const ScalpelSegment& from, const ScalpelSegment& to) const;
+  /// A crossing of the tip's path with a triangle: time and point.
+  struct TipHit {
+    double time = 0;
+    mesh::ElementHandle triangle;
+    Vec3 point = Vec3::Zero();
+  };
+  std::vector<TipHit> find_tip_entries(const ScalpelSegment& from, const ScalpelSegment& to) const;
+  void start(Index a, bool tip, double tau, const ScalpelSegment& from, const ScalpelSegment& to,
+             SurfaceMoveReport& r);
+  void tip_fix_up(SurfaceMoveReport& r);
   void advance(const ScalpelSegment& from, const ScalpelSegment& to, double tau,
                SurfaceMoveReport& r);
   void load(const Incision& i);
@@ -147,6 +159,7 @@ class SurfaceCutter {
   Index active_ = -1;
   Vec3 entry_ = Vec3::Zero();
   IncisionTrack<Vec3> track_;                   // the working incision's node pair, path and sides
+  bool tip_ = false;                            // the working incision entered with the tip
   std::vector<Incision> incisions_, finished_;  // live (oldest first) and ended incisions
   struct ForbiddenZone {  // the boundary edges at an exit, closed for entry near it
     std::vector<Edge> edges;
