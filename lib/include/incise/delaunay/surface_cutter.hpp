@@ -1,36 +1,46 @@
 #pragma once
 /// \file surface_cutter.hpp
-/// Delaunay cutting of a triangle surface in 3D by a line-segment scalpel, one incision at a
-/// time (thesis §5.3.1, Figs. 5.9–5.11; the planar scheme of §5.2.2 carried to the surface).
+/// Delaunay cutting of a triangle surface in 3D by a line-segment scalpel (thesis §5.3, Figs.
+/// 5.9–5.13; the planar scheme of §5.2.2 carried to the surface), with several incisions at once.
 ///
 /// The scalpel is a segment whose ends move at constant velocity between the sampled positions
-/// given to move_to. Each movement:
-///  0. outside the surface: the sweep is intersected with every boundary edge (eq. (5.1),
-///     sweep.hpp); at the earliest contact the scalpel enters (Fig. 5.12, first case): the active
-///     node is the edge's end within ε_entry, or a new node on the edge. The rest of the movement
-///     is processed as below;
-///  1. the movement is subdivided so that neither scalpel end moves by d_max or more per
-///     sub-movement (Fig. 5.11: d_max = the smallest distance from the scalpel to an edge
-///     opposite the active node; floored at 10⁻³ h̄, see the .cpp);
+/// given to move_to; its tail end is the tip. Each movement:
+///  0. the live incisions are advanced one after the other (below); then every entering contact
+///     of the sweep with a boundary edge (eq. (5.1), sweep.hpp; Fig. 5.12, first case) and every
+///     crossing of the tip's path with the inside of a triangle (second case) starts an incision,
+///     earliest first, ties by vertex numbers — unless its edge or triangle is active or it is
+///     within ε_entry of an entry of this movement (restriction 1 of §5.3.2; counted). An edge
+///     entry's active node is the edge's end within ε_entry or a new node on it; a tip entry's is
+///     a new node inside the triangle. The incision is then advanced over the rest of the
+///     movement;
+///  1. advancing an incision: the movement is subdivided so that neither scalpel end moves by
+///     d_max or more per sub-movement (Fig. 5.11: d_max = the smallest distance from the scalpel
+///     to an edge opposite the active node; floored at 10⁻³ h̄, see the .cpp);
 ///  2. per sub-movement, a sweep that crosses a boundary edge opposite the active node (eq. (5.1))
 ///     is an exit there; otherwise the scalpel segment is intersected with the active triangles
 ///     (the star of the active node) and the active node moves to the intersection — in halving
 ///     steps when a star triangle would fold or flatten (surface.hpp guards), with the active
 ///     triangles legalized by the unfolded criterion and interior nodes closer than ε_edge
-///     removed by ear flips (Fig. 5.10) after each step;
+///     removed by ear flips (Fig. 5.10) after each step — but not a node next to another active
+///     node (restriction 2);
 ///  3. the incision is split behind the active node as in Fig. 5.5 when the cut edges fail the
 ///     unfolded empty-circle test (new nodes where the path is closest to the line between the
 ///     opposite nodes, dilated by δ);
-///  4. entry fix-up (Fig. 5.6) once the active node is ε_entry from the entry point; exit
-///     (Fig. 5.7) when the sweep crosses a boundary edge of the star or the active node comes
-///     within ε_exit of one: a node on that edge, the edge to it dissected and contracted.
-/// A scalpel that no longer meets the active triangles (lifted off the surface, or a jump past
-/// the d_max floor) ends the incision where it is (status kLost: the slit stays, the mesh is
-/// valid). Only one incision is active at a time: tip entry, entry through an interior edge,
-/// several active nodes, annihilation and branching (§5.3.2) are not built (docs/delaunay.md).
-/// Thresholds are fractions of the starting mesh's mean edge length h̄ (Cutter2DOptions, §5.4
-/// defaults). Boundary edges are found by a scan of the connectivity's boundary map: the cost of
-/// an outside movement grows with the boundary (no spatial index yet).
+///  4. ε_entry from the entry point: the fix-up of the dent (Fig. 5.6), or for a tip entry an
+///     entry node and a constrained edge to the active node, opened into a slit by the first
+///     split; exit (Fig. 5.7) when the sweep crosses a boundary edge of the star or the active
+///     node comes within ε_exit of one: a node on that edge, the edge to it dissected and
+///     contracted; annihilation (Fig. 5.13) when the active node comes within ε_edge of a node
+///     next to another active node: the two incisions join and end.
+/// All live active nodes are marked on the Surface, which refuses any change that would put two
+/// in one triangle (restriction 3 and "at most one active node per triangle"). A scalpel that no
+/// longer meets the active triangles (lifted off the surface, or a jump past the d_max floor)
+/// ends the incision where it is (status kLost: the slit stays, the mesh is valid). Not built:
+/// entry through an exposed interior edge (Fig. 5.12, third case), a tip through an edge or a
+/// node, branching (Fig. 5.14: a folded star is followed at its nearest intersection). Thresholds
+/// are fractions of the starting mesh's mean edge length h̄ (Cutter2DOptions, §5.4 defaults).
+/// Entries are found by scans of the boundary map and of all triangles: the cost of a movement
+/// grows with the mesh (no spatial index yet); the work inside touches only the stars.
 
 #include <incise/core/outcome.hpp>
 #include <incise/delaunay/cutter2d.hpp>
