@@ -412,6 +412,31 @@ TEST(DelaunaySurfaceCutter, CoincidingContactsAtABoundaryNodeAreOrderedAndRepeat
   EXPECT_TRUE(a.points == b.points);
 }
 
+TEST(DelaunaySurfaceCutter, PathAlongAGridLineThroughNodesCutsThrough) {
+  // The scalpel along the grid line u = 1/2 of the cylinder patch runs through grid nodes, each
+  // on both diagonals of its link when the active node comes along the line: ear flips cannot
+  // remove it (Fig. 5.10 degenerate) and the active node stopped against it (blocked, then
+  // lost) until removal learnt to split such a node's four triangles along a diagonal. The path
+  // ends exactly in the boundary node at v = 1, where the exit after a crossing looked for the
+  // edge within ε_exit of a node it had put ε_exit short of it (lost by rounding) until that
+  // radius became 2 ε_exit.
+  Surface s(make_surface(SurfaceShape::kCylinder, 10));
+  SurfaceCutter cutter(s);
+  Tally t;
+  for (int k = 0; k <= 60; ++k) {
+    const auto r = cutter.move_to(scalpel_at(SurfaceShape::kCylinder, 0.5, -0.1 + 0.02 * k));
+    t.add(r);
+    ++t.validations;
+    EXPECT_TRUE(r.ok()) << "movement " << k << ": " << r.message;
+    EXPECT_TRUE(valid(s, generated(SurfaceShape::kCylinder))) << "after movement " << k;
+  }
+  std::cout << "along a grid line: " << t << "\n";
+  EXPECT_EQ(t.entered, 1) << t;
+  EXPECT_EQ(t.exited, 1) << t;
+  EXPECT_GT(t.removals, 0) << t;
+  EXPECT_EQ(test::components(s), 2);
+}
+
 TEST(DelaunaySurfaceCutter, Fig5_12TipEntryThroughATriangleGrowsAnIncisionToTheBoundary) {
   // Fig. 5.12, second case: the scalpel, held along the normal of the cylinder patch at
   // (u, v) = (0.48, 0.33), is lowered until its tip pierces the surface, then drawn along

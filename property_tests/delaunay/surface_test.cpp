@@ -156,6 +156,28 @@ TEST(DelaunaySurface, Fig5_10EarFlipRemovalTakesTwoTrianglesPerInteriorNode) {
   EXPECT_GE(removed, 30);
 }
 
+TEST(DelaunaySurface, Fig5_10DegreeFourNodeOnBothDiagonalsIsRemovedAlongADiagonal) {
+  // The centre of a square split into four triangles lies on both diagonals of its link: every
+  // ear has the angle π at it, so no ear flip is possible (each is kNotConvex); the removal
+  // replaces the four triangles by the two on a diagonal instead. Tilted out of the xy-plane.
+  mesh::MeshData m;
+  m.dimension = 2;
+  m.points.resize(3, 5);
+  m.points << 0, 1, 0, -1, 0,  //
+      0, 0, 1, 0, -1,          //
+      0, 0.3, 0.3, -0.3, -0.3;
+  m.cells.resize(3, 4);
+  m.cells << 0, 0, 0, 0,  //
+      1, 2, 3, 4,         //
+      2, 3, 4, 1;
+  Surface s(m);
+  for (const Index w : {1, 2, 3, 4}) EXPECT_EQ(Surface(m).try_flip(0, w), FlipStatus::kNotConvex);
+  EXPECT_TRUE(s.remove_vertex(0));
+  EXPECT_EQ(s.num_triangles(), 2);
+  EXPECT_EQ(s.connectivity().star_size(0), 0);
+  EXPECT_TRUE(valid(s));
+}
+
 TEST(DelaunaySurface, RejectsNonManifoldAndFlatInput) {
   mesh::MeshData fan;  // three triangles on the edge 0–1: not a manifold
   fan.dimension = 2;

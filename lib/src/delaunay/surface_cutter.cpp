@@ -179,14 +179,14 @@ bool SurfaceCutter::sweep_exit(const ScalpelSegment& from, const ScalpelSegment&
   return pick_exit_edge(first_contact, 2.0, p, q, x);
 }
 
-bool SurfaceCutter::near_exit(Index& p, Index& q, Vec3& x) const {
-  // Fig. 5.7, predicted exit: such an edge within ε_exit of the active node.
+bool SurfaceCutter::near_exit(double radius, Index& p, Index& q, Vec3& x) const {
+  // Fig. 5.7, predicted exit: such an edge within `radius` of the active node.
   const Vec3 a = mesh_.point(active_);
   auto distance = [&](const Vec3& pu, const Vec3& pw, Vec3& y) {
     y = closest_on(pu, pw, a);
     return (y - a).norm();
   };
-  return pick_exit_edge(distance, eps_exit_, p, q, x);
+  return pick_exit_edge(distance, radius, p, q, x);
 }
 
 void SurfaceCutter::remove_close_nodes(SurfaceMoveReport& r) {
@@ -406,7 +406,9 @@ void SurfaceCutter::advance(const ScalpelSegment& from, const ScalpelSegment& to
       move_active(len > eps_exit_ ? Vec3(x - eps_exit_ * (x - a) / len) : a, r);
       Index pp, qq;
       Vec3 xx;
-      if (phase_ == CutPhase::kCutting && near_exit(pp, qq, xx)) exit_at(pp, qq, xx, r);
+      // (Within 2 ε_exit: the node stopped ε_exit short of the crossing, up to rounding.)
+      if (phase_ == CutPhase::kCutting && near_exit(2 * eps_exit_, pp, qq, xx))
+        exit_at(pp, qq, xx, r);
       if (phase_ != CutPhase::kOutside) {
         r.status = SurfaceMoveStatus::kLost;
         r.message =
@@ -430,7 +432,7 @@ void SurfaceCutter::advance(const ScalpelSegment& from, const ScalpelSegment& to
       tip_ ? tip_fix_up(r) : fix_up(r);
     if (phase_ == CutPhase::kCutting) {
       split_incision(r);
-      if (!annihilate(r) && near_exit(p, q, x)) exit_at(p, q, x, r);
+      if (!annihilate(r) && near_exit(eps_exit_, p, q, x)) exit_at(p, q, x, r);
     }
     if (r.status != SurfaceMoveStatus::kOk || next_tau >= 1) break;
     cur = next;

@@ -115,11 +115,32 @@ long lawson_legalize(Mesh& m, std::vector<Edge> edges, long max_flips,
   return made;
 }
 
+/// Replaces the four triangles around v (degree 4) by the two on a diagonal of its link
+/// quadrilateral, trying l0–l2 first, then l1–l3 (l in orientation order from the star's first
+/// triangle); false (unchanged) when m.replace accepts neither.
+template <class Mesh>
+bool replace_by_diagonal(Mesh& m, Index v) {
+  const mesh::Connectivity& c = m.connectivity();
+  const std::vector<mesh::ElementHandle> star = c.star(v);
+  std::array<Index, 4> l{};
+  l[0] = starting_at(oriented(c.simplex(star[0])), v)[1];
+  for (size_t i = 1; i < 4; ++i) {
+    const mesh::ElementHandle e = left_of(c, v, l[i - 1]);
+    if (!e.valid()) return false;
+    l[i] = third(c, e, v, l[i - 1]);
+  }
+  for (size_t d = 0; d < 2; ++d)
+    if (m.replace(star, {{l[d], l[d + 1], l[(d + 2) % 4]}, {l[d], l[(d + 2) % 4], l[(d + 3) % 4]}}))
+      return true;
+  return false;
+}
+
 /// Removes interior vertex v by ear flips (§5.3.1, Fig. 5.10): an ear is an edge (v, w) that
 /// m.flip accepts; ears are flipped until v has degree 3, the three triangles become one, and
 /// the former link polygon is legalized. Returns false (mesh unchanged when refused before the
 /// first flip) when v is not interior, an edge at v is constrained, or no ear can be flipped
-/// (then the flips made so far stay: the mesh is valid, v keeps its triangles). Mesh needs
+/// and (at degree 4) no diagonal of the link is accepted (then the flips made so far stay: the
+/// mesh is valid, v keeps its triangles). Mesh needs
 /// connectivity(), is_constrained(p, q), flip(p, q), replace(remove, add),
 /// legalize(edges).
 template <class Mesh>
@@ -145,6 +166,13 @@ bool remove_by_ears(Mesh& m, Index v) {
       }
     }
     if (!flipped) {
+      // No ear: with degree 4 this is v on both diagonals of its link quadrilateral (a scalpel
+      // running along a grid line makes it) — every ear has the angle π at v. The four
+      // triangles become two, split along either diagonal if the mesh accepts one.
+      if (c.star_size(v) == 4 && replace_by_diagonal(m, v)) {
+        m.legalize(link);
+        return true;
+      }
       m.legalize(link);
       return false;
     }

@@ -147,7 +147,7 @@ class SurfaceCutter {
   bool star_intersection(const ScalpelSegment& s, Vec3& x, SurfaceMoveReport& r) const;
   bool sweep_exit(const ScalpelSegment& from, const ScalpelSegment& to, Index& p, Index& q,
                   Vec3& x) const;
-  bool near_exit(Index& p, Index& q, Vec3& x) const;
+  bool near_exit(double radius, Index& p, Index& q, Vec3& x) const;
   bool pick_exit_edge(const std::function<double(const Vec3&, const Vec3&, Vec3&)>& key,
                       double limit, Index& p, Index& q, Vec3& x) const;
   double d_max(const ScalpelSegment& s) const;
