@@ -274,7 +274,7 @@ long Surface::legalize(std::vector<Edge> edges) {
 }
 
 bool Surface::remove_vertex(Index v) {
-  return detail::remove_by_ears(*this, v);
+  return detail::remove_by_ears(*this, v, /*diagonal_fallback=*/true);
 }
 
 Index Surface::add_vertex(const Vec3& x) {

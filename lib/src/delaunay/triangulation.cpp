@@ -103,7 +103,7 @@ std::vector<Edge> Triangulation::edges() const {
 }
 
 bool Triangulation::remove_vertex(Index v) {
-  return detail::remove_by_ears(*this, v);
+  return detail::remove_by_ears(*this, v, /*diagonal_fallback=*/false);
 }
 
 std::array<Index, 3> Triangulation::triangle(ElementHandle e) const {
