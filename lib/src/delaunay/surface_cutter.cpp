@@ -1,6 +1,7 @@
 #include <incise/delaunay/surface_cutter.hpp>
 
 #include "incision.hpp"
+#include "surface_grid.hpp"
 #include "topology.hpp"
 
 #include <incise/core/error.hpp>
@@ -72,6 +73,12 @@ SurfaceCutter::SurfaceCutter(Surface& surface, Cutter2DOptions options)
   eps_entry_ = options.entry * h_;
   eps_exit_ = options.exit * h_;
   delta_ = options.dilation * h_;
+  grid_ = std::make_unique<detail::SurfaceGrid>(mesh_, h_);
+  mesh_.add_watcher(grid_.get());  // calls init: every current triangle and boundary edge
+}
+
+SurfaceCutter::~SurfaceCutter() {
+  mesh_.remove_watcher(grid_.get());
 }
 
 bool SurfaceCutter::is_forbidden(Index p, Index q) const {
@@ -87,8 +94,11 @@ std::vector<SurfaceCutter::EntryHit> SurfaceCutter::find_entries(const ScalpelSe
   // numbers (deterministic order of coinciding events).
   const mesh::Connectivity& c = mesh_.connectivity();
   std::vector<EntryHit> out;
-  for (const mesh::FaceHandle f : c.boundary()) {
-    const mesh::Simplex& s = c.simplex(f);
+  for (const mesh::Simplex& s : grid_->near({from.head, from.tail, to.head, to.tail}, 2)) {
+    // The swept surface lies in the convex hull of the four scalpel ends, so every contact is
+    // in the cells of their bounding box.
+    const mesh::FaceHandle f = c.boundary_face(s);
+    if (!f.valid()) continue;
     const Index u = s.vertex(0), w = s.vertex(1);
     if (is_forbidden(u, w)) continue;
     const Vec3 pu = mesh_.point(u), pw = mesh_.point(w);
@@ -213,7 +223,8 @@ void SurfaceCutter::move_active(const Vec3& target, SurfaceMoveReport& r) {
     double s = 1;
     bool moved = false;
     for (int k = 0; k < 12 && !moved; ++k, s *= 0.5) moved = mesh_.move_vertex(active_, a + s * d);
-    s *= 2;  // the fraction taken
+    if (moved) grid_->refresh(active_);  // its triangles and edges are elsewhere now
+    s *= 2;                              // the fraction taken
     ++r.substeps;
     if (!moved) {
       r.status = SurfaceMoveStatus::kBlocked;
@@ -585,12 +596,14 @@ void SurfaceCutter::start(Index a, bool tip, double tau, const ScalpelSegment& f
 
 std::vector<SurfaceCutter::TipHit> SurfaceCutter::find_tip_entries(const ScalpelSegment& from,
                                                                    const ScalpelSegment& to) const {
-  // The tip (the tail end) moving from → to through a live triangle, earliest first, ties by
-  // the triangle's smallest vertex number. A scan of all triangles (no spatial index yet).
+  // The tip (the tail end) moving from → to through a live triangle (those in the cells of the
+  // path's bounding box), earliest first, ties by the triangle's smallest vertex number.
   std::vector<TipHit> out;
   const ScalpelSegment path{to.tail, from.tail};  // as a segment tail → head: from → to
   if (!((to.tail - from.tail).norm() > 0)) return out;
-  for (const ElementHandle e : mesh_.connectivity().elements()) {
+  for (const mesh::Simplex& s : grid_->near({from.tail, to.tail}, 3)) {
+    const ElementHandle e = mesh_.connectivity().find_element(s);
+    if (!e.valid()) continue;
     const auto t = mesh_.triangle(e);
     Vec3 x;
     if (!segment_triangle(path, mesh_.point(t[0]), mesh_.point(t[1]), mesh_.point(t[2]), x))

@@ -39,8 +39,9 @@
 /// entry through an exposed interior edge (Fig. 5.12, third case), a tip through an edge or a
 /// node, branching (Fig. 5.14: a folded star is followed at its nearest intersection). Thresholds
 /// are fractions of the starting mesh's mean edge length h̄ (Cutter2DOptions, §5.4 defaults).
-/// Entries are found by scans of the boundary map and of all triangles: the cost of a movement
-/// grows with the mesh (no spatial index yet); the work inside touches only the stars.
+/// Entries are found through a uniform 3D grid of cell h̄ over the triangles and boundary edges,
+/// kept current by watching the connectivity, so a movement touches only what is near the
+/// scalpel and the stars.
 
 #include <incise/core/outcome.hpp>
 #include <incise/delaunay/cutter2d.hpp>
@@ -49,9 +50,13 @@
 #include <incise/delaunay/sweep.hpp>
 
 #include <functional>
+#include <memory>
 #include <vector>
 
 namespace incise::delaunay {
+namespace detail {
+class SurfaceGrid;
+}
 
 /// Outcome of one surface scalpel movement.
 enum class SurfaceMoveStatus {
@@ -96,6 +101,9 @@ class SurfaceCutter {
   /// ParameterError for thresholds ≤ 0 or non-finite, dilation outside (0, 0.1],
   /// max_substeps < 1, or short_edge = kAngle.
   explicit SurfaceCutter(Surface& surface, Cutter2DOptions options = {});
+  ~SurfaceCutter();
+  SurfaceCutter(const SurfaceCutter&) = delete;
+  SurfaceCutter& operator=(const SurfaceCutter&) = delete;
 
   /// Moves the scalpel to s (m). The first call only places it. Throws ParameterError for a
   /// non-finite position or a zero-length scalpel.
@@ -162,6 +170,7 @@ class SurfaceCutter {
 
   Surface& mesh_;
   Cutter2DOptions options_;
+  std::unique_ptr<detail::SurfaceGrid> grid_;  // triangles and boundary edges by cell
   double h_ = 0, eps_edge_ = 0, eps_entry_ = 0, eps_exit_ = 0, delta_ = 0;
   CutPhase phase_ = CutPhase::kOutside;
   bool placed_ = false;
