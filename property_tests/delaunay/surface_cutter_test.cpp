@@ -380,6 +380,34 @@ TEST(DelaunaySurfaceCutter, Sec5_3_2Fig5_13IncisionsMeetingOnTheFoldAnnihilate) 
   EXPECT_EQ(test::components(s), 2);
 }
 
+TEST(DelaunaySurfaceCutter, Fig5_14AScalpelTurnedAcrossTheFoldBranchesTheIncision) {
+  // A coarse fold (12 × 6 cells, so a star spans a good part of its top): a vertical scalpel
+  // through the top cuts one incision along the axis; from y = −0.2 it turns towards the
+  // horizontal about the point 0.01 below the top, until it meets the fold twice within the
+  // active triangles — the folded case of Fig. 5.14: the incision branches into two.
+  Surface s(make_surface(SurfaceShape::kFold, 12, 6));
+  SurfaceCutter cutter(s);
+  Tally t;
+  int branched = 0, most = 0;
+  for (int k = 0; k <= 60; ++k) {
+    const double y = -1.2 + 0.04 * k;
+    const double phi = std::clamp((y + 0.2) / 0.8, 0.0, 1.0) * M_PI / 2;
+    const Vec3 c(0, y, 0.99), d(std::sin(phi), 0, std::cos(phi));
+    const auto r = cutter.move_to({c + 0.3 * d, c - 0.3 * d});
+    t.add(r);
+    ++t.validations;
+    branched += r.branched;
+    most = std::max(most, r.incisions);
+    EXPECT_TRUE(valid(s, generated(SurfaceShape::kFold))) << "after movement " << k;
+    EXPECT_FALSE(two_active_in_a_triangle(s, cutter)) << "after movement " << k;
+    if (::testing::Test::HasFailure()) break;
+  }
+  std::cout << "fold, turned scalpel: " << t << ", " << branched << " branchings\n";
+  EXPECT_GE(branched, 1) << t;
+  EXPECT_EQ(most, 2) << t;
+  EXPECT_EQ(t.entered, 1) << t;
+}
+
 TEST(DelaunaySurfaceCutter, CoincidingContactsAtABoundaryNodeAreOrderedAndRepeatable) {
   // The scalpel (u = 1/2 + 0.3 v) enters the cylinder patch exactly through the boundary node
   // at u = 1/2 of the end v = 0 (the sample at v = 0 is that node to the last bit): it touches

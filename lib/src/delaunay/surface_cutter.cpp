@@ -121,8 +121,9 @@ std::vector<SurfaceCutter::EntryHit> SurfaceCutter::find_entries(const ScalpelSe
   return out;
 }
 
-bool SurfaceCutter::star_intersection(const ScalpelSegment& s, Vec3& x,
-                                      SurfaceMoveReport& r) const {
+std::vector<Vec3> SurfaceCutter::star_intersections(const ScalpelSegment& s) const {
+  // The distinct intersections of the scalpel with the active triangles, nearest to the active
+  // node first (a scalpel through a shared edge or node is one intersection).
   const Vec3 a = mesh_.point(active_);
   std::vector<Vec3> hits;
   for (const ElementHandle e : mesh_.connectivity().star(active_)) {
@@ -133,14 +134,60 @@ bool SurfaceCutter::star_intersection(const ScalpelSegment& s, Vec3& x,
     for (const Vec3& z : hits) known = known || (z - y).norm() <= 1e-9 * h_;
     if (!known) hits.push_back(y);
   }
-  if (hits.empty()) return false;
-  // §5.3.1 follows a single intersection; more (a folded star, Fig. 5.14) would branch, which
-  // is not built: the one nearest the active node is followed and the rest counted.
   std::sort(hits.begin(), hits.end(), [&](const Vec3& u, const Vec3& w) {
     return (u - a).squaredNorm() < (w - a).squaredNorm();
   });
-  r.extra_intersections += static_cast<int>(hits.size()) - 1;
-  x = hits.front();
+  return hits;
+}
+
+bool SurfaceCutter::branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r) {
+  // Fig. 5.14: the scalpel meets the active triangles twice (a fold): a node goes in at each of
+  // the two nearest intersections, the edges from the active node to them are dissected, and
+  // two incisions with these active nodes replace the old one. Only intersections strictly
+  // inside two different triangles, and not next to another active node, are taken; anything
+  // else is refused before the mesh changes.
+  std::array<ElementHandle, 2> tri;
+  for (size_t k = 0; k < 2; ++k) {
+    for (const ElementHandle e : mesh_.connectivity().star(active_)) {
+      const auto t = mesh_.triangle(e);
+      const Vec3 p = mesh_.point(t[0]), u = mesh_.point(t[1]) - p, w = mesh_.point(t[2]) - p;
+      const Vec3 n = u.cross(w), d = hits[k] - p;
+      const double s1 = d.cross(w).dot(n) / n.squaredNorm(),
+                   s2 = u.cross(d).dot(n) / n.squaredNorm();
+      if (s1 > 1e-3 && s2 > 1e-3 && s1 + s2 < 1 - 1e-3) tri[k] = e;
+    }
+    if (!tri[k].valid()) return false;
+    for (const Index v : mesh_.triangle(tri[k]))
+      for (const Index w : mesh_.neighbours(v))
+        if (w != active_ && mesh_.is_active_node(w)) return false;
+  }
+  if (tri[0] == tri[1]) return false;
+  const Index n1 = mesh_.split_triangle(tri[0], hits[0]);
+  const Index n2 = n1 < 0 ? -1 : mesh_.split_triangle(tri[1], hits[1]);
+  if (n2 < 0) {
+    ++r.refused;  // n1, if made, stays an ordinary interior node
+    return false;
+  }
+  const Index c1 = detail::dissect_from_boundary(mesh_, active_, n1);
+  const Index from2 = c1 >= 0 && !mesh_.incident(c1, n2).empty() ? c1 : active_;
+  if (c1 < 0 || detail::dissect_from_boundary(mesh_, from2, n2) < 0) {
+    ++r.refused;  // the incision goes on (to n1 when only the second dissection failed)
+    return false;
+  }
+  for (const Index n : {n1, n2}) {
+    Incision i{n, CutPhase::kCutting, mesh_.point(n), IncisionTrack<Vec3>{}, false};
+    for (const ElementHandle e : mesh_.connectivity().star(n)) {
+      const auto t = starting_at(mesh_.triangle(e), n);
+      if (mesh_.is_boundary_edge(n, t[1])) i.track.right = t[1];
+      if (mesh_.is_boundary_edge(t[2], n)) i.track.left = t[2];
+    }
+    i.track.sides = {{i.track.left}, {i.track.right}};
+    i.track.path = {mesh_.point(n)};
+    spawned_.push_back(i);
+  }
+  r.branched = true;
+  phase_ = CutPhase::kOutside;  // the old incision ends at the branch
+  active_ = -1;
   return true;
 }
 
@@ -429,8 +476,10 @@ void SurfaceCutter::advance(const ScalpelSegment& from, const ScalpelSegment& to
       }
       break;
     }
-    Vec3 target;
-    if (!star_intersection(next, target, r)) {
+    const std::vector<Vec3> hits = star_intersections(next);
+    r.extra_intersections += hits.empty() ? 0 : static_cast<int>(hits.size()) - 1;
+    if (hits.size() >= 2 && phase_ == CutPhase::kCutting && branch(hits, r)) break;
+    if (hits.empty()) {
       r.status = SurfaceMoveStatus::kLost;
       r.message =
           "the scalpel no longer meets the active triangles; the incision ends at the "
@@ -438,7 +487,7 @@ void SurfaceCutter::advance(const ScalpelSegment& from, const ScalpelSegment& to
       end_incision();
       break;
     }
-    move_active(target, r);
+    move_active(hits.front(), r);
     if (phase_ == CutPhase::kDent && (mesh_.point(active_) - entry_).norm() > eps_entry_)
       tip_ ? tip_fix_up(r) : fix_up(r);
     if (phase_ == CutPhase::kCutting) {
@@ -459,13 +508,14 @@ void SurfaceCutter::load(const Incision& i) {
   entry_ = i.entry;
   track_ = i.track;
   tip_ = i.tip;
-  for (const Incision& o : incisions_)
-    mesh_.set_active_node(o.active, o.phase != CutPhase::kOutside);
+  for (const std::vector<Incision>* list : {&incisions_, &spawned_})
+    for (const Incision& o : *list) mesh_.set_active_node(o.active, o.phase != CutPhase::kOutside);
   mesh_.set_active_node(active_, true);
 }
 
 SurfaceCutter::Incision SurfaceCutter::store() {
-  for (const Incision& o : incisions_) mesh_.set_active_node(o.active, false);
+  for (const std::vector<Incision>* list : {&incisions_, &spawned_})
+    for (const Incision& o : *list) mesh_.set_active_node(o.active, false);
   if (active_ >= 0) mesh_.set_active_node(active_, false);
   return {active_, phase_, entry_, track_, tip_};
 }
@@ -476,6 +526,7 @@ void SurfaceCutter::merge(SurfaceMoveReport& r, const SurfaceMoveReport& sub) {
   r.exited = r.exited || sub.exited;
   r.tip_entered = r.tip_entered || sub.tip_entered;
   r.annihilated = r.annihilated || sub.annihilated;
+  r.branched = r.branched || sub.branched;
   r.submovements += sub.submovements;
   r.substeps += sub.substeps;
   r.removals += sub.removals;
@@ -523,6 +574,10 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
     incisions_[k] = store();
     merge(r, sub);
   }
+  // Branches (Fig. 5.14) are live from now (no entry in their triangles) and cut from the next
+  // movement on.
+  incisions_.insert(incisions_.end(), spawned_.begin(), spawned_.end());
+  spawned_.clear();
   // New incisions (Fig. 5.12, first case): every entering contact of the sweep with a boundary
   // edge, earliest first (ties by vertex numbers), each then cut over the rest of the movement.
   for (const EntryHit& e : find_entries(from, s)) {

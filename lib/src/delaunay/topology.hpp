@@ -190,6 +190,49 @@ bool remove_by_ears(Mesh& m, Index v, bool diagonal_fallback) {
   return true;
 }
 
+/// The triangles around the boundary node v from its outgoing boundary edge, in orientation
+/// order (empty when v has no outgoing boundary edge).
+template <class Mesh>
+std::vector<mesh::ElementHandle> boundary_fan(const Mesh& m, Index v) {
+  const mesh::Connectivity& c = m.connectivity();
+  std::vector<mesh::ElementHandle> out;
+  mesh::ElementHandle start;
+  for (const mesh::ElementHandle e : c.star(v)) {
+    const auto t = starting_at(m.triangle(e), v);
+    if (m.is_boundary_edge(v, t[1])) start = e;
+  }
+  for (mesh::ElementHandle e = start; e.valid() && out.size() <= c.star(v).size();) {
+    out.push_back(e);
+    e = left_of(c, v, starting_at(m.triangle(e), v)[2]);
+  }
+  return out;
+}
+
+/// Dissects the edge from the boundary node a to the interior node n (a branch of an incision
+/// reaches n, Fig. 5.14): a's triangles after a–n (in orientation order from its outgoing
+/// boundary edge) take a new copy of a, so n becomes a boundary node between a and the copy.
+/// Returns the copy, or −1 (unchanged but for an unused vertex when m refuses) otherwise.
+template <class Mesh>
+Index dissect_from_boundary(Mesh& m, Index a, Index n) {
+  const mesh::Connectivity& c = m.connectivity();
+  if (!is_interior_vertex(c, n)) return -1;
+  const mesh::ElementHandle t1 = left_of(c, a, n);
+  const std::vector<mesh::ElementHandle> fa = boundary_fan(m, a);
+  const auto it = std::find(fa.begin(), fa.end(), t1);
+  if (!t1.valid() || it == fa.end() || it == fa.begin()) return -1;
+  const Index copy = m.add_vertex(m.point(a));
+  std::vector<mesh::ElementHandle> remove(it, fa.end());
+  std::vector<std::array<Index, 3>> add;
+  for (const mesh::ElementHandle e : remove) {
+    auto t = m.triangle(e);
+    for (Index& v : t)
+      if (v == a) v = copy;
+    add.push_back(t);
+  }
+  if (!m.replace(remove, add)) return -1;
+  return copy;
+}
+
 /// The exit of an incision (§5.2.2, Fig. 5.7 (c)–(d)): the interior edge a–n between the active
 /// node a and the boundary node n is dissected and contracted into n. The triangles at a–n go;
 /// a's other triangles take n (the c_l side) or a new copy n2 of n (the c_r side), and so do
@@ -201,21 +244,7 @@ Index dissect_and_contract(Mesh& m, Index a, Index n) {
   const mesh::Connectivity& c = m.connectivity();
   const mesh::ElementHandle t1 = left_of(c, a, n), t2 = left_of(c, n, a);
   if (!t1.valid() || !t2.valid()) return -1;
-  // Fans around v from its outgoing boundary edge, in orientation order.
-  auto fan = [&](Index v) {
-    std::vector<mesh::ElementHandle> out;
-    mesh::ElementHandle start;
-    for (const mesh::ElementHandle e : c.star(v)) {
-      const auto t = starting_at(m.triangle(e), v);
-      if (m.is_boundary_edge(v, t[1])) start = e;
-    }
-    for (mesh::ElementHandle e = start; e.valid() && out.size() <= c.star(v).size();) {
-      out.push_back(e);
-      e = left_of(c, v, starting_at(m.triangle(e), v)[2]);
-    }
-    return out;
-  };
-  const std::vector<mesh::ElementHandle> fa = fan(a), fn = fan(n);
+  const std::vector<mesh::ElementHandle> fa = boundary_fan(m, a), fn = boundary_fan(m, n);
   const auto ia2 = std::find(fa.begin(), fa.end(), t2), in2 = std::find(fn.begin(), fn.end(), t2);
   if (std::find(fa.begin(), fa.end(), t1) == fa.end() || ia2 == fa.end() ||
       std::find(fn.begin(), fn.end(), t1) == fn.end() || in2 == fn.end())

@@ -77,6 +77,7 @@ struct [[nodiscard]] SurfaceMoveReport
   bool fixed_up = false;                ///< the entry fix-up was made
   bool exited = false;                  ///< the incision reached the boundary (exit)
   bool annihilated = false;             ///< two incisions met and ended (Fig. 5.13)
+  bool branched = false;                ///< an incision branched into two (Fig. 5.14)
   int submovements = 0;                 ///< d_max sub-movements (Fig. 5.11)
   int substeps = 0;                     ///< moves of the active node
   long flips = 0;                       ///< edge flips
@@ -152,7 +153,7 @@ class SurfaceCutter {
   Incision store();
   static void merge(SurfaceMoveReport& r, const SurfaceMoveReport& sub);
   bool is_active(Index v) const;
-  bool star_intersection(const ScalpelSegment& s, Vec3& x, SurfaceMoveReport& r) const;
+  std::vector<Vec3> star_intersections(const ScalpelSegment& s) const;
   bool sweep_exit(const ScalpelSegment& from, const ScalpelSegment& to, Index& p, Index& q,
                   Vec3& x) const;
   bool near_exit(double radius, Index& p, Index& q, Vec3& x) const;
@@ -165,6 +166,7 @@ class SurfaceCutter {
   void split_incision(SurfaceMoveReport& r);
   bool exit_at(Index p, Index q, const Vec3& x, SurfaceMoveReport& r);
   bool annihilate(SurfaceMoveReport& r);
+  bool branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r);
   bool is_forbidden(Index p, Index q) const;
   void end_incision();
 
@@ -180,6 +182,7 @@ class SurfaceCutter {
   IncisionTrack<Vec3> track_;                   // the working incision's node pair, path and sides
   bool tip_ = false;                            // the working incision entered with the tip
   std::vector<Incision> incisions_, finished_;  // live (oldest first) and ended incisions
+  std::vector<Incision> spawned_;               // branches of this movement (from the next on)
   struct ForbiddenZone {  // the boundary edges at an exit, closed for entry near it
     std::vector<Edge> edges;
     Vec3 near = Vec3::Zero();
