@@ -144,8 +144,9 @@ bool SurfaceCutter::branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r) 
   // Fig. 5.14: the scalpel meets the active triangles twice (a fold): a node goes in at each of
   // the two nearest intersections, the edges from the active node to them are dissected, and
   // two incisions with these active nodes replace the old one. Only intersections strictly
-  // inside two different triangles, and not next to another active node, are taken; anything
-  // else is refused before the mesh changes.
+  // inside two different triangles, and not next to another active node, are taken (else
+  // refused before the mesh changes); when only the first dissection succeeds, the incision
+  // goes on from the first node alone.
   std::array<ElementHandle, 2> tri;
   for (size_t k = 0; k < 2; ++k) {
     for (const ElementHandle e : mesh_.connectivity().star(active_)) {
@@ -169,12 +170,17 @@ bool SurfaceCutter::branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r) 
     return false;
   }
   const Index c1 = detail::dissect_from_boundary(mesh_, active_, n1);
-  const Index from2 = c1 >= 0 && !mesh_.incident(c1, n2).empty() ? c1 : active_;
-  if (c1 < 0 || detail::dissect_from_boundary(mesh_, from2, n2) < 0) {
-    ++r.refused;  // the incision goes on (to n1 when only the second dissection failed)
+  if (c1 < 0) {
+    ++r.refused;  // n1 and n2 stay ordinary interior nodes; the incision goes on
     return false;
   }
-  for (const Index n : {n1, n2}) {
+  const Index from2 = !mesh_.incident(c1, n2).empty() ? c1 : active_;
+  std::vector<Index> tips{n1};
+  if (detail::dissect_from_boundary(mesh_, from2, n2) >= 0)
+    tips.push_back(n2);
+  else
+    ++r.refused;  // only the branch to n1 is made: the incision goes on from there
+  for (const Index n : tips) {
     Incision i{n, CutPhase::kCutting, mesh_.point(n), IncisionTrack<Vec3>{}, false};
     for (const ElementHandle e : mesh_.connectivity().star(n)) {
       const auto t = starting_at(mesh_.triangle(e), n);
