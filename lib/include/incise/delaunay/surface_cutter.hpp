@@ -31,13 +31,16 @@
 ///     split; exit (Fig. 5.7) when the sweep crosses a boundary edge of the star or the active
 ///     node comes within ε_exit of one: a node on that edge, the edge to it dissected and
 ///     contracted; annihilation (Fig. 5.13) when the active node comes within ε_edge of a node
-///     next to another active node: the two incisions join and end.
+///     next to another active node: the two incisions join and end; branching (Fig. 5.14) when
+///     the scalpel meets the active triangles twice (a fold): nodes at the two nearest
+///     intersections, the edges to them dissected, two incisions instead of one from the next
+///     movement on.
 /// All live active nodes are marked on the Surface, which refuses any change that would put two
 /// in one triangle (restriction 3 and "at most one active node per triangle"). A scalpel that no
 /// longer meets the active triangles (lifted off the surface, or a jump past the d_max floor)
 /// ends the incision where it is (status kLost: the slit stays, the mesh is valid). Not built:
 /// entry through an exposed interior edge (Fig. 5.12, third case), a tip through an edge or a
-/// node, branching (Fig. 5.14: a folded star is followed at its nearest intersection). Thresholds
+/// node, more than two branches at once (the two nearest intersections are taken). Thresholds
 /// are fractions of the starting mesh's mean edge length h̄ (Cutter2DOptions, §5.4 defaults).
 /// Entries are found through a uniform 3D grid of cell h̄ over the triangles and boundary edges,
 /// kept current by watching the connectivity, so a movement touches only what is near the
