@@ -509,7 +509,7 @@ void SurfaceCutter::advance(const ScalpelSegment& from, const ScalpelSegment& to
 void SurfaceCutter::load(const Incision& i) {
   // The working incision in active_, phase_, entry_, track_; every live active node (this one
   // included) marked on the surface, which then refuses any triangle with two (§5.3.2).
-  active_ = i.active;
+  active_ = loaded_ = i.active;
   phase_ = i.phase;
   entry_ = i.entry;
   track_ = i.track;
@@ -522,6 +522,8 @@ void SurfaceCutter::load(const Incision& i) {
 SurfaceCutter::Incision SurfaceCutter::store() {
   for (const std::vector<Incision>* list : {&incisions_, &spawned_})
     for (const Incision& o : *list) mesh_.set_active_node(o.active, false);
+  // The node loaded too: an incision that ended (lost) leaves it an ordinary node, unmarked.
+  mesh_.set_active_node(loaded_, false);
   if (active_ >= 0) mesh_.set_active_node(active_, false);
   return {active_, phase_, entry_, track_, tip_};
 }

@@ -181,6 +181,7 @@ class SurfaceCutter {
   bool placed_ = false;
   ScalpelSegment scalpel_;
   Index active_ = -1;
+  Index loaded_ = -1;  // the working incision's active node when it was loaded
   Vec3 entry_ = Vec3::Zero();
   IncisionTrack<Vec3> track_;                   // the working incision's node pair, path and sides
   bool tip_ = false;                            // the working incision entered with the tip
