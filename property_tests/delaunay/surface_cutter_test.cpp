@@ -38,6 +38,11 @@ struct TestSurface {
   if (!r.ok())
     return ::testing::AssertionFailure()
            << r.violations.front().invariant << ": " << r.violations.front().message;
+  // Between movements no node is marked active on the Surface (the cutter marks them only while
+  // it works; a stale mark would restrict flips next to an ordinary node for good).
+  for (Index v = 0; v < s.connectivity().num_vertices(); ++v)
+    if (s.is_active_node(v))
+      return ::testing::AssertionFailure() << "node " << v << " still marked";
   for (const mesh::ElementHandle e : s.connectivity().elements()) {
     const auto t = s.triangle(e);
     const Vec3 a = s.point(t[0]), b = s.point(t[1]), c = s.point(t[2]);
