@@ -2,6 +2,8 @@
 
 #include <incise/delaunay/predicates.hpp>
 #include "boundary_grid.hpp"
+#include "incision.hpp"
+#include "topology.hpp"
 
 #include <incise/core/error.hpp>
 
@@ -12,6 +14,7 @@
 namespace incise::delaunay {
 namespace {
 
+using detail::starting_at;
 using mesh::ElementHandle;
 
 double cross(const Vec2& a, const Vec2& b) {
@@ -29,12 +32,6 @@ bool segment_intersection(const Vec2& p0, const Vec2& p1, const Vec2& q0, const 
   t = cross(q0 - p0, d) / den;
   s = cross(q0 - p0, r) / den;
   return t >= 0 && t <= 1 && s >= 0 && s <= 1;
-}
-
-/// Rotates a counter-clockwise triple so that v comes first.
-std::array<Index, 3> starting_at(std::array<Index, 3> t, Index v) {
-  while (t[0] != v) std::rotate(t.begin(), t.begin() + 1, t.end());
-  return t;
 }
 
 }  // namespace
@@ -71,7 +68,7 @@ Cutter2D::~Cutter2D() {
 }
 
 bool Cutter2D::is_incision_node(Index v) const {
-  for (const auto& side : sides_)
+  for (const auto& side : track_.sides)
     if (std::find(side.begin(), side.end(), v) != side.end()) return true;
   return false;
 }
@@ -127,13 +124,7 @@ bool Cutter2D::locate_entry(const Vec2& from, const Vec2& to, Index& p, Index& q
 }
 
 void Cutter2D::legalize_around(Index v, CutMove2DReport& r) {
-  std::vector<Edge> edges;
-  for (const ElementHandle e : mesh_.connectivity().star(v)) {
-    const auto t = mesh_.triangle(e);
-    for (int i = 0; i < 3; ++i)
-      edges.push_back(make_edge(t[static_cast<size_t>(i)], t[static_cast<size_t>((i + 1) % 3)]));
-  }
-  r.flips += mesh_.legalize(edges);
+  r.flips += detail::legalize_star(mesh_, v);
 }
 
 bool Cutter2D::too_short(Index v) const {
@@ -152,17 +143,9 @@ bool Cutter2D::too_short(Index v) const {
 }
 
 void Cutter2D::remove_close_nodes(CutMove2DReport& r) {
-  for (bool again = true; again;) {
-    again = false;
-    for (const Index v : mesh_.neighbours(active_)) {
-      if (is_incision_node(v) || !mesh_.is_interior_vertex(v) || !too_short(v)) continue;
-      if (mesh_.remove_vertex(v)) {
-        ++r.removals;
-        again = true;
-        break;
-      }
-    }
-  }
+  r.removals += detail::remove_close_nodes(
+      mesh_, active_, [&](Index v) { return too_short(v); },
+      [&](Index v) { return is_incision_node(v); });
 }
 
 bool Cutter2D::move_keeping_shape(const Vec2& x) {
@@ -208,7 +191,7 @@ void Cutter2D::move_active(const Vec2& target, CutMove2DReport& r) {
     remove_close_nodes(r);
     legalize_around(active_, r);
     if (phase_ == CutPhase::kCutting) {
-      path_.push_back(mesh_.point(active_));
+      track_.path.push_back(mesh_.point(active_));
       split_incision(r);
     }
     const bool changed = mesh_.num_flips() + r.removals + r.splits != changes;
@@ -234,45 +217,21 @@ void Cutter2D::move_active(const Vec2& target, CutMove2DReport& r) {
 }
 
 void Cutter2D::fix_up(CutMove2DReport& r) {
-  // Boundary neighbours of a: bl → a → br (interior on the left).
-  Index bl = -1, br = -1;
-  for (const ElementHandle e : mesh_.connectivity().star(active_)) {
-    const auto t = starting_at(mesh_.triangle(e), active_);
-    if (mesh_.is_boundary_edge(active_, t[1])) br = t[1];
-    if (mesh_.is_boundary_edge(t[2], active_)) bl = t[2];
-  }
-  if (bl < 0 || br < 0 || bl == br) {
-    ++r.refused;
-    return;
-  }
-  const Vec2 e = entry_;
-  auto toward = [&](Index v) {
-    const Vec2 d = mesh_.point(v) - e;
-    return Vec2(e + delta_ * d / d.norm());
-  };
-  const Index cl = mesh_.add_vertex(toward(bl)), cr = mesh_.add_vertex(toward(br));
-  if (!mesh_.replace({}, {{bl, cl, active_}, {active_, cr, br}})) {
-    ++r.refused;  // the new vertices stay unused
+  if (!detail::fix_up(track_, mesh_, active_, entry_, delta_)) {
+    ++r.refused;  // the new vertices, if any, stay unused
     return;
   }
   r.fixed_up = true;
-  side_l_ = cl;
-  side_r_ = cr;
-  sides_.push_back({cl});
-  sides_.push_back({cr});
-  path_ = {entry_, mesh_.point(active_)};
   phase_ = CutPhase::kCutting;
-  for (const Index v : {cl, cr, active_}) legalize_around(v, r);
 }
 
 void Cutter2D::split_incision(CutMove2DReport& r) {
   for (int k = 0; k < 16; ++k) {
-    const ElementHandle tl = mesh_.left_of(side_l_, active_), tr = mesh_.left_of(active_, side_r_);
-    if (!tl.valid() || !tr.valid()) return;
-    const Index ol = starting_at(mesh_.triangle(tl), side_l_)[2];
-    const Index orr = starting_at(mesh_.triangle(tr), active_)[2];
-    if (ol == orr) return;
-    const Vec2 a = mesh_.point(active_), c = 0.5 * (mesh_.point(side_l_) + mesh_.point(side_r_));
+    ElementHandle tl, tr;
+    Index ol, orr;
+    if (!detail::cut_edge_triangles(track_, mesh_, active_, tl, tr, ol, orr)) return;
+    const Vec2 a = mesh_.point(active_),
+               c = 0.5 * (mesh_.point(track_.left) + mesh_.point(track_.right));
     const Vec2 pl = mesh_.point(ol), pr = mesh_.point(orr);
     // Fig. 5.5: the incision as the edge c–a in the quadrilateral c, o_r, a, o_l.
     if (orient2d(c, a, pl) <= 0 || orient2d(a, c, pr) <= 0) return;
@@ -283,8 +242,8 @@ void Cutter2D::split_incision(CutMove2DReport& r) {
     double best = std::numeric_limits<double>::infinity();
     Vec2 x = Vec2::Zero();
     size_t seg = 0;
-    for (size_t i = 0; i + 1 < path_.size(); ++i) {
-      const Vec2 p0 = path_[i], p1 = path_[i + 1];
+    for (size_t i = 0; i + 1 < track_.path.size(); ++i) {
+      const Vec2 p0 = track_.path[i], p1 = track_.path[i + 1];
       double t, s2;
       if (segment_intersection(p0, p1, pl, pr, t, s2)) {
         best = 0;
@@ -310,32 +269,16 @@ void Cutter2D::split_incision(CutMove2DReport& r) {
       }
     }
     if (!std::isfinite(best)) return;
-    const Vec2 xl = x + delta_ * (pl - x).normalized(), xr = x + delta_ * (pr - x).normalized();
-    const Index nl = mesh_.add_vertex(xl), nr = mesh_.add_vertex(xr);
-    if (!mesh_.replace(
-            {tl, tr},
-            {{side_l_, nl, ol}, {nl, active_, ol}, {active_, nr, orr}, {nr, side_r_, orr}})) {
+    if (!detail::split(track_, mesh_, active_, tl, tr, ol, orr, x, seg, delta_)) {
       ++r.refused;
       return;
     }
     ++r.splits;
-    side_l_ = nl;
-    side_r_ = nr;
-    sides_[sides_.size() - 2].push_back(nl);
-    sides_.back().push_back(nr);
-    path_.erase(path_.begin(), path_.begin() + static_cast<std::ptrdiff_t>(seg) + 1);
-    path_.insert(path_.begin(), x);
-    legalize_around(nl, r);
-    legalize_around(nr, r);
   }
 }
 
 Index Cutter2D::boundary_node_at(Index p, Index q, const Vec2& x, double snap) {
-  // An end of the edge within `snap` of x, else a new node at x (never a new node that close
-  // to an existing one: it would make a sliver); −1 when the split is refused.
-  if ((mesh_.point(p) - x).norm() < snap) return p;
-  if ((mesh_.point(q) - x).norm() < snap) return q;
-  return mesh_.split_boundary_edge(p, q, x);
+  return detail::boundary_node_at(mesh_, p, q, x, snap);
 }
 
 bool Cutter2D::exit_at(Index p, Index q, const Vec2& x, CutMove2DReport& r) {
@@ -358,69 +301,14 @@ bool Cutter2D::exit_at(Index p, Index q, const Vec2& x, CutMove2DReport& r) {
     }
     if (!flipped) break;
   }
-  const ElementHandle t1 = mesh_.left_of(active_, n), t2 = mesh_.left_of(n, active_);
-  if (!t1.valid() || !t2.valid()) {
+  if (!detail::exit(track_, mesh_, active_, n, forbidden_)) {
     ++r.refused;  // n stays a boundary node; the incision goes on
     return false;
   }
-  // Fans around a (from its outgoing boundary edge, counter-clockwise) and around n.
-  auto fan = [&](Index v) {
-    std::vector<ElementHandle> out;
-    ElementHandle start;
-    for (const ElementHandle e : mesh_.connectivity().star(v)) {
-      const auto t = starting_at(mesh_.triangle(e), v);
-      if (mesh_.is_boundary_edge(v, t[1])) start = e;
-    }
-    for (ElementHandle e = start; e.valid() && out.size() <= mesh_.connectivity().star(v).size();) {
-      out.push_back(e);
-      const auto t = starting_at(mesh_.triangle(e), v);
-      e = mesh_.left_of(v, t[2]);
-    }
-    return out;
-  };
-  const std::vector<ElementHandle> fa = fan(active_), fn = fan(n);
-  const auto ia1 = std::find(fa.begin(), fa.end(), t1), ia2 = std::find(fa.begin(), fa.end(), t2);
-  const auto in1 = std::find(fn.begin(), fn.end(), t1), in2 = std::find(fn.begin(), fn.end(), t2);
-  if (ia1 == fa.end() || ia2 == fa.end() || in1 == fn.end() || in2 == fn.end()) {
-    ++r.refused;
-    return false;
-  }
-  const Index n2 = mesh_.add_vertex(mesh_.point(n));
-  std::vector<ElementHandle> remove;
-  std::vector<std::array<Index, 3>> add;
-  auto substituted = [&](ElementHandle e, Index from, Index to) {
-    auto t = mesh_.triangle(e);
-    for (Index& v : t)
-      if (v == from) v = to;
-    return t;
-  };
-  for (auto it = fa.begin(); it != fa.end(); ++it) {
-    remove.push_back(*it);
-    if (*it == t1 || *it == t2) continue;
-    // Before t2 (counter-clockwise from the outgoing edge a → c_r): the c_r side, copy n2.
-    add.push_back(substituted(*it, active_, it < ia2 ? n2 : n));
-  }
-  for (auto it = in2 + 1; it != fn.end(); ++it) {  // n's fan after t2: the c_r side
-    remove.push_back(*it);
-    add.push_back(substituted(*it, n, n2));
-  }
-  if (!mesh_.replace(remove, add)) {
-    ++r.refused;
-    return false;
-  }
   r.exited = true;
-  if (sides_.size() >= 2) {
-    sides_[sides_.size() - 2].push_back(n);
-    sides_.back().push_back(n2);
-  }
-  forbidden_.clear();
-  for (const Index v : {n, n2})
-    for (const Index w : mesh_.neighbours(v))
-      if (mesh_.is_boundary_edge(v, w)) forbidden_.push_back(make_edge(v, w));
   forbidden_near_ = x;
   phase_ = CutPhase::kOutside;
   active_ = -1;
-  for (const Index v : {n, n2}) legalize_around(v, r);
   return true;
 }
 

@@ -1,10 +1,12 @@
 #include <incise/delaunay/predicates.hpp>
 #include <incise/delaunay/triangulation.hpp>
+#include "topology.hpp"
 
 #include <incise/core/error.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace incise::delaunay {
@@ -13,12 +15,7 @@ namespace {
 using mesh::ElementHandle;
 using mesh::Simplex;
 
-/// The vertices of triangle s in counter-clockwise order (positive orientation, §7.2: the
-/// sorted sequence for sign +1, one swap for −1).
-std::array<Index, 3> ccw(const Simplex& s) {
-  if (s.sign() > 0) return {s.vertex(0), s.vertex(1), s.vertex(2)};
-  return {s.vertex(0), s.vertex(2), s.vertex(1)};
-}
+using detail::oriented;
 
 double angle_at(const Vec2& p, const Vec2& a, const Vec2& b) {
   const Vec2 u = a - p, w = b - p;
@@ -51,19 +48,11 @@ Triangulation::Triangulation(const mesh::MeshData& mesh) : conn_(2), points_(mes
 }
 
 std::vector<ElementHandle> Triangulation::incident(Index p, Index q) const {
-  std::vector<ElementHandle> out;
-  if (p < 0 || p >= conn_.num_vertices()) return out;
-  for (const ElementHandle e : conn_.star(p))
-    if (conn_.simplex(e).contains(q)) out.push_back(e);
-  return out;
+  return detail::incident(conn_, p, q);
 }
 
 bool Triangulation::is_interior_vertex(Index v) const {
-  if (v < 0 || v >= conn_.num_vertices() || conn_.star_size(v) == 0) return false;
-  for (const ElementHandle e : conn_.star(v))
-    for (const Index w : ccw(conn_.simplex(e)))
-      if (w != v && incident(v, w).size() != 2) return false;
-  return true;
+  return detail::is_interior_vertex(conn_, v);
 }
 
 void Triangulation::set_constrained(Index p, Index q, bool constrained) {
@@ -74,18 +63,11 @@ void Triangulation::set_constrained(Index p, Index q, bool constrained) {
 }
 
 ElementHandle Triangulation::left_of(Index p, Index q) const {
-  for (const ElementHandle e : incident(p, q)) {
-    const auto t = ccw(conn_.simplex(e));
-    for (int i = 0; i < 3; ++i)
-      if (t[static_cast<size_t>(i)] == p && t[static_cast<size_t>((i + 1) % 3)] == q) return e;
-  }
-  return {};
+  return detail::left_of(conn_, p, q);
 }
 
 Index Triangulation::third(ElementHandle e, Index p, Index q) const {
-  for (const Index w : ccw(conn_.simplex(e)))
-    if (w != p && w != q) return w;
-  return -1;
+  return detail::third(conn_, e, p, q);
 }
 
 bool Triangulation::is_locally_delaunay(Index p, Index q) const {
@@ -112,94 +94,24 @@ bool Triangulation::flip(Index p, Index q) {
 }
 
 long Triangulation::legalize(std::vector<Edge> edges) {
-  long made = 0;
-  while (!edges.empty()) {
-    const Edge e = edges.back();
-    edges.pop_back();
-    if (is_locally_delaunay(e.first, e.second)) continue;
-    const ElementHandle l = left_of(e.first, e.second), r = left_of(e.second, e.first);
-    const Index c = third(l, e.first, e.second), d = third(r, e.second, e.first);
-    // An illegal interior edge always bounds a strictly convex quadrilateral (d inside the
-    // circumcircle of p q c, on the other side of pq), so the flip succeeds.
-    if (!flip(e.first, e.second)) continue;
-    ++made;
-    for (const Edge& o : {make_edge(e.first, c), make_edge(c, e.second), make_edge(e.second, d),
-                          make_edge(d, e.first)})
-      edges.push_back(o);
-  }
-  return made;
+  // Terminates without a cap (file comment): the cap is never reached.
+  return detail::lawson_legalize(*this, std::move(edges), std::numeric_limits<long>::max());
 }
 
 std::vector<Edge> Triangulation::edges() const {
-  std::vector<Edge> out;
-  for (const ElementHandle e : conn_.elements()) {
-    const auto t = ccw(conn_.simplex(e));
-    for (int i = 0; i < 3; ++i)
-      out.push_back(make_edge(t[static_cast<size_t>(i)], t[static_cast<size_t>((i + 1) % 3)]));
-  }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
+  return detail::edges(conn_);
 }
 
 bool Triangulation::remove_vertex(Index v) {
-  if (!is_interior_vertex(v)) return false;
-  for (const ElementHandle e : conn_.star(v))
-    for (const Index w : ccw(conn_.simplex(e)))
-      if (w != v && is_constrained(v, w)) return false;
-  std::vector<Edge> link;  // link polygon edges and ear diagonals, legalized at the end
-  // Fig. 5.10: flip ears until degree 3. Each flip lowers the degree by one; the loop is
-  // bounded by the initial degree (a pass without a flip ends it: reported as false below).
-  while (conn_.star_size(v) > 3) {
-    bool flipped = false;
-    for (const ElementHandle e : conn_.star(v)) {
-      const auto t = ccw(conn_.simplex(e));
-      const int i = static_cast<int>(std::find(t.begin(), t.end(), v) - t.begin());
-      const Index w = t[static_cast<size_t>((i + 1) % 3)];
-      const ElementHandle r = left_of(w, v);
-      if (!r.valid()) continue;
-      const Index prev = third(r, w, v), next = t[static_cast<size_t>((i + 2) % 3)];
-      link.push_back(make_edge(prev, w));
-      link.push_back(make_edge(w, next));
-      if (flip(v, w)) {
-        link.push_back(make_edge(prev, next));  // the ear's diagonal
-        flipped = true;
-        break;
-      }
-    }
-    if (!flipped) return false;  // not star-shaped from v: cannot happen for a valid mesh
-  }
-  const std::vector<ElementHandle> star = conn_.star(v);
-  std::array<Index, 3> outer{};
-  {
-    // The link triangle, counter-clockwise: the successor of v in each star triangle.
-    const auto t = ccw(conn_.simplex(star[0]));
-    const int i = static_cast<int>(std::find(t.begin(), t.end(), v) - t.begin());
-    outer[0] = t[static_cast<size_t>((i + 1) % 3)];
-    outer[1] = t[static_cast<size_t>((i + 2) % 3)];
-    outer[2] = third(left_of(v, outer[1]), v, outer[1]);
-  }
-  conn_.replace_elements(star, {Simplex({outer[0], outer[1], outer[2]})});
-  for (int i = 0; i < 3; ++i)
-    link.push_back(
-        make_edge(outer[static_cast<size_t>(i)], outer[static_cast<size_t>((i + 1) % 3)]));
-  legalize(link);
-  return true;
+  return detail::remove_by_ears(*this, v, /*diagonal_fallback=*/false);
 }
 
 std::array<Index, 3> Triangulation::triangle(ElementHandle e) const {
-  return ccw(conn_.simplex(e));
+  return oriented(conn_.simplex(e));
 }
 
 std::vector<Index> Triangulation::neighbours(Index v) const {
-  std::vector<Index> out;
-  if (v < 0 || v >= conn_.num_vertices()) return out;
-  for (const ElementHandle e : conn_.star(v))
-    for (const Index w : ccw(conn_.simplex(e)))
-      if (w != v) out.push_back(w);
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
+  return detail::neighbours(conn_, v);
 }
 
 Index Triangulation::add_vertex(const Vec2& x) {
@@ -216,7 +128,7 @@ bool Triangulation::move_vertex(Index v, const Vec2& x) {
   INCISE_CHECK_PARAM(x.allFinite(), "Triangulation::move_vertex: non-finite position");
   for (const ElementHandle e : conn_.star(v)) {
     std::array<Vec2, 3> p;
-    const auto t = ccw(conn_.simplex(e));
+    const auto t = oriented(conn_.simplex(e));
     for (int i = 0; i < 3; ++i)
       p[static_cast<size_t>(i)] =
           t[static_cast<size_t>(i)] == v ? x : point(t[static_cast<size_t>(i)]);
@@ -243,7 +155,7 @@ bool Triangulation::replace(const std::vector<ElementHandle>& remove,
 Index Triangulation::split_boundary_edge(Index p, Index q, const Vec2& x) {
   const std::vector<ElementHandle> inc = incident(p, q);
   if (inc.size() != 1) return -1;
-  const auto t = ccw(conn_.simplex(inc[0]));
+  const auto t = oriented(conn_.simplex(inc[0]));
   // Rotate so that the triangle reads (a, b, r) with {a, b} = {p, q}.
   int i = 0;
   while (t[static_cast<size_t>(i)] == p || t[static_cast<size_t>(i)] == q) ++i;
@@ -263,7 +175,7 @@ Index Triangulation::split_edge(Index p, Index q, const Vec2& x) {
   const Index n = conn_.num_vertices();
   std::vector<std::array<Index, 3>> add;
   for (const ElementHandle e : inc) {
-    auto t = ccw(conn_.simplex(e));
+    auto t = oriented(conn_.simplex(e));
     while (t[0] == p || t[0] == q) std::rotate(t.begin(), t.begin() + 1, t.end());
     // t = (r, a, b) with {a, b} = {p, q}: (a, n, r) and (n, b, r).
     add.push_back({t[1], n, t[0]});
@@ -283,7 +195,7 @@ Index Triangulation::split_edge(Index p, Index q, const Vec2& x) {
 
 Index Triangulation::split_triangle(ElementHandle e, const Vec2& x) {
   if (!conn_.is_alive(e) || !x.allFinite()) return -1;
-  const auto t = ccw(conn_.simplex(e));
+  const auto t = oriented(conn_.simplex(e));
   for (int i = 0; i < 3; ++i)
     if (orient2d(point(t[static_cast<size_t>(i)]), point(t[static_cast<size_t>((i + 1) % 3)]), x) <=
         0)
@@ -295,7 +207,7 @@ Index Triangulation::split_triangle(ElementHandle e, const Vec2& x) {
 
 ElementHandle Triangulation::locate(const Vec2& x) const {
   for (const ElementHandle e : conn_.elements()) {
-    const auto t = ccw(conn_.simplex(e));
+    const auto t = oriented(conn_.simplex(e));
     bool in = true;
     for (int i = 0; i < 3 && in; ++i)
       in = orient2d(point(t[static_cast<size_t>(i)]), point(t[static_cast<size_t>((i + 1) % 3)]),
@@ -308,7 +220,7 @@ ElementHandle Triangulation::locate(const Vec2& x) const {
 std::pair<double, double> Triangulation::angle_range() const {
   double lo = 4, hi = 0;
   for (const ElementHandle e : conn_.elements()) {
-    const auto t = ccw(conn_.simplex(e));
+    const auto t = oriented(conn_.simplex(e));
     for (int i = 0; i < 3; ++i) {
       const double a =
           angle_at(point(t[static_cast<size_t>(i)]), point(t[static_cast<size_t>((i + 1) % 3)]),

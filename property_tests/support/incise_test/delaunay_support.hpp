@@ -23,8 +23,9 @@ inline ::testing::AssertionResult valid(const delaunay::Triangulation& t) {
          << r.violations.front().invariant << ": " << r.violations.front().message;
 }
 
-/// Face-connected components of the live triangles.
-inline int components(const delaunay::Triangulation& t) {
+/// Face-connected components of the live triangles (a Triangulation or a Surface).
+template <class Mesh>
+int components(const Mesh& t) {
   const auto& c = t.connectivity();
   std::vector<mesh::ElementHandle> all = c.elements();
   std::map<std::pair<Index, int>, int> seen;

@@ -35,6 +35,7 @@
 /// movement's report and leaves a valid mesh.
 
 #include <incise/core/outcome.hpp>
+#include <incise/delaunay/incision_track.hpp>
 #include <incise/delaunay/triangulation.hpp>
 
 #include <memory>
@@ -115,7 +116,7 @@ class Cutter2D {
   /// Mean edge length h̄ of the starting mesh (m).
   double mean_edge() const { return h_; }
   /// The incision nodes of the current and finished incisions, in path order per side.
-  const std::vector<std::vector<Index>>& incision_sides() const { return sides_; }
+  const std::vector<std::vector<Index>>& incision_sides() const { return track_.sides; }
 
  private:
   bool locate_entry(const Vec2& from, const Vec2& to, Index& p, Index& q, double& t) const;
@@ -141,9 +142,7 @@ class Cutter2D {
   Index active_ = -1;
   Vec2 entry_ = Vec2::Zero();
   Index dent_left_ = -1, dent_right_ = -1;  // boundary neighbours of a at entry
-  Index side_l_ = -1, side_r_ = -1;         // last incision nodes (cut edges (l, a), (a, r))
-  std::vector<Vec2> path_;                  // scalpel positions since the last incision node
-  std::vector<std::vector<Index>> sides_;   // incision nodes, two lists per incision
+  IncisionTrack<Vec2> track_;               // last node pair, path since it, all sides
   std::vector<Edge> forbidden_;
   Vec2 forbidden_near_ = Vec2::Zero();
 };

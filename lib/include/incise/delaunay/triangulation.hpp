@@ -13,6 +13,7 @@
 /// surface of the constrained triangulation) and never flips a cocircular quadrilateral.
 
 #include <incise/core/types.hpp>
+#include <incise/delaunay/edge.hpp>
 #include <incise/mesh/connectivity.hpp>
 #include <incise/mesh/mesh_data.hpp>
 
@@ -22,13 +23,6 @@
 #include <vector>
 
 namespace incise::delaunay {
-
-/// An undirected edge (p, q) with p < q.
-using Edge = std::pair<Index, Index>;
-/// The edge {p, q} in canonical order.
-inline Edge make_edge(Index p, Index q) {
-  return p < q ? Edge{p, q} : Edge{q, p};
-}
 
 /// Planar triangulation with positions and constrained edges (see file comment).
 class Triangulation {
