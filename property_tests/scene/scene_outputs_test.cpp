@@ -6,6 +6,8 @@
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
 
+#include <incise_test/files.hpp>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -26,24 +28,12 @@ using namespace incise;
 
 /// An empty folder for one test's files.
 fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("incise_scene_outputs_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
+  return incise::test::fresh_dir("incise_scene_outputs_test", name);
 }
 
+using incise::test::lines_of;
 std::string read(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream os;
-  os << in.rdbuf();
-  return os.str();
-}
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> out;
-  std::istringstream in(text);
-  for (std::string l; std::getline(in, l);) out.push_back(l);
-  return out;
+  return incise::test::read_file(p);
 }
 
 /// Files below `dir` whose name ends in ".tmp" (none may be left behind).
