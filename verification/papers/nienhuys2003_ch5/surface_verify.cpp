@@ -27,13 +27,14 @@ namespace {
 
 /// Counts over a sequence of movements.
 struct Tally {
-  int moves = 0, entered = 0, tip_entered = 0, exited = 0, branched = 0, annihilated = 0,
-      splits = 0, removals = 0, blocked = 0, lost = 0, most_incisions = 0;
+  int moves = 0, entered = 0, tip_entered = 0, edge_entered = 0, exited = 0, branched = 0,
+      annihilated = 0, splits = 0, removals = 0, blocked = 0, lost = 0, most_incisions = 0;
   long flips = 0, restricted = 0;
   void add(const SurfaceMoveReport& r) {
     ++moves;
     entered += r.entered;
     tip_entered += r.tip_entered;
+    edge_entered += r.edge_entered;
     exited += r.exited;
     branched += r.branched;
     annihilated += r.annihilated;
@@ -49,10 +50,11 @@ struct Tally {
 
 std::ostream& operator<<(std::ostream& o, const Tally& t) {
   return o << t.moves << " movements, " << t.entered << " entries, " << t.tip_entered
-           << " tip entries, " << t.exited << " exits, " << t.branched << " branchings (at most "
-           << t.most_incisions << " live incisions), " << t.annihilated << " annihilations, "
-           << t.splits << " splits, " << t.removals << " removals, " << t.flips << " flips, "
-           << t.restricted << " restrictions, " << t.blocked << " blocked, " << t.lost << " lost";
+           << " tip entries, " << t.edge_entered << " edge entries, " << t.exited << " exits, "
+           << t.branched << " branchings (at most " << t.most_incisions << " live incisions), "
+           << t.annihilated << " annihilations, " << t.splits << " splits, " << t.removals
+           << " removals, " << t.flips << " flips, " << t.restricted << " restrictions, "
+           << t.blocked << " blocked, " << t.lost << " lost";
 }
 
 /// Smallest and largest triangle angle (degrees) and the triangles with an angle below 10° or

@@ -77,19 +77,21 @@ struct [[nodiscard]] SurfaceMoveReport
   CutPhase phase = CutPhase::kOutside;  ///< the phase after the movement
   bool entered = false;                 ///< the scalpel entered the surface (at an edge)
   bool tip_entered = false;             ///< the scalpel's tip pierced a triangle (Fig. 5.12)
-  bool fixed_up = false;                ///< the entry fix-up was made
-  bool exited = false;                  ///< the incision reached the boundary (exit)
-  bool annihilated = false;             ///< two incisions met and ended (Fig. 5.13)
-  bool branched = false;                ///< an incision branched into two (Fig. 5.14)
-  int submovements = 0;                 ///< d_max sub-movements (Fig. 5.11)
-  int substeps = 0;                     ///< moves of the active node
-  long flips = 0;                       ///< edge flips
-  long topological_refusals = 0;        ///< flips refused as in Fig. 5.9
-  int removals = 0;                     ///< interior nodes removed
-  int splits = 0;                       ///< incision splits (new node pairs)
-  int refused = 0;                      ///< splits, fix-ups or exits the guards refused
-  int extra_intersections = 0;          ///< further scalpel–star intersections (not followed)
-  int incisions = 0;                    ///< live incisions after the movement
+  /// The scalpel's side hit an exposed interior edge (a ridge; Fig. 5.12, third case).
+  bool edge_entered = false;
+  bool fixed_up = false;          ///< the entry fix-up was made
+  bool exited = false;            ///< the incision reached the boundary (exit)
+  bool annihilated = false;       ///< two incisions met and ended (Fig. 5.13)
+  bool branched = false;          ///< an incision branched into two (Fig. 5.14)
+  int submovements = 0;           ///< d_max sub-movements (Fig. 5.11)
+  int substeps = 0;               ///< moves of the active node
+  long flips = 0;                 ///< edge flips
+  long topological_refusals = 0;  ///< flips refused as in Fig. 5.9
+  int removals = 0;               ///< interior nodes removed
+  int splits = 0;                 ///< incision splits (new node pairs)
+  int refused = 0;                ///< splits, fix-ups or exits the guards refused
+  int extra_intersections = 0;    ///< further scalpel–star intersections (not followed)
+  int incisions = 0;              ///< live incisions after the movement
   long restricted = 0;  ///< changes refused: a triangle would get two active nodes (§5.3.2)
   /// Contacts with boundary edges not taken as entries (restriction 1 of §5.3.2: the edge or its
   /// triangle is active — mostly the scalpel at its own incision — or within ε_entry of an entry
@@ -132,7 +134,10 @@ class SurfaceCutter {
     CutPhase phase = CutPhase::kOutside;
     Vec3 entry = Vec3::Zero();
     IncisionTrack<Vec3> track;
-    bool tip = false;  ///< entered with the tip through a triangle (Fig. 5.12, second case)
+    bool tip = false;   ///< entered with the tip through a triangle (Fig. 5.12, second case)
+    bool edge = false;  ///< entered through an exposed interior edge (Fig. 5.12, third case)
+    double tau = 0;     ///< a branch: the time of its movement from which it is cut
+    int family = -1;    ///< the branches of one branching share a number (−1: not a branch)
   };
   /// An entering contact of the sweep with the boundary edge {p, q}.
   struct EntryHit {
@@ -140,6 +145,8 @@ class SurfaceCutter {
     SweepHit hit;
   };
   std::vector<EntryHit> find_entries(const ScalpelSegment& from, const ScalpelSegment& to) const;
+  std::vector<EntryHit> find_edge_entries(const ScalpelSegment& from,
+                                          const ScalpelSegment& to) const;
   /// A crossing of the tip's path with a triangle: time and point.
   struct TipHit {
     double time = 0;
@@ -147,8 +154,8 @@ class SurfaceCutter {
     Vec3 point = Vec3::Zero();
   };
   std::vector<TipHit> find_tip_entries(const ScalpelSegment& from, const ScalpelSegment& to) const;
-  void start(Index a, bool tip, double tau, const ScalpelSegment& from, const ScalpelSegment& to,
-             SurfaceMoveReport& r);
+  void start(Index a, bool tip, bool edge, double tau, const ScalpelSegment& from,
+             const ScalpelSegment& to, SurfaceMoveReport& r);
   void tip_fix_up(SurfaceMoveReport& r);
   void advance(const ScalpelSegment& from, const ScalpelSegment& to, double tau,
                SurfaceMoveReport& r);
@@ -156,6 +163,7 @@ class SurfaceCutter {
   Incision store();
   static void merge(SurfaceMoveReport& r, const SurfaceMoveReport& sub);
   bool is_active(Index v) const;
+  bool is_sibling(Index v) const;
   std::vector<Vec3> star_intersections(const ScalpelSegment& s) const;
   bool sweep_exit(const ScalpelSegment& from, const ScalpelSegment& to, Index& p, Index& q,
                   Vec3& x) const;
@@ -170,6 +178,9 @@ class SurfaceCutter {
   bool exit_at(Index p, Index q, const Vec3& x, SurfaceMoveReport& r);
   bool annihilate(SurfaceMoveReport& r);
   bool branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r);
+  bool edge_branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r);
+  std::array<mesh::ElementHandle, 2> branch_triangles(const std::vector<Vec3>& hits) const;
+  void spawn(const std::vector<Index>& tips);
   bool is_forbidden(Index p, Index q) const;
   void end_incision();
 
@@ -183,8 +194,12 @@ class SurfaceCutter {
   Index active_ = -1;
   Index loaded_ = -1;  // the working incision's active node when it was loaded
   Vec3 entry_ = Vec3::Zero();
-  IncisionTrack<Vec3> track_;                   // the working incision's node pair, path and sides
-  bool tip_ = false;                            // the working incision entered with the tip
+  IncisionTrack<Vec3> track_;  // the working incision's node pair, path and sides
+  bool tip_ = false;           // the working incision entered with the tip
+  bool edge_ = false;          // the working incision entered through an interior edge
+  int family_ = -1;            // the working incision's branch family
+  int next_family_ = 0;
+  double branch_tau_ = 0;  // the current sub-movement's end (a branch made there is cut from it)
   std::vector<Incision> incisions_, finished_;  // live (oldest first) and ended incisions
   std::vector<Incision> spawned_;               // branches of this movement (from the next on)
   struct ForbiddenZone {  // the boundary edges at an exit, closed for entry near it
