@@ -149,10 +149,23 @@ std::vector<SurfaceCutter::EntryHit> SurfaceCutter::find_edge_entries(
       const Vec3 pu = mesh_.point(u), pw = mesh_.point(w);
       const Vec3 r1 = mesh_.point(detail::third(c, t1, u, w)),
                  r2 = mesh_.point(detail::third(c, t2, u, w));
+      // Cheap necessary condition first: f_i(τ) = det[e, d(τ), r_i − p_u] is linear in τ (the
+      // scalpel direction d is, and moving the point along the edge does not change it), and
+      // r1, r2 must be on one side at the contact, f1 f2 > 0 there. The product of two linear
+      // functions is largest on [0, 1] at an end or midway between their roots.
+      const Vec3 e = pw - pu, d0 = from.head - from.tail, d1 = to.head - to.tail;
+      const double a1 = e.cross(d0).dot(r1 - pu), b1 = e.cross(d1).dot(r1 - pu),
+                   a2 = e.cross(d0).dot(r2 - pu), b2 = e.cross(d1).dot(r2 - pu);
+      auto f = [](double a, double b, double q) { return a + q * (b - a); };
+      auto root = [](double a, double b) { return a != b ? a / (a - b) : 0.0; };
+      const double mid = std::clamp(0.5 * (root(a1, b1) + root(a2, b2)), 0.0, 1.0);
+      const double slack = 1e-9 * std::max({std::abs(a1 * a2), std::abs(b1 * b2), 1e-300});
+      if (!(a1 * a2 > -slack || b1 * b2 > -slack || f(a1, b1, mid) * f(a2, b2, mid) > -slack))
+        continue;
       for (const SweepHit& h : intersect_sweep_edge(from, to, pu, pw).hits) {
         if (!(h.mu > 0 && h.mu < 1)) continue;  // through an end node: left to its edges
         const ScalpelSegment at = interpolate(from, to, h.time);
-        const Vec3 x = h.mu * pu + (1 - h.mu) * pw, e = pw - pu, d = at.head - at.tail;
+        const Vec3 x = h.mu * pu + (1 - h.mu) * pw, d = at.head - at.tail;
         const Vec3 v = h.lambda * (to.head - from.head) + (1 - h.lambda) * (to.tail - from.tail);
         const Vec3 n = e.cross(d);  // det[e, d, y] = (e × d) · y
         const double sv = n.dot(v), s1 = n.dot(r1 - x), s2 = n.dot(r2 - x);

@@ -6,13 +6,16 @@
 /// The scalpel is a segment whose ends move at constant velocity between the sampled positions
 /// given to move_to; its tail end is the tip. Each movement:
 ///  0. the live incisions are advanced one after the other (below); then every entering contact
-///     of the sweep with a boundary edge (eq. (5.1), sweep.hpp; Fig. 5.12, first case) and every
-///     crossing of the tip's path with the inside of a triangle (second case) starts an incision,
+///     of the sweep with a boundary edge (eq. (5.1), sweep.hpp; Fig. 5.12, first case), every
+///     crossing of the tip's path with the inside of a triangle (second case) and every contact
+///     of the scalpel's side with an exposed interior edge — a ridge it comes down on, meeting
+///     neither triangle of the edge before and both after (third case) — starts an incision,
 ///     earliest first, ties by vertex numbers — unless its edge or triangle is active or it is
-///     within ε_entry of an entry of this movement (restriction 1 of §5.3.2; counted). An edge
-///     entry's active node is the edge's end within ε_entry or a new node on it; a tip entry's is
-///     a new node inside the triangle. The incision is then advanced over the rest of the
-///     movement;
+///     within ε_entry of an entry of this movement (restriction 1 of §5.3.2; counted). A
+///     boundary edge entry's active node is the edge's end within ε_entry or a new node on it; a
+///     tip entry's is a new node inside the triangle; an interior edge entry's is the edge's
+///     interior end within ε_entry or a new node splitting the edge. The incision is then
+///     advanced over the rest of the movement;
 ///  1. advancing an incision: the movement is subdivided so that neither scalpel end moves by
 ///     d_max or more per sub-movement (Fig. 5.11: d_max = the smallest distance from the scalpel
 ///     to an edge opposite the active node; floored at 10⁻³ h̄, see the .cpp);
@@ -31,16 +34,20 @@
 ///     split; exit (Fig. 5.7) when the sweep crosses a boundary edge of the star or the active
 ///     node comes within ε_exit of one: a node on that edge, the edge to it dissected and
 ///     contracted; annihilation (Fig. 5.13) when the active node comes within ε_edge of a node
-///     next to another active node: the two incisions join and end; branching (Fig. 5.14) when
-///     the scalpel meets the active triangles twice (a fold): nodes at the two nearest
-///     intersections, the edges to them dissected, two incisions instead of one from the next
-///     movement on.
+///     next to another active node (not a branch of the same branching): the two incisions join
+///     and end; branching (Fig. 5.14) when the scalpel meets the active triangles twice (a
+///     fold): nodes at the two nearest intersections, the edges to them dissected, two
+///     incisions instead of one, cut over the rest of the movement. An interior edge entry's
+///     node branches the same way once the scalpel meets its triangles on both sides of the
+///     ridge (the path n1–a–n2 dissected: a slit with two tips); met on one side only, it goes
+///     on as a tip entry.
 /// All live active nodes are marked on the Surface, which refuses any change that would put two
 /// in one triangle (restriction 3 and "at most one active node per triangle"). A scalpel that no
 /// longer meets the active triangles (lifted off the surface, or a jump past the d_max floor)
 /// ends the incision where it is (status kLost: the slit stays, the mesh is valid). Not built:
-/// entry through an exposed interior edge (Fig. 5.12, third case), a tip through an edge or a
-/// node, more than two branches at once (the two nearest intersections are taken). Thresholds
+/// a tip or a scalpel side through a node or (tip) an edge exactly, more than two branches at
+/// once (the two nearest intersections are taken), an incision crossing its own slit (it is
+/// lost there: its slit's edges are its active triangles' edges). Thresholds
 /// are fractions of the starting mesh's mean edge length h̄ (Cutter2DOptions, §5.4 defaults).
 /// Entries are found through a uniform 3D grid of cell h̄ over the triangles and boundary edges,
 /// kept current by watching the connectivity, so a movement touches only what is near the
