@@ -164,10 +164,13 @@ Tally cut(Surface& s, SurfaceCutter& cutter, const std::vector<ScalpelSegment>& 
   for (size_t k = 0; k < samples.size(); ++k) {
     const auto r = cutter.move_to(samples[k]);
     t.add(r);
-    if (std::getenv("INCISE_CH5_TRACE") != nullptr && (r.entered || r.exited || !r.ok()))
-      std::cout << "  movement " << k << " at (" << samples[k].head.x() << ", "
-                << samples[k].head.y() << "): entered " << r.entered << " exited " << r.exited
-                << " " << to_string(r.status) << "\n";
+    if (std::getenv("INCISE_CH5_TRACE") != nullptr &&
+        (r.entered || r.edge_entered || r.tip_entered || r.exited || !r.ok() ||
+         r.rejected_entries > 0))
+      std::cout << std::defaultfloat << std::setprecision(4) << "  movement " << k << " at ("
+                << samples[k].head.x() << ", " << samples[k].head.y() << "): entered " << r.entered
+                << " exited " << r.exited << " rejected entries " << r.rejected_entries << " "
+                << to_string(r.status) << (r.ok() ? "" : ": ") << r.message << "\n";
     drawn.push_back(0.5 * (samples[k].head + samples[k].tail));
     const auto v = mesh::validate(s.connectivity());
     EXPECT_TRUE(v.ok()) << "after movement " << k << ": " << v.violations.front().message;
@@ -251,7 +254,9 @@ TEST(Chapter5, Fig5_19SelfIntersectingPathOnTheBell) {
   // Fig. 5.19's last image ("more self-intersecting paths"), a guessed trajectory: the trochoid
   // x = −1.2 + 2.4u + 0.6 sin 2πu, y = 0.1 − 0.6 cos 2πu (u ∈ [0, 1]) enters at (−1.2, −0.5),
   // loops once over the bell's top (x runs backwards for u near ½, so the path crosses itself)
-  // and leaves at (1.2, −0.5).
+  // and leaves at (1.2, −0.5). Measured (README, reported): the incision is blocked on the
+  // bell's top and lost before the path reaches its crossing point — only the entry and
+  // validity are asserted.
   Surface s(make_surface(SurfaceShape::kBell, 14));
   SurfaceCutter cutter(s);
   std::vector<Vec3> drawn;

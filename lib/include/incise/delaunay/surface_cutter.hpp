@@ -46,8 +46,7 @@
 /// longer meets the active triangles (lifted off the surface, or a jump past the d_max floor)
 /// ends the incision where it is (status kLost: the slit stays, the mesh is valid). Not built:
 /// a tip or a scalpel side through a node or (tip) an edge exactly, more than two branches at
-/// once (the two nearest intersections are taken), an incision crossing its own slit (it is
-/// lost there: its slit's edges are its active triangles' edges). Thresholds
+/// once (the two nearest intersections are taken). Thresholds
 /// are fractions of the starting mesh's mean edge length h̄ (Cutter2DOptions, §5.4 defaults).
 /// Entries are found through a uniform 3D grid of cell h̄ over the triangles and boundary edges,
 /// kept current by watching the connectivity, so a movement touches only what is near the
