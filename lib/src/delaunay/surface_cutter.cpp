@@ -121,6 +121,72 @@ std::vector<SurfaceCutter::EntryHit> SurfaceCutter::find_entries(const ScalpelSe
   return out;
 }
 
+std::vector<SurfaceCutter::EntryHit> SurfaceCutter::find_edge_entries(
+    const ScalpelSegment& from, const ScalpelSegment& to) const {
+  // Fig. 5.12, third case: the side of the scalpel hits an exposed interior edge — one where it
+  // touches the surface from outside, so that it met neither triangle of the edge near the
+  // contact before it and meets both after. In the plane normal to the edge (direction e) the
+  // surface near the contact is two half-lines, towards the triangles' third vertices r1 and r2,
+  // and the scalpel (direction d) a line through the contact moving by v: after the contact it
+  // crosses the half-line towards r_i exactly when r_i and v lie on the same side of it,
+  // sign det[e, d, r_i − p] = sign det[e, d, v]. Entries need both (a ridge the scalpel comes
+  // down on); a scalpel that passes through the surface across an edge has r1 and r2 on
+  // opposite sides. Earliest first, ties by the edge's vertex numbers.
+  const mesh::Connectivity& c = mesh_.connectivity();
+  std::vector<Edge> seen;
+  std::vector<EntryHit> out;
+  for (const mesh::Simplex& s : grid_->near({from.head, from.tail, to.head, to.tail}, 3)) {
+    const ElementHandle t = c.find_element(s);
+    if (!t.valid()) continue;
+    const auto tv = mesh_.triangle(t);
+    for (size_t i = 0; i < 3; ++i) {
+      const Index u = tv[i], w = tv[(i + 1) % 3];
+      const Edge key = make_edge(u, w);
+      if (std::find(seen.begin(), seen.end(), key) != seen.end()) continue;
+      seen.push_back(key);
+      const ElementHandle t1 = detail::left_of(c, u, w), t2 = detail::left_of(c, w, u);
+      if (!t1.valid() || !t2.valid()) continue;  // a boundary edge: the first case
+      const Vec3 pu = mesh_.point(u), pw = mesh_.point(w);
+      const Vec3 r1 = mesh_.point(detail::third(c, t1, u, w)),
+                 r2 = mesh_.point(detail::third(c, t2, u, w));
+      // Cheap necessary condition first: f_i(τ) = det[e, d(τ), r_i − p_u] is linear in τ (the
+      // scalpel direction d is, and moving the point along the edge does not change it), and
+      // r1, r2 must be on one side at the contact, f1 f2 > 0 there. The product of two linear
+      // functions is largest on [0, 1] at an end or midway between their roots.
+      const Vec3 e = pw - pu, d0 = from.head - from.tail, d1 = to.head - to.tail;
+      const double a1 = e.cross(d0).dot(r1 - pu), b1 = e.cross(d1).dot(r1 - pu),
+                   a2 = e.cross(d0).dot(r2 - pu), b2 = e.cross(d1).dot(r2 - pu);
+      auto f = [](double a, double b, double q) { return a + q * (b - a); };
+      auto root = [](double a, double b) { return a != b ? a / (a - b) : 0.0; };
+      const double mid = std::clamp(0.5 * (root(a1, b1) + root(a2, b2)), 0.0, 1.0);
+      const double slack = 1e-9 * std::max({std::abs(a1 * a2), std::abs(b1 * b2), 1e-300});
+      if (!(a1 * a2 > -slack || b1 * b2 > -slack || f(a1, b1, mid) * f(a2, b2, mid) > -slack))
+        continue;
+      for (const SweepHit& h : intersect_sweep_edge(from, to, pu, pw).hits) {
+        if (!(h.mu > 0 && h.mu < 1)) continue;  // through an end node: left to its edges
+        const ScalpelSegment at = interpolate(from, to, h.time);
+        const Vec3 x = h.mu * pu + (1 - h.mu) * pw, d = at.head - at.tail;
+        const Vec3 v = h.lambda * (to.head - from.head) + (1 - h.lambda) * (to.tail - from.tail);
+        const Vec3 n = e.cross(d);  // det[e, d, y] = (e × d) · y
+        const double sv = n.dot(v), s1 = n.dot(r1 - x), s2 = n.dot(r2 - x);
+        // Strict signs beyond round-off relative to the magnitudes involved.
+        const double tol = 1e-12 * n.norm();
+        if (!(std::abs(sv) > tol * v.norm() && std::abs(s1) > tol * (r1 - x).norm() &&
+              std::abs(s2) > tol * (r2 - x).norm()))
+          continue;
+        if ((sv > 0) != (s1 > 0) || (sv > 0) != (s2 > 0)) continue;
+        out.push_back({u, w, h});
+        break;
+      }
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const EntryHit& x, const EntryHit& y) {
+    if (x.hit.time != y.hit.time) return x.hit.time < y.hit.time;
+    return make_edge(x.p, x.q) < make_edge(y.p, y.q);
+  });
+  return out;
+}
+
 std::vector<Vec3> SurfaceCutter::star_intersections(const ScalpelSegment& s) const {
   // The distinct intersections of the scalpel with the active triangles, nearest to the active
   // node first (a scalpel through a shared edge or node is one intersection).
@@ -140,13 +206,10 @@ std::vector<Vec3> SurfaceCutter::star_intersections(const ScalpelSegment& s) con
   return hits;
 }
 
-bool SurfaceCutter::branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r) {
-  // Fig. 5.14: the scalpel meets the active triangles twice (a fold): a node goes in at each of
-  // the two nearest intersections, the edges from the active node to them are dissected, and
-  // two incisions with these active nodes replace the old one. Only intersections strictly
-  // inside two different triangles, and not next to another active node, are taken (else
-  // refused before the mesh changes); when only the first dissection succeeds, the incision
-  // goes on from the first node alone.
+std::array<ElementHandle, 2> SurfaceCutter::branch_triangles(const std::vector<Vec3>& hits) const {
+  // The triangles of the active node holding the two nearest intersections strictly inside
+  // (barycentrics > 10⁻³, so the new nodes make no sliver), neither next to another active
+  // node; invalid handles when there are none.
   std::array<ElementHandle, 2> tri;
   for (size_t k = 0; k < 2; ++k) {
     for (const ElementHandle e : mesh_.connectivity().star(active_)) {
@@ -157,12 +220,42 @@ bool SurfaceCutter::branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r) 
                    s2 = u.cross(d).dot(n) / n.squaredNorm();
       if (s1 > 1e-3 && s2 > 1e-3 && s1 + s2 < 1 - 1e-3) tri[k] = e;
     }
-    if (!tri[k].valid()) return false;
+    if (!tri[k].valid()) return {};
     for (const Index v : mesh_.triangle(tri[k]))
       for (const Index w : mesh_.neighbours(v))
-        if (w != active_ && mesh_.is_active_node(w)) return false;
+        if (w != active_ && mesh_.is_active_node(w)) return {};
   }
-  if (tri[0] == tri[1]) return false;
+  if (tri[0] == tri[1]) return {};
+  return tri;
+}
+
+void SurfaceCutter::spawn(const std::vector<Index>& tips) {
+  // New incisions at the slit tips `tips` (boundary nodes), one family (never annihilated
+  // with each other), cut from branch_tau_ on.
+  const int family = next_family_++;
+  for (const Index n : tips) {
+    Incision i{n,     CutPhase::kCutting, mesh_.point(n), IncisionTrack<Vec3>{}, false,
+               false, branch_tau_,        family};
+    for (const ElementHandle e : mesh_.connectivity().star(n)) {
+      const auto t = starting_at(mesh_.triangle(e), n);
+      if (mesh_.is_boundary_edge(n, t[1])) i.track.right = t[1];
+      if (mesh_.is_boundary_edge(t[2], n)) i.track.left = t[2];
+    }
+    i.track.sides = {{i.track.left}, {i.track.right}};
+    i.track.path = {mesh_.point(n)};
+    spawned_.push_back(i);
+  }
+}
+
+bool SurfaceCutter::branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r) {
+  // Fig. 5.14: the scalpel meets the active triangles twice (a fold): a node goes in at each of
+  // the two nearest intersections, the edges from the active node to them are dissected, and
+  // two incisions with these active nodes replace the old one. Only intersections strictly
+  // inside two different triangles, and not next to another active node, are taken (else
+  // refused before the mesh changes); when only the first dissection succeeds, the incision
+  // goes on from the first node alone.
+  const std::array<ElementHandle, 2> tri = branch_triangles(hits);
+  if (!tri[0].valid()) return false;
   const Index n1 = mesh_.split_triangle(tri[0], hits[0]);
   const Index n2 = n1 < 0 ? -1 : mesh_.split_triangle(tri[1], hits[1]);
   if (n2 < 0) {
@@ -180,19 +273,60 @@ bool SurfaceCutter::branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r) 
     tips.push_back(n2);
   else
     ++r.refused;  // only the branch to n1 is made: the incision goes on from there
-  for (const Index n : tips) {
-    Incision i{n, CutPhase::kCutting, mesh_.point(n), IncisionTrack<Vec3>{}, false};
-    for (const ElementHandle e : mesh_.connectivity().star(n)) {
-      const auto t = starting_at(mesh_.triangle(e), n);
-      if (mesh_.is_boundary_edge(n, t[1])) i.track.right = t[1];
-      if (mesh_.is_boundary_edge(t[2], n)) i.track.left = t[2];
-    }
-    i.track.sides = {{i.track.left}, {i.track.right}};
-    i.track.path = {mesh_.point(n)};
-    spawned_.push_back(i);
-  }
+  spawn(tips);
   r.branched = true;
   phase_ = CutPhase::kOutside;  // the old incision ends at the branch
+  active_ = -1;
+  return true;
+}
+
+bool SurfaceCutter::edge_branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r) {
+  // Fig. 5.12, third case: the active node a sits on the ridge the scalpel hit, an interior
+  // node; once the scalpel meets a's triangles on both sides of it, nodes n1, n2 go in at the
+  // two nearest intersections and the path n1–a–n2 is dissected in one replace: a's triangles
+  // from a→n2 round to a→n1 (orientation order) take a copy a', so a slit n1–a–n2 / n1–a'–n2
+  // opens with n1 and n2 at its ends, and two incisions with active nodes n1 and n2 go on from
+  // there ("the cut will branch into two incisions"). False with the mesh unchanged (but for
+  // unused or ordinary new nodes, counted refused) when that cannot be done.
+  const std::array<ElementHandle, 2> tri = branch_triangles(hits);
+  if (!tri[0].valid()) return false;
+  const Index n1 = mesh_.split_triangle(tri[0], hits[0]);
+  const Index n2 = n1 < 0 ? -1 : mesh_.split_triangle(tri[1], hits[1]);
+  if (n2 < 0) {
+    ++r.refused;
+    return false;
+  }
+  const mesh::Connectivity& c = mesh_.connectivity();
+  // a's fan from the triangle left of a→n2 round to the one before a→n1.
+  std::vector<ElementHandle> part;
+  const ElementHandle first = detail::left_of(c, active_, n2);
+  for (ElementHandle e = first; e.valid() && part.size() <= c.star(active_).size();) {
+    const auto t = starting_at(mesh_.triangle(e), active_);
+    part.push_back(e);
+    if (t[2] == n1) break;
+    e = detail::left_of(c, active_, t[2]);
+    if (e == first) break;  // round without meeting n1 (checked below)
+  }
+  if (part.empty() || part.size() >= c.star(active_).size() ||
+      starting_at(mesh_.triangle(part.back()), active_)[2] != n1) {
+    ++r.refused;
+    return false;
+  }
+  const Index copy = mesh_.add_vertex(mesh_.point(active_));
+  std::vector<std::array<Index, 3>> add;
+  for (const ElementHandle e : part) {
+    auto t = mesh_.triangle(e);
+    for (Index& v : t)
+      if (v == active_) v = copy;
+    add.push_back(t);
+  }
+  if (!mesh_.replace(part, add)) {
+    ++r.refused;  // copy stays unused; n1 and n2 stay ordinary interior nodes
+    return false;
+  }
+  spawn({n1, n2});
+  r.branched = true;
+  phase_ = CutPhase::kOutside;  // the entry's incision ends at the branch
   active_ = -1;
   return true;
 }
@@ -381,7 +515,7 @@ bool SurfaceCutter::annihilate(SurfaceMoveReport& r) {
     if (!mesh_.is_interior_vertex(v)) continue;
     Index w = -1;
     for (const Index u : mesh_.neighbours(v))
-      if (u != active_ && mesh_.is_active_node(u)) w = u;
+      if (u != active_ && mesh_.is_active_node(u) && !is_sibling(u)) w = u;
     const double d = (mesh_.point(v) - pa).norm();
     if (w >= 0 && d < best) {
       best = d;
@@ -416,10 +550,12 @@ bool SurfaceCutter::annihilate(SurfaceMoveReport& r) {
   mesh_.set_active_node(b, false);
   std::vector<Edge> closed;
   if (!detail::exit(track_, mesh_, s, b, closed)) {
+    // The incision reached s, next to b: it cannot go on from there (a triangle would hold two
+    // active nodes), so it ends at s; b's incision goes on.
     mesh_.set_active_node(b, true);
-    mesh_.set_active_node(s, true);
-    ++r.refused;  // the incision goes on from s
-    return false;
+    ++r.refused;
+    end_incision();
+    return true;
   }
   r.annihilated = true;
   forbidden_.push_back({closed, mesh_.point(b)});
@@ -483,8 +619,10 @@ void SurfaceCutter::advance(const ScalpelSegment& from, const ScalpelSegment& to
       break;
     }
     const std::vector<Vec3> hits = star_intersections(next);
+    branch_tau_ = next_tau;  // a branch made here is cut on from there
     r.extra_intersections += hits.empty() ? 0 : static_cast<int>(hits.size()) - 1;
     if (hits.size() >= 2 && phase_ == CutPhase::kCutting && branch(hits, r)) break;
+    if (hits.size() >= 2 && edge_ && phase_ == CutPhase::kDent && edge_branch(hits, r)) break;
     if (hits.empty()) {
       r.status = SurfaceMoveStatus::kLost;
       r.message =
@@ -514,6 +652,8 @@ void SurfaceCutter::load(const Incision& i) {
   entry_ = i.entry;
   track_ = i.track;
   tip_ = i.tip;
+  edge_ = i.edge;
+  family_ = i.family;
   for (const std::vector<Incision>* list : {&incisions_, &spawned_})
     for (const Incision& o : *list) mesh_.set_active_node(o.active, o.phase != CutPhase::kOutside);
   mesh_.set_active_node(active_, true);
@@ -525,7 +665,7 @@ SurfaceCutter::Incision SurfaceCutter::store() {
   // The node loaded too: an incision that ended (lost) leaves it an ordinary node, unmarked.
   mesh_.set_active_node(loaded_, false);
   if (active_ >= 0) mesh_.set_active_node(active_, false);
-  return {active_, phase_, entry_, track_, tip_};
+  return {active_, phase_, entry_, track_, tip_, edge_, 0.0, family_};
 }
 
 void SurfaceCutter::merge(SurfaceMoveReport& r, const SurfaceMoveReport& sub) {
@@ -533,6 +673,7 @@ void SurfaceCutter::merge(SurfaceMoveReport& r, const SurfaceMoveReport& sub) {
   r.fixed_up = r.fixed_up || sub.fixed_up;
   r.exited = r.exited || sub.exited;
   r.tip_entered = r.tip_entered || sub.tip_entered;
+  r.edge_entered = r.edge_entered || sub.edge_entered;
   r.annihilated = r.annihilated || sub.annihilated;
   r.branched = r.branched || sub.branched;
   r.submovements += sub.submovements;
@@ -582,9 +723,12 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
     incisions_[k] = store();
     merge(r, sub);
   }
-  // Branches (Fig. 5.14) are live from now (no entry in their triangles) and cut from the next
-  // movement on.
+  // Branches (Fig. 5.14) are live from now (no entry in their triangles); they are cut over the
+  // rest of the movement after the entries.
   incisions_.insert(incisions_.end(), spawned_.begin(), spawned_.end());
+  std::vector<size_t> branches;  // their places in incisions_
+  for (size_t k = incisions_.size() - spawned_.size(); k < incisions_.size(); ++k)
+    branches.push_back(k);
   spawned_.clear();
   // New incisions (Fig. 5.12, first case): every entering contact of the sweep with a boundary
   // edge, earliest first (ties by vertex numbers), each then cut over the rest of the movement.
@@ -606,7 +750,7 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
       ++r.refused;
       continue;
     }
-    start(a, false, e.hit.time, from, s, r);
+    start(a, false, false, e.hit.time, from, s, r);
   }
   // Tip entries (Fig. 5.12, second case): the tip's path through a triangle without an active
   // node (restriction 1) makes an active node inside it.
@@ -626,8 +770,56 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
       ++r.refused;
       continue;
     }
-    start(a, true, h.time, from, s, r);
+    start(a, true, false, h.time, from, s, r);
   }
+  // Edge entries (Fig. 5.12, third case): the side of the scalpel coming down on an exposed
+  // interior edge makes an active node on it (the edge's end within ε_entry when that is an
+  // interior node, else a new node splitting the edge's two triangles into four).
+  for (const EntryHit& e : find_edge_entries(from, s)) {
+    const std::vector<ElementHandle> inc = mesh_.incident(e.p, e.q);
+    bool active = inc.size() != 2;  // changed by an earlier entry of this movement
+    for (const ElementHandle t : inc)
+      for (const Index v : mesh_.triangle(t)) active = active || is_active(v);
+    const Vec3 pp = mesh_.point(e.p), pq = mesh_.point(e.q);
+    const Vec3 x = e.hit.mu * pp + (1 - e.hit.mu) * pq;
+    for (const Incision& i : incisions_) active = active || (i.entry - x).norm() < eps_entry_;
+    if (active) {
+      ++r.rejected_entries;
+      continue;
+    }
+    Index a = (x - pp).norm() <= (x - pq).norm() ? e.p : e.q;
+    if ((mesh_.point(a) - x).norm() > eps_entry_ || !mesh_.is_interior_vertex(a)) {
+      const mesh::Connectivity& c = mesh_.connectivity();
+      const ElementHandle t1 = detail::left_of(c, e.p, e.q), t2 = detail::left_of(c, e.q, e.p);
+      const Index r1 = detail::third(c, t1, e.p, e.q), r2 = detail::third(c, t2, e.p, e.q);
+      a = mesh_.add_vertex(x);
+      if (!mesh_.replace({t1, t2}, {{e.p, a, r1}, {a, e.q, r1}, {e.q, a, r2}, {a, e.p, r2}})) {
+        ++r.refused;  // a stays unused
+        continue;
+      }
+    }
+    start(a, false, true, e.hit.time, from, s, r);
+  }
+  // The branches of this movement (Figs. 5.12 third case, 5.14), each cut from the time it was
+  // made to the end of the movement; branches of branches in turn (at most 8 rounds; a later
+  // round's are cut from the next movement on).
+  for (int round = 0; round < 8 && !(branches.empty() && spawned_.empty()); ++round) {
+    for (size_t k = incisions_.size(); k < incisions_.size() + spawned_.size(); ++k)
+      branches.push_back(k);
+    incisions_.insert(incisions_.end(), spawned_.begin(), spawned_.end());
+    spawned_.clear();
+    const std::vector<size_t> now = std::move(branches);
+    branches.clear();
+    for (const size_t k : now) {
+      load(incisions_[k]);
+      SurfaceMoveReport sub;
+      advance(from, s, incisions_[k].tau, sub);
+      incisions_[k] = store();
+      merge(r, sub);
+    }
+  }
+  incisions_.insert(incisions_.end(), spawned_.begin(), spawned_.end());
+  spawned_.clear();
   // Incisions that ended (exit, or the scalpel lost) keep only their sides.
   for (auto it = incisions_.begin(); it != incisions_.end();) {
     if (it->phase != CutPhase::kOutside) {
@@ -647,11 +839,13 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
   return r;
 }
 
-void SurfaceCutter::start(Index a, bool tip, double tau, const ScalpelSegment& from,
+void SurfaceCutter::start(Index a, bool tip, bool edge, double tau, const ScalpelSegment& from,
                           const ScalpelSegment& to, SurfaceMoveReport& r) {
-  load({a, CutPhase::kDent, mesh_.point(a), IncisionTrack<Vec3>{}, tip});
+  // An edge entry's node is interior like a tip entry's: it goes on as one (tip fix-up) when
+  // the scalpel meets its triangles only once, and branches when it meets them on both sides.
+  load({a, CutPhase::kDent, mesh_.point(a), IncisionTrack<Vec3>{}, tip || edge, edge, 0.0, -1});
   SurfaceMoveReport sub;
-  (tip ? sub.tip_entered : sub.entered) = true;
+  (edge ? sub.edge_entered : tip ? sub.tip_entered : sub.entered) = true;
   advance(from, to, tau, sub);
   incisions_.push_back(store());
   merge(r, sub);
@@ -714,6 +908,16 @@ void SurfaceCutter::tip_fix_up(SurfaceMoveReport& r) {
     return;
   }
   ++r.refused;  // tried again after the next step
+}
+
+bool SurfaceCutter::is_sibling(Index v) const {
+  // v is the active node of a live incision of the working incision's family (the branches of
+  // one branching: their tips start next to each other, and they move apart).
+  if (family_ < 0) return false;
+  for (const std::vector<Incision>* list : {&incisions_, &spawned_})
+    for (const Incision& i : *list)
+      if (i.active == v && i.phase != CutPhase::kOutside && i.family == family_) return true;
+  return false;
 }
 
 bool SurfaceCutter::is_active(Index v) const {

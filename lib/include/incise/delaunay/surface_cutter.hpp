@@ -6,13 +6,16 @@
 /// The scalpel is a segment whose ends move at constant velocity between the sampled positions
 /// given to move_to; its tail end is the tip. Each movement:
 ///  0. the live incisions are advanced one after the other (below); then every entering contact
-///     of the sweep with a boundary edge (eq. (5.1), sweep.hpp; Fig. 5.12, first case) and every
-///     crossing of the tip's path with the inside of a triangle (second case) starts an incision,
+///     of the sweep with a boundary edge (eq. (5.1), sweep.hpp; Fig. 5.12, first case), every
+///     crossing of the tip's path with the inside of a triangle (second case) and every contact
+///     of the scalpel's side with an exposed interior edge — a ridge it comes down on, meeting
+///     neither triangle of the edge before and both after (third case) — starts an incision,
 ///     earliest first, ties by vertex numbers — unless its edge or triangle is active or it is
-///     within ε_entry of an entry of this movement (restriction 1 of §5.3.2; counted). An edge
-///     entry's active node is the edge's end within ε_entry or a new node on it; a tip entry's is
-///     a new node inside the triangle. The incision is then advanced over the rest of the
-///     movement;
+///     within ε_entry of an entry of this movement (restriction 1 of §5.3.2; counted). A
+///     boundary edge entry's active node is the edge's end within ε_entry or a new node on it; a
+///     tip entry's is a new node inside the triangle; an interior edge entry's is the edge's
+///     interior end within ε_entry or a new node splitting the edge. The incision is then
+///     advanced over the rest of the movement;
 ///  1. advancing an incision: the movement is subdivided so that neither scalpel end moves by
 ///     d_max or more per sub-movement (Fig. 5.11: d_max = the smallest distance from the scalpel
 ///     to an edge opposite the active node; floored at 10⁻³ h̄, see the .cpp);
@@ -31,16 +34,19 @@
 ///     split; exit (Fig. 5.7) when the sweep crosses a boundary edge of the star or the active
 ///     node comes within ε_exit of one: a node on that edge, the edge to it dissected and
 ///     contracted; annihilation (Fig. 5.13) when the active node comes within ε_edge of a node
-///     next to another active node: the two incisions join and end; branching (Fig. 5.14) when
-///     the scalpel meets the active triangles twice (a fold): nodes at the two nearest
-///     intersections, the edges to them dissected, two incisions instead of one from the next
-///     movement on.
+///     next to another active node (not a branch of the same branching): the two incisions join
+///     and end; branching (Fig. 5.14) when the scalpel meets the active triangles twice (a
+///     fold): nodes at the two nearest intersections, the edges to them dissected, two
+///     incisions instead of one, cut over the rest of the movement. An interior edge entry's
+///     node branches the same way once the scalpel meets its triangles on both sides of the
+///     ridge (the path n1–a–n2 dissected: a slit with two tips); met on one side only, it goes
+///     on as a tip entry.
 /// All live active nodes are marked on the Surface, which refuses any change that would put two
 /// in one triangle (restriction 3 and "at most one active node per triangle"). A scalpel that no
 /// longer meets the active triangles (lifted off the surface, or a jump past the d_max floor)
 /// ends the incision where it is (status kLost: the slit stays, the mesh is valid). Not built:
-/// entry through an exposed interior edge (Fig. 5.12, third case), a tip through an edge or a
-/// node, more than two branches at once (the two nearest intersections are taken). Thresholds
+/// a tip or a scalpel side through a node or (tip) an edge exactly, more than two branches at
+/// once (the two nearest intersections are taken). Thresholds
 /// are fractions of the starting mesh's mean edge length h̄ (Cutter2DOptions, §5.4 defaults).
 /// Entries are found through a uniform 3D grid of cell h̄ over the triangles and boundary edges,
 /// kept current by watching the connectivity, so a movement touches only what is near the
@@ -77,19 +83,21 @@ struct [[nodiscard]] SurfaceMoveReport
   CutPhase phase = CutPhase::kOutside;  ///< the phase after the movement
   bool entered = false;                 ///< the scalpel entered the surface (at an edge)
   bool tip_entered = false;             ///< the scalpel's tip pierced a triangle (Fig. 5.12)
-  bool fixed_up = false;                ///< the entry fix-up was made
-  bool exited = false;                  ///< the incision reached the boundary (exit)
-  bool annihilated = false;             ///< two incisions met and ended (Fig. 5.13)
-  bool branched = false;                ///< an incision branched into two (Fig. 5.14)
-  int submovements = 0;                 ///< d_max sub-movements (Fig. 5.11)
-  int substeps = 0;                     ///< moves of the active node
-  long flips = 0;                       ///< edge flips
-  long topological_refusals = 0;        ///< flips refused as in Fig. 5.9
-  int removals = 0;                     ///< interior nodes removed
-  int splits = 0;                       ///< incision splits (new node pairs)
-  int refused = 0;                      ///< splits, fix-ups or exits the guards refused
-  int extra_intersections = 0;          ///< further scalpel–star intersections (not followed)
-  int incisions = 0;                    ///< live incisions after the movement
+  /// The scalpel's side hit an exposed interior edge (a ridge; Fig. 5.12, third case).
+  bool edge_entered = false;
+  bool fixed_up = false;          ///< the entry fix-up was made
+  bool exited = false;            ///< the incision reached the boundary (exit)
+  bool annihilated = false;       ///< two incisions met and ended (Fig. 5.13)
+  bool branched = false;          ///< an incision branched into two (Fig. 5.14)
+  int submovements = 0;           ///< d_max sub-movements (Fig. 5.11)
+  int substeps = 0;               ///< moves of the active node
+  long flips = 0;                 ///< edge flips
+  long topological_refusals = 0;  ///< flips refused as in Fig. 5.9
+  int removals = 0;               ///< interior nodes removed
+  int splits = 0;                 ///< incision splits (new node pairs)
+  int refused = 0;                ///< splits, fix-ups or exits the guards refused
+  int extra_intersections = 0;    ///< further scalpel–star intersections (not followed)
+  int incisions = 0;              ///< live incisions after the movement
   long restricted = 0;  ///< changes refused: a triangle would get two active nodes (§5.3.2)
   /// Contacts with boundary edges not taken as entries (restriction 1 of §5.3.2: the edge or its
   /// triangle is active — mostly the scalpel at its own incision — or within ε_entry of an entry
@@ -132,7 +140,10 @@ class SurfaceCutter {
     CutPhase phase = CutPhase::kOutside;
     Vec3 entry = Vec3::Zero();
     IncisionTrack<Vec3> track;
-    bool tip = false;  ///< entered with the tip through a triangle (Fig. 5.12, second case)
+    bool tip = false;   ///< entered with the tip through a triangle (Fig. 5.12, second case)
+    bool edge = false;  ///< entered through an exposed interior edge (Fig. 5.12, third case)
+    double tau = 0;     ///< a branch: the time of its movement from which it is cut
+    int family = -1;    ///< the branches of one branching share a number (−1: not a branch)
   };
   /// An entering contact of the sweep with the boundary edge {p, q}.
   struct EntryHit {
@@ -140,6 +151,8 @@ class SurfaceCutter {
     SweepHit hit;
   };
   std::vector<EntryHit> find_entries(const ScalpelSegment& from, const ScalpelSegment& to) const;
+  std::vector<EntryHit> find_edge_entries(const ScalpelSegment& from,
+                                          const ScalpelSegment& to) const;
   /// A crossing of the tip's path with a triangle: time and point.
   struct TipHit {
     double time = 0;
@@ -147,8 +160,8 @@ class SurfaceCutter {
     Vec3 point = Vec3::Zero();
   };
   std::vector<TipHit> find_tip_entries(const ScalpelSegment& from, const ScalpelSegment& to) const;
-  void start(Index a, bool tip, double tau, const ScalpelSegment& from, const ScalpelSegment& to,
-             SurfaceMoveReport& r);
+  void start(Index a, bool tip, bool edge, double tau, const ScalpelSegment& from,
+             const ScalpelSegment& to, SurfaceMoveReport& r);
   void tip_fix_up(SurfaceMoveReport& r);
   void advance(const ScalpelSegment& from, const ScalpelSegment& to, double tau,
                SurfaceMoveReport& r);
@@ -156,6 +169,7 @@ class SurfaceCutter {
   Incision store();
   static void merge(SurfaceMoveReport& r, const SurfaceMoveReport& sub);
   bool is_active(Index v) const;
+  bool is_sibling(Index v) const;
   std::vector<Vec3> star_intersections(const ScalpelSegment& s) const;
   bool sweep_exit(const ScalpelSegment& from, const ScalpelSegment& to, Index& p, Index& q,
                   Vec3& x) const;
@@ -170,6 +184,9 @@ class SurfaceCutter {
   bool exit_at(Index p, Index q, const Vec3& x, SurfaceMoveReport& r);
   bool annihilate(SurfaceMoveReport& r);
   bool branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r);
+  bool edge_branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r);
+  std::array<mesh::ElementHandle, 2> branch_triangles(const std::vector<Vec3>& hits) const;
+  void spawn(const std::vector<Index>& tips);
   bool is_forbidden(Index p, Index q) const;
   void end_incision();
 
@@ -183,8 +200,12 @@ class SurfaceCutter {
   Index active_ = -1;
   Index loaded_ = -1;  // the working incision's active node when it was loaded
   Vec3 entry_ = Vec3::Zero();
-  IncisionTrack<Vec3> track_;                   // the working incision's node pair, path and sides
-  bool tip_ = false;                            // the working incision entered with the tip
+  IncisionTrack<Vec3> track_;  // the working incision's node pair, path and sides
+  bool tip_ = false;           // the working incision entered with the tip
+  bool edge_ = false;          // the working incision entered through an interior edge
+  int family_ = -1;            // the working incision's branch family
+  int next_family_ = 0;
+  double branch_tau_ = 0;  // the current sub-movement's end (a branch made there is cut from it)
   std::vector<Incision> incisions_, finished_;  // live (oldest first) and ended incisions
   std::vector<Incision> spawned_;               // branches of this movement (from the next on)
   struct ForbiddenZone {  // the boundary edges at an exit, closed for entry near it
