@@ -9,7 +9,7 @@
 #   3 release tests, label slow (but the soak, label soak: docs/ci.md)
 #   4 asan build: clang++ ASan + UBSan, every test and the libFuzzer harnesses (preset asan)
 #   5 asan tests, all but label slow and the certify mutants (docs/ci.md)
-#   6 fuzz smoke: each harness of fuzz/ for INCISE_FUZZ_SECONDS (default 30) s (ci/fuzz.sh)
+#   6 fuzz smoke: each harness of fuzz/ for INCISE_FUZZ_SECONDS (default 20) s (ci/fuzz.sh)
 #   7 tsan build of the tests labelled threads and their libraries (preset tsan)
 #   8 tsan tests, label threads
 # Prints each stage's duration. A failing build stops the script; a failing test stage fails it
@@ -25,7 +25,7 @@ jobs=$(getconf _NPROCESSORS_ONLN 2>/dev/null || echo 2)  # not nproc: it honours
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
 logdir=build/ci-logs
 mkdir -p "$logdir"
-fuzz_seconds=${INCISE_FUZZ_SECONDS:-30}
+fuzz_seconds=${INCISE_FUZZ_SECONDS:-20}
 
 passed=0 failed=0 skipped=0 status=0
 summary=()
@@ -126,9 +126,9 @@ if [ "${INCISE_SKIP_ASAN:-0}" != "1" ]; then
   cmake --build --preset asan -j"$jobs"
   end "4 asan build (clang++, tests + fuzzers)"
 
-  begin "5 asan tests (all but label slow, mutants)"
+  begin "5 asan tests (all but label slow, mutants, 4 reproductions)"
   run_ctest asan --preset asan
-  end "5 asan tests (all but label slow, mutants)"
+  end "5 asan tests (all but label slow, mutants, 4 reproductions)"
 
   begin "6 fuzz smoke (${fuzz_seconds} s per harness)"
   INCISE_FUZZ_PREBUILT=1 ci/fuzz.sh "$fuzz_seconds" 2>&1 | tee "$logdir/fuzz.log" || status=1
