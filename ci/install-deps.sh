@@ -9,7 +9,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ccache pkg-config clang-format clang libclang-rt-14-dev
   libeigen3-dev libsuitesparse-dev libfftw3-dev nlohmann-json3-dev libopenblas-dev
-  libgtest-dev libgmock-dev googletest libbenchmark-dev gnuplot-nox doxygen
+  libgtest-dev libgmock-dev googletest libbenchmark-dev doxygen
 )
 # Headless Chromium (large) only on request, for the `slow` render test of the certification
 # report and the benchmark dashboard (verification/scene/render_pages.sh).
@@ -26,8 +26,18 @@ for p in "${packages[@]}"; do
 done
 if [ ${#missing[@]} -gt 0 ]; then
   echo "install-deps: installing ${missing[*]}"
-  $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  # apt/dpkg progress goes to a log, shown only when the install fails.
+  log=$(mktemp)
+  if ! { $SUDO apt-get update -qq &&
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
+      "${missing[@]}"; } >"$log" 2>&1; then
+    cat "$log" >&2
+    echo "install-deps: apt-get failed (output above)" >&2
+    rm -f "$log"
+    exit 1
+  fi
+  rm -f "$log"
+  echo "install-deps: installed ${#missing[@]} packages"
 else
   echo "install-deps: all ${#packages[@]} packages present"
 fi

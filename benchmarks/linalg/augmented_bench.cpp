@@ -35,6 +35,7 @@
 
 #include "yeung2016_experiment.hpp"
 
+#include <incise/core/environment.hpp>
 #include <incise/linalg/ldl_closure_solver.hpp>
 
 #include <incise_bench/context.hpp>
@@ -307,7 +308,7 @@ int run_table(int argc, char** argv) {
       "# %s: %d nodes, %d tetrahedra, n0 = %d DOFs, nnz(K) = %lld, |L| = %lld, s = %.4g m\n",
       info.name.c_str(), info.nodes, info.elements, info.n0, info.nnz_k, info.nnz_l, info.spacing);
   std::printf("# assembly %.3f s, initial factorization + LDL' extraction %.3f s; blas: %s\n",
-              info.t_assemble, info.t_initial_factor, incise::bench::loaded_blas().c_str());
+              info.t_assemble, info.t_initial_factor, incise::loaded_blas().c_str());
   std::printf(
       "# threads: update %d (step 3); reference refactorization %s%s\n", opt.solve_threads,
       simplicial_ref

@@ -1,35 +1,21 @@
 #include "incise_bench/context.hpp"
 
 #include <incise/core/baseline.hpp>
+#include <incise/core/environment.hpp>
 
 #include <benchmark/benchmark.h>
 
-#include <fstream>
 #include <sstream>
 
 namespace incise::bench {
-
-namespace {
-std::string cpuinfo_field(const std::string& key) {
-  std::ifstream in("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.compare(0, key.size(), key) == 0) {
-      const auto colon = line.find(':');
-      if (colon != std::string::npos) return line.substr(colon + 2);
-    }
-  }
-  return "";
-}
-}  // namespace
 
 double vector_add_mflops() {
   return incise::vector_add_mflops();  // lib/src/core/baseline.cpp, one implementation
 }
 
 double fma_peak_mflops() {
-  const std::string mhz = cpuinfo_field("cpu MHz");
-  const std::string flags = cpuinfo_field("flags");
+  const std::string mhz = incise::cpuinfo_field("cpu MHz");
+  const std::string flags = incise::cpuinfo_field("flags");
   if (mhz.empty()) return 0.0;
   double per_cycle = 4.0;  // SSE2: 2-wide add + 2-wide mul
   if (flags.find(" avx512f") != std::string::npos)
@@ -41,24 +27,11 @@ double fma_peak_mflops() {
   return std::stod(mhz) * per_cycle;
 }
 
-std::string loaded_blas() {
-  std::ifstream in("/proc/self/maps");
-  std::string line;
-  while (std::getline(in, line)) {
-    const auto pos = line.find('/');
-    if (pos == std::string::npos) continue;
-    const std::string path = line.substr(pos);
-    if (path.find("blas") != std::string::npos) {
-      // Resolve the Debian alternatives symlink chain to the real object.
-      return path;
-    }
-  }
-  return "none loaded";
-}
-
 void add_context() {
-  benchmark::AddCustomContext("incise_cpu", cpuinfo_field("model name"));
-  benchmark::AddCustomContext("incise_blas", loaded_blas());
+  // The same record as every incise report (core/environment.hpp), keys prefixed "incise_".
+  for (const auto& [key, value] : incise::capture_environment().fields())
+    if (key != "date_utc" && key != "host" && key != "cores")  // Google Benchmark records those
+      benchmark::AddCustomContext("incise_" + key, value);
   std::ostringstream base, peak;
   base << vector_add_mflops();
   peak << fma_peak_mflops();

@@ -54,7 +54,8 @@ void print_residual_summary(std::ostream& out, const scene::SceneSpec& spec,
   if (!rep.message.empty()) out << "message:         " << rep.message << "\n";
   out << "final residual:  ||r|| = " << num(rep.residual_norm)
       << " N, ||r||/||f_ext|| = " << num(std::isfinite(fnorm) ? rep.residual_norm / fnorm : fnorm)
-      << " (tolerance " << spec.solver.tolerance << ", ||f_ext|| = " << num(fnorm) << " N)\n";
+      << " (tolerance " << spec.solver.tolerance << ", ||f_ext|| = " << num(fnorm)
+      << " N, the 2-norm of the nodal load vector)\n";
   out << "energy:          " << num(rep.energy) << " J\n";
   if (res.inverted_elements >= 0)
     out << "inverted:        " << res.inverted_elements << " of " << built.problem->num_elements()
@@ -258,6 +259,7 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
       out << ", reference " << join_vec(*p.reference) << ", relative error "
           << num(100 * p.relative_error) << " %";
     out << "\n";
+    if (!p.note.empty()) out << "  note: " << p.note << "\n";
   }
   if (!res.cut_steps.empty()) {
     // Per solve: m = replaced columns, GMRES iterations on the Schur system, update time

@@ -116,6 +116,9 @@ TEST(SceneOutputs, RunSceneAndWriteOutputsWriteTheFilesTheSceneNames) {
   EXPECT_EQ(s.at("iterations"), res.report.iterations);
   EXPECT_EQ(s.at("total_seconds"), 1.5);
   EXPECT_EQ(s.at("probes").at(0).at("name"), "tip");
+  // The environment of the run (core/environment.hpp), as captured by run_scene.
+  for (const auto& [key, value] : res.environment.fields())
+    EXPECT_EQ(s.at("environment").at(key), value) << key;
   const std::vector<std::string> before_summary(expected.begin(), expected.end() - 1);
   EXPECT_EQ(s.at("outputs"), Json(before_summary));
   EXPECT_EQ(read(summary), scene::summary_json(built, res, 1.5, before_summary));

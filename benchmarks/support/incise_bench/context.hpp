@@ -2,8 +2,9 @@
 /// \file context.hpp
 /// Benchmark context shared by every incise benchmark binary.
 ///
-/// - add_context(): records CPU model, the BLAS shared object actually mapped into the process
-///   (read from /proc/self/maps — it is what CHOLMOD calls at run time), and the measured
+/// - add_context(): records the run environment of every incise report (core/environment.hpp:
+///   CPU model, compiler, build type, the BLAS shared object actually mapped into the process,
+///   Eigen version; date, host and cores are Google Benchmark's own entries) and the measured
 ///   vector-add baseline, as Google Benchmark context entries (they appear in the JSON output).
 /// - vector_add_mflops(): the thesis' machine baseline (§4.5, Table 4.5), forwarded to
 ///   incise::vector_add_mflops() (incise/core/baseline.hpp, shared with `incise certify`):
@@ -23,10 +24,7 @@ double vector_add_mflops();
 /// Nominal FMA peak of one core in MFLOP/s (see file comment); 0 when unknown.
 double fma_peak_mflops();
 
-/// Path of the BLAS library mapped into this process, or "none loaded".
-std::string loaded_blas();
-
-/// Adds cpu, blas, baseline and peak entries to the Google Benchmark context.
+/// Adds the environment, baseline and peak entries to the Google Benchmark context.
 void add_context();
 
 }  // namespace incise::bench

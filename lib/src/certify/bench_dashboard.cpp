@@ -222,8 +222,9 @@ std::string dashboard_html(const std::vector<BenchRun>& runs, const DashboardOpt
   const BenchRun& last = runs.back();
   os << "<h2>Last run: " << html_escape(last.id) << "</h2>\n<table>\n";
   for (const char* k :
-       {"incise_cpu", "incise_blas", "incise_vector_add_mflops", "incise_fma_peak_mflops_nominal",
-        "num_cpus", "mhz_per_cpu", "library_build_type", "host_name", "date"}) {
+       {"incise_cpu", "incise_blas", "incise_compiler", "incise_build_type", "incise_eigen",
+        "incise_vector_add_mflops", "incise_fma_peak_mflops_nominal", "num_cpus", "mhz_per_cpu",
+        "library_build_type", "host_name", "date"}) {
     auto it = last.context.find(k);
     if (it != last.context.end())
       os << "<tr><th>" << k << "</th><td>" << html_escape(it->second) << "</td></tr>\n";

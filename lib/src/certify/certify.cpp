@@ -186,6 +186,7 @@ CertifySummary run_certify(const std::string& data_dir, bool quick, const std::s
   }
   const std::regex re(filter.empty() ? ".*" : filter);
   CertifySummary sum;
+  sum.environment = capture_environment();
   sum.quick = quick;
   Timer total;
   for (const Check& c : certify_catalogue()) {

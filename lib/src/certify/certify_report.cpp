@@ -40,6 +40,10 @@ std::string certify_html(const CertifySummary& s, const std::string& commit) {
      << " passed</span>, <span class=\"" << (s.failed ? "fail" : "pass") << "\">" << s.failed
      << " failed</span>, " << fmt(s.seconds) << " s. Bands [min, max] and their justifications: "
      << "<code>reference_data/certify/tolerances.json</code>; docs/certify.md.</p>\n";
+  os << "<table id=\"environment\">\n<caption>Environment</caption>\n";
+  for (const auto& [key, value] : s.environment.fields())
+    os << "<tr><th>" << html_escape(key) << "</th><td>" << html_escape(value) << "</td></tr>\n";
+  os << "</table>\n";
   os << "<table id=\"summary\">\n<tr><th>check</th><th>result</th><th>comparisons in band</th>"
      << "<th>first failing, else nearest its band's end</th><th>criterion</th>"
      << "<th>time (s)</th></tr>\n";
@@ -102,6 +106,7 @@ nlohmann::json certify_json(const CertifySummary& s, const std::string& commit) 
   j["passed"] = s.passed;
   j["failed"] = s.failed;
   j["seconds"] = s.seconds;
+  for (const auto& [key, value] : s.environment.fields()) j["environment"][key] = value;
   j["checks"] = nlohmann::json::array();
   for (const auto& r : s.results) {
     nlohmann::json comparisons = nlohmann::json::array();

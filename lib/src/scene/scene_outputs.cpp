@@ -229,6 +229,7 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
   j["flops"] = rep.flops;
   j["solver_seconds"] = rep.seconds;
   j["total_seconds"] = total_seconds;
+  for (const auto& [key, value] : result.environment.fields()) j["environment"][key] = value;
   j["mesh"] = {{"nodes", scene.mesh.num_points()},
                {scene.mesh.dimension == 2 ? "triangles" : "tetrahedra", scene.mesh.num_cells()},
                {"fixed_nodes", scene.fixed_nodes.size()}};
@@ -238,6 +239,7 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
       pj["reference"] = vec_json(*p.reference);
       pj["relative_error"] = num(p.relative_error);
     }
+    if (!p.note.empty()) pj["note"] = p.note;
     j["probes"].push_back(pj);
   }
   for (const auto& s : scene.steps)

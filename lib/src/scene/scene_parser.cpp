@@ -406,6 +406,7 @@ OutputSpec parse_outputs(JsonObject o) {
       }
       if (po.has("reference")) pr.reference = po.vec3("reference");
       po.get("reference");
+      pr.note = po.string("note", "");
       po.finish();
       out.probes.push_back(std::move(pr));
     }

@@ -541,6 +541,7 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
                          const CutStepObserver& cut_observer,
                          const NeedleUpdateObserver& needle_observer) {
   SceneRunResult res;
+  res.environment = capture_environment();
   if (scene.needle) {
     std::ostringstream detail;
     run_needle(scene, res, needle_observer, detail);
@@ -555,6 +556,7 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
       r.name = pr.spec.name;
       r.value = probe_value(pr, res.u);
       r.reference = pr.spec.reference;
+      r.note = pr.spec.note;
       if (r.reference && r.reference->norm() > 0)
         r.relative_error = (r.value - *r.reference).norm() / r.reference->norm();
       res.probes.push_back(r);

@@ -10,6 +10,7 @@
 /// condition or a measurement without comparisons makes it fail, with the reason in its detail.
 
 #include <incise/certify/svg_plot.hpp>
+#include <incise/core/environment.hpp>
 #include <incise/scene/scene_spec.hpp>
 
 #include <nlohmann/json.hpp>
@@ -138,6 +139,7 @@ struct CertifySummary {
   int passed = 0;
   int failed = 0;
   double seconds = 0.0;
+  RunEnvironment environment;  ///< machine and build of the run (captured when it started)
 };
 
 /// Reads `data_dir`/certify/tolerances.json (ParseError when missing or malformed), runs the

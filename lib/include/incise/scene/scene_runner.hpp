@@ -22,6 +22,7 @@
 /// Parts built on the way (eigenvalue estimates, FFT, factorization) are
 /// recorded in BuiltScene::steps with their cost.
 
+#include <incise/core/environment.hpp>
 #include <incise/core/outcome.hpp>
 #include <incise/scene/scene_builder.hpp>
 #include <incise/solver/eigen_estimates.hpp>
@@ -44,6 +45,7 @@ struct ProbeResult {
   std::string name;
   Vec3 value = Vec3::Zero();      ///< mean displacement over the probe's nodes (m)
   std::optional<Vec3> reference;  ///< expected value from the scene, if given (m)
+  std::string note;               ///< the probe's `note` from the scene ("" = none)
   /// ‖value − reference‖/‖reference‖ (NaN without reference).
   double relative_error = std::numeric_limits<double>::quiet_NaN();
 };
@@ -116,6 +118,7 @@ struct NeedleUpdateRow {
 
 /// Outcome of run_scene().
 struct SceneRunResult {
+  RunEnvironment environment;      ///< machine and build, captured when run_scene started
   solver::SolverReport report;     ///< the solver's report (reason, iterations, flops, time)
   std::string method_detail;       ///< parameters actually used (e.g. Δt, η and their origin)
   VecX u;                          ///< final displacements (m)

@@ -249,6 +249,9 @@ struct ProbeSpec {
   Vec3 at = Vec3::Zero();         ///< location (m)
   Region region;                  ///< averaging region
   std::optional<Vec3> reference;  ///< optional expected value (m), reported with the error
+  /// Optional one-line context printed with the probe (e.g. what the source reports for the
+  /// same quantity on the same mesh, so an error against `reference` is read correctly).
+  std::string note;
 };
 
 /// Names of ProbeSpec::Quantity (scene key `quantity` of a probe).
