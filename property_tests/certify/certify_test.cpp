@@ -86,6 +86,20 @@ TEST(Certify, PassesWithinTheStoredBand) {
   EXPECT_EQ(s.results[0].failed_comparisons(), 0);
 }
 
+TEST(Certify, ReportsRecordTheCommitAndTheRunEnvironment) {
+  const auto dir = data_dir_with({{"box_volume", {{"relative", band(0, 1e-13)}}}}, "env");
+  const auto s = run_certify(dir, true, "^box_volume$");
+  const Json j = incise::certify::certify_json(s, "abc123");
+  EXPECT_EQ(j.at("commit"), "abc123");
+  const std::string html = incise::certify::certify_html(s, "abc123");
+  EXPECT_NE(html.find("<table id=\"environment\">"), std::string::npos);
+  for (const auto& [key, value] : s.environment.fields()) {
+    EXPECT_FALSE(value.empty()) << key;
+    EXPECT_EQ(j.at("environment").at(key), value) << key;
+    EXPECT_NE(html.find("<th>" + key + "</th>"), std::string::npos) << key;
+  }
+}
+
 TEST(Certify, FailsAboveTheBand) {
   // The box volumes carry round-off (~1e-14) on the larger boxes, so [0, 0] must fail.
   const auto dir = data_dir_with({{"box_volume", {{"relative", band(0, 0)}}}}, "above");
