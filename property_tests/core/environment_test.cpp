@@ -17,8 +17,7 @@ TEST(RunEnvironment, EveryFieldIsFilledInItsDocumentedForm) {
       << e.date_utc;
   EXPECT_GT(std::stoi(e.cores), 0);
   EXPECT_TRUE(std::regex_match(e.eigen, std::regex(R"(\d+\.\d+\.\d+)"))) << e.eigen;
-  EXPECT_TRUE(e.compiler.rfind("g++ ", 0) == 0 || e.compiler.rfind("clang ", 0) == 0)
-      << e.compiler;
+  EXPECT_TRUE(e.compiler.rfind("g++ ", 0) == 0 || e.compiler.rfind("clang ", 0) == 0) << e.compiler;
   EXPECT_NE(e.build_type, "unknown");  // set by lib/src/core/CMakeLists.txt for every build
   const auto fields = e.fields();
   ASSERT_EQ(fields.size(), 8u);
