@@ -2,8 +2,8 @@
 
 #include <incise/core/environment.hpp>
 
-#include <Eigen/Core>
 #include <unistd.h>
+#include <Eigen/Core>
 
 #include <array>
 #include <ctime>
@@ -54,14 +54,15 @@ std::string compiler_name() {
 #endif
 }
 
-std::string or_unknown(std::string s) { return s.empty() ? "unknown" : s; }
+std::string or_unknown(std::string s) {
+  return s.empty() ? "unknown" : s;
+}
 
 }  // namespace
 
 std::vector<std::pair<std::string, std::string>> RunEnvironment::fields() const {
-  return {{"date_utc", date_utc}, {"host", host},
-          {"cpu", cpu},           {"cores", cores},
-          {"compiler", compiler}, {"build_type", build_type},
+  return {{"date_utc", date_utc}, {"host", host},         {"cpu", cpu},
+          {"cores", cores},       {"compiler", compiler}, {"build_type", build_type},
           {"blas", blas},         {"eigen", eigen}};
 }
 
