@@ -5,11 +5,13 @@
 set -euo pipefail
 # clang + libclang-rt-14-dev (the sanitizer and libFuzzer runtimes, only recommended by clang, so
 # not pulled in with --no-install-recommends): the asan preset that ci/test.sh builds. doxygen:
-# the API reference (target incise_docs), built by ci/test.sh.
+# the API reference (target incise_docs), built by ci/test.sh. pybind11 + Debian's python3 with
+# NumPy, pytest and Matplotlib: the Python module, its tests and example (docs/python.md).
 packages=(
   build-essential cmake ccache pkg-config clang-format clang libclang-rt-14-dev
   libeigen3-dev libsuitesparse-dev libfftw3-dev nlohmann-json3-dev libopenblas-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev doxygen
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
 )
 # Headless Chromium (large) only on request, for the `slow` render test of the certification
 # report and the benchmark dashboard (verification/scene/render_pages.sh).
