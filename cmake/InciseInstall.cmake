@@ -33,7 +33,7 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/reference_data/
         DESTINATION ${incise_data_dir} PATTERN "fuzz" EXCLUDE)
 
 # `cmake --build --preset release --target incise_package` builds exactly what `cmake --install`
-# installs (ci/demo.sh), without the tests and benchmarks.
+# installs (ci/demo.sh), without the tests and benchmarks (python/CMakeLists.txt adds the module).
 add_custom_target(incise_package)
 add_dependencies(incise_package ${incise_libraries})
 if(TARGET incise)
