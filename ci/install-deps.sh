@@ -5,11 +5,14 @@
 set -euo pipefail
 # clang + libclang-rt-14-dev (the sanitizer and libFuzzer runtimes, only recommended by clang, so
 # not pulled in with --no-install-recommends): the asan preset that ci/test.sh builds. doxygen:
-# the API reference (target incise_docs), built by ci/test.sh.
+# the API reference (target incise_docs), built by ci/test.sh. libbenchmark-tools (Google
+# Benchmark's compare.py) with python3-scipy and python3-numpy (its U test imports them):
+# `incise bench --compare` and the test cli_bench_compare_py.
 packages=(
   build-essential cmake ccache pkg-config clang-format clang libclang-rt-14-dev
   libeigen3-dev libsuitesparse-dev libfftw3-dev nlohmann-json3-dev libopenblas-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev doxygen
+  libbenchmark-tools python3-scipy python3-numpy
 )
 # Headless Chromium (large) only on request, for the `slow` render test of the certification
 # report and the benchmark dashboard (verification/scene/render_pages.sh).

@@ -7,25 +7,14 @@
 #     2. a filter that selects nothing: exit 1, one stderr line "no benchmark matches", no run
 #        folder added;
 #     3. --compare with INCISE_COMPARE_PY naming no file: exit 1, one stderr line naming it.
-#   cmake -DINCISE=... -DRUNS=<two run folders> -DMODE=compare -P bench_cli.cmake
+#   cmake -DINCISE=... -DRUNS=<two run folders> -DWORKDIR=... -DMODE=compare -P bench_cli.cmake
 #     compare.py on two stored runs: exit 0, its "U Test" line on stdout; reported as skipped
 #     (ctest SKIP_REGULAR_EXPRESSION) when /usr/share/benchmark/compare.py (Debian
 #     libbenchmark-tools) is not installed.
-function(expect what rc_expected out_regex err_regex)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  message(STATUS "${what}: exit ${rc}\n${out}stderr: ${err}")
-  if(NOT rc EQUAL rc_expected)
-    message(FATAL_ERROR "${what}: exit ${rc}, expected ${rc_expected}")
-  endif()
-  if(NOT out MATCHES "${out_regex}")
-    message(FATAL_ERROR "${what}: stdout does not match '${out_regex}'")
-  endif()
-  if(NOT err MATCHES "${err_regex}")
-    message(FATAL_ERROR "${what}: stderr does not match '${err_regex}'")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/expect.cmake)
 
 if(MODE STREQUAL "compare")
+  file(MAKE_DIRECTORY "${WORKDIR}")
   if(NOT EXISTS /usr/share/benchmark/compare.py)
     message(STATUS "compare.py not installed (Debian libbenchmark-tools); skipping")
     return()
@@ -35,16 +24,21 @@ if(MODE STREQUAL "compare")
 endif()
 
 file(REMOVE_RECURSE "${WORKDIR}")
+file(MAKE_DIRECTORY "${WORKDIR}")
 set(bench "${INCISE}" bench --bin-dir "${FAKE}" --out "${WORKDIR}" --repetitions 1)
+function(expect_run_folders n)
+  file(GLOB run_dirs "${WORKDIR}/runs/*")
+  list(LENGTH run_dirs found)
+  if(NOT found EQUAL n)
+    message(FATAL_ERROR "expected ${n} run folder(s), found ${found}: ${run_dirs}")
+  endif()
+  set(run_dirs "${run_dirs}" PARENT_SCOPE)
+endfunction()
 
 # 1. Only the binary with matching benchmarks runs.
 expect("filter BM_alpha" 0 "bench: 2 benchmarks in 1 of 2 binaries" "^$"
        ${bench} --filter "BM_alpha")
-file(GLOB run_dirs "${WORKDIR}/runs/*")
-list(LENGTH run_dirs n)
-if(NOT n EQUAL 1)
-  message(FATAL_ERROR "expected one run folder, found ${n}: ${run_dirs}")
-endif()
+expect_run_folders(1)
 file(GLOB stored RELATIVE "${run_dirs}" "${run_dirs}/*")
 if(NOT stored STREQUAL "alpha_bench.json")
   message(FATAL_ERROR "expected only alpha_bench.json in ${run_dirs}, found '${stored}'")
@@ -57,11 +51,7 @@ endif()
 expect("filter selects nothing" 1 ""
        "^incise bench: no benchmark matches --filter 'BM_gamma' in the 2 binaries under [^\n]*; nothing run or stored\n$"
        ${bench} --filter "BM_gamma")
-file(GLOB run_dirs "${WORKDIR}/runs/*")
-list(LENGTH run_dirs n)
-if(NOT n EQUAL 1)
-  message(FATAL_ERROR "a filter that selects nothing added a run folder: ${run_dirs}")
-endif()
+expect_run_folders(1)  # none added
 
 # 3. compare.py missing.
 expect("compare.py missing" 1 ""

@@ -328,6 +328,15 @@ TEST_F(BenchStore, EnvironmentOfEveryRunIsTabled) {
   // Values that differ between the binaries of one run name them.
   EXPECT_EQ(runs[1].context.at("incise_blas"),
             "/usr/lib/openblas/libblas.so.3 (a_bench); none loaded (b_bench)");
+  EXPECT_EQ(runs[1].context.at("num_cpus"), "2");  // the same in both binaries
+  // Numbers measured by each process: their range.
+  auto j4 = j3;
+  j4["context"]["incise_vector_add_mflops"] = "6450.5";
+  j3["context"]["incise_vector_add_mflops"] = "6847";
+  BenchRun mixed;
+  add_benchmark_json(j3.dump(), "x_bench.json", mixed);
+  add_benchmark_json(j4.dump(), "y_bench.json", mixed);
+  EXPECT_EQ(mixed.context.at("incise_vector_add_mflops"), "6450.5 \xE2\x80\x93 6847 (2 binaries)");
   const std::string html = dashboard_html(runs, {});
   EXPECT_NE(html.find("<tr><th>incise_compiler</th><td>g++ 12.2.0</td>"
                       "<td class=\"changed\">clang 14</td></tr>"),

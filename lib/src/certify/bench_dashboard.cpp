@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -94,6 +95,23 @@ void merge_context(BenchRun& run) {
   for (const auto& [k, values] : by_key) {
     if (values.size() == 1 || k == "date" || k == "incise_date_utc") {
       run.context[k] = values.begin()->first;  // the smallest: earliest for ISO dates
+      continue;
+    }
+    // Numbers measured per process (incise_vector_add_mflops): their range.
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const auto& kv : values) {
+      char* end = nullptr;
+      const double x = std::strtod(kv.first.c_str(), &end);
+      if (kv.first.empty() || *end != '\0' || !std::isfinite(x)) {
+        lo = kNaN;
+        break;
+      }
+      lo = std::min(lo, x), hi = std::max(hi, x);
+    }
+    if (!std::isnan(lo)) {
+      std::ostringstream range;
+      range << lo << " \xE2\x80\x93 " << hi << " (" << run.module_context.size() << " binaries)";
+      run.context[k] = range.str();
       continue;
     }
     std::string merged;
@@ -459,7 +477,8 @@ std::string dashboard_html(const std::vector<BenchRun>& runs, const DashboardOpt
   std::ostringstream os;
   os << html_page_begin(options.title);
   os << "<style>\n.plots{gap:6px}\nfigure.trend{margin:0;width:236px;font-size:11px}\n"
-        "figure.trend figcaption{line-height:1.25}\n.changed{background:#fff3c0}\n"
+        "figure.trend "
+        "figcaption{line-height:1.25;overflow-wrap:anywhere}\n.changed{background:#fff3c0}\n"
         ".better{color:#006400}.worse{color:#b00000}\ntable.env td{max-width:260px;"
         "word-break:break-word}\n</style>\n";
   os << "<h1>" << html_escape(options.title) << "</h1>\n";

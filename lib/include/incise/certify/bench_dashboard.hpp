@@ -44,9 +44,10 @@ struct BenchRun {
   std::string date;    ///< from the id
   std::string commit;  ///< from the id
   /// Google Benchmark context merged over the run's files: a key with one value in every file
-  /// has that value; one that differs between binaries (e.g. incise_blas: only binaries that
-  /// link CHOLMOD map a BLAS) reads "v1 (a_bench, b_bench); v2 (c_bench)"; the per-binary start
-  /// times "date" and "incise_date_utc" keep the earliest.
+  /// has that value; numbers that differ between binaries (incise_vector_add_mflops, measured
+  /// by each process) read "min – max (N binaries)"; other values that differ (e.g.
+  /// incise_blas: only binaries that link CHOLMOD map a BLAS) read "v1 (a_bench, b_bench); v2
+  /// (c_bench)"; the per-binary start times "date" and "incise_date_utc" keep the earliest.
   std::map<std::string, std::string> context;
   /// Context of each file, by module.
   std::map<std::string, std::map<std::string, std::string>> module_context;
