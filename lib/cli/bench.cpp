@@ -108,7 +108,8 @@ std::vector<std::string> list_benchmarks(const fs::path& binary, const std::stri
 }
 
 /// A stored run folder: an existing folder, a folder name under `runs`, "last" / "previous", or
-/// a prefix of exactly one folder name. Throws ParseError-free UsageError naming what was tried.
+/// a prefix of exactly one folder name. Throws ParseError naming the argument and what it
+/// expected (exit 1).
 fs::path resolve_run(const std::string& arg, const fs::path& runs) {
   std::error_code ec;
   if (fs::is_directory(arg, ec)) return arg;
