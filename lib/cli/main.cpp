@@ -26,7 +26,8 @@ const Command kCommands[] = {
      "certify [--quick] [--out DIR] [--filter RE] [--data DIR]: run the verification "
      "catalogue, write a report",
      &run_certify_command},
-    {"bench", "bench [--filter RE] [--out DIR]: run benchmarks, update the dashboard",
+    {"bench",
+     "bench [--filter RE] [--out DIR] | --compare A B: run benchmarks, update the dashboard",
      &run_bench_command},
     {"cut", "cut MESH SWEEPS [--out OUT.vtu]: cut along sweep triangles (docs/cutting.md)",
      &run_cut},

@@ -16,20 +16,7 @@ set(program "${WORKDIR}/bin/${name}")
 file(REAL_PATH "${WORKDIR}" root)
 set(certify certify --quick --filter "^box_volume$" --out "${WORKDIR}/out")
 
-function(expect what rc_expected out_regex err_regex)
-  execute_process(COMMAND ${ARGN} WORKING_DIRECTORY "${WORKDIR}" RESULT_VARIABLE rc
-                  OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  message(STATUS "${what}: exit ${rc}\n${out}stderr: ${err}")
-  if(NOT rc EQUAL rc_expected)
-    message(FATAL_ERROR "${what}: exit ${rc}, expected ${rc_expected}")
-  endif()
-  if(NOT out MATCHES "${out_regex}")
-    message(FATAL_ERROR "${what}: stdout does not match '${out_regex}'")
-  endif()
-  if(NOT err MATCHES "${err_regex}")
-    message(FATAL_ERROR "${what}: stderr does not match '${err_regex}'")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/expect.cmake)
 
 # 1. Nothing to find: the message names every path tried, on one line.
 expect("no data" 1 "^$"

@@ -89,7 +89,8 @@ std::string html_page_end() {
 }
 
 std::string svg_line_plot(const std::vector<Series>& series, const PlotOptions& o) {
-  const double ml = 70, mr = 12, mt = 28, mb = 48;  // margins (px)
+  const double ml = o.compact ? 50 : 70, mr = o.compact ? 8 : 12, mt = o.compact ? 8 : 28,
+               mb = o.compact ? 18 : 48;  // margins (px)
   const double pw = o.width - ml - mr, ph = o.height - mt - mb;
   auto usable = [&](double x, double y) {
     return std::isfinite(x) && std::isfinite(y) && (!o.log_x || x > 0) && (!o.log_y || y > 0);
@@ -105,14 +106,19 @@ std::string svg_line_plot(const std::vector<Series>& series, const PlotOptions& 
       const double yb = o.log_y ? std::log10(s.y[i] + e) : s.y[i] + e;
       xlo = std::min(xlo, x), xhi = std::max(xhi, x);
       ylo = std::min(ylo, ya), yhi = std::max(yhi, yb);
+      if (!o.log_y && i < s.band_lo.size() && i < s.band_hi.size() && std::isfinite(s.band_lo[i]) &&
+          std::isfinite(s.band_hi[i]))
+        ylo = std::min(ylo, s.band_lo[i]), yhi = std::max(yhi, s.band_hi[i]);
     }
   }
+  if (o.include_zero && !o.log_y && ylo <= yhi) ylo = std::min(ylo, 0.0), yhi = std::max(yhi, 0.0);
   std::ostringstream os;
   os << "<svg class=\"incise-plot\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << o.width
      << "\" height=\"" << o.height << "\" viewBox=\"0 0 " << o.width << " " << o.height
      << "\" role=\"img\" aria-label=\"" << html_escape(o.title) << "\">\n";
-  os << "<text x=\"" << num(o.width / 2.0) << "\" y=\"17\" text-anchor=\"middle\" "
-     << "font-size=\"13\" font-weight=\"bold\">" << html_escape(o.title) << "</text>\n";
+  if (!o.compact)
+    os << "<text x=\"" << num(o.width / 2.0) << "\" y=\"17\" text-anchor=\"middle\" "
+       << "font-size=\"13\" font-weight=\"bold\">" << html_escape(o.title) << "</text>\n";
   if (!(xlo <= xhi)) {
     os << "<text x=\"" << num(o.width / 2.0) << "\" y=\"" << num(o.height / 2.0)
        << "\" text-anchor=\"middle\" fill=\"#777\">no data</text>\n</svg>\n";
@@ -160,44 +166,88 @@ std::string svg_line_plot(const std::vector<Series>& series, const PlotOptions& 
     }
     return t;
   };
+  const int fs = o.compact ? 9 : 10;  // tick font size
   auto tick_label = [](double v, bool log) {
     std::ostringstream label;
     label << std::setprecision(4) << (log ? std::pow(10.0, v) : v);  // as printf "%.4g"
     return label.str();
   };
+  auto y_text = [&o](double v) { return o.y_format ? o.y_format(v) : format_number(v); };
   for (double t : ticks_for(ylo, yhi, o.log_y)) {
     os << "<line x1=\"" << ml << "\" x2=\"" << num(ml + pw) << "\" y1=\"" << num(py(t))
        << "\" y2=\"" << num(py(t)) << "\" stroke=\"#eee\"/>"
        << "<text x=\"" << ml - 4 << "\" y=\"" << num(py(t) + 4)
-       << "\" text-anchor=\"end\" font-size=\"10\">" << tick_label(t, o.log_y) << "</text>\n";
+       << "\" text-anchor=\"end\" font-size=\"" << fs << "\">"
+       << html_escape(o.y_format && !o.log_y ? o.y_format(t) : tick_label(t, o.log_y))
+       << "</text>\n";
   }
   if (!o.x_categories.empty()) {
     const std::size_t n = o.x_categories.size();
-    const std::size_t every = std::max<std::size_t>(1, n / 8);
-    for (std::size_t i = 0; i < n; i += every) {
+    std::vector<std::size_t> shown;
+    if (o.compact) {
+      shown.push_back(0);
+      if (n > 1) shown.push_back(n - 1);
+    } else {
+      for (std::size_t i = 0; i < n; i += std::max<std::size_t>(1, n / 8)) shown.push_back(i);
+    }
+    for (std::size_t i : shown) {
       const double x = px(static_cast<double>(i));
-      os << "<text x=\"" << num(x) << "\" y=\"" << num(mt + ph + 14)
-         << "\" text-anchor=\"middle\" font-size=\"9\">" << html_escape(o.x_categories[i])
-         << "</text>\n";
+      const char* anchor = !o.compact || n == 1 ? "middle" : (i == 0 ? "start" : "end");
+      os << "<text x=\"" << num(o.compact && n > 1 ? (i == 0 ? ml : ml + pw) : x) << "\" y=\""
+         << num(mt + ph + (o.compact ? 12 : 14)) << "\" text-anchor=\"" << anchor
+         << "\" font-size=\"9\">" << html_escape(o.x_categories[i]) << "</text>\n";
     }
   } else {
     for (double t : ticks_for(xlo, xhi, o.log_x)) {
       os << "<line x1=\"" << num(px(t)) << "\" x2=\"" << num(px(t)) << "\" y1=\"" << mt
          << "\" y2=\"" << num(mt + ph) << "\" stroke=\"#eee\"/>"
          << "<text x=\"" << num(px(t)) << "\" y=\"" << num(mt + ph + 14)
-         << "\" text-anchor=\"middle\" font-size=\"10\">" << tick_label(t, o.log_x) << "</text>\n";
+         << "\" text-anchor=\"middle\" font-size=\"" << fs << "\">" << tick_label(t, o.log_x)
+         << "</text>\n";
     }
   }
-  os << "<text x=\"" << num(ml + pw / 2) << "\" y=\"" << o.height - 6
-     << "\" text-anchor=\"middle\" font-size=\"11\">" << html_escape(o.x_label) << "</text>\n";
-  os << "<text transform=\"translate(13," << num(mt + ph / 2)
-     << ") rotate(-90)\" text-anchor=\"middle\" font-size=\"11\">" << html_escape(o.y_label)
-     << "</text>\n";
+  if (!o.compact) {
+    os << "<text x=\"" << num(ml + pw / 2) << "\" y=\"" << o.height - 6
+       << "\" text-anchor=\"middle\" font-size=\"11\">" << html_escape(o.x_label) << "</text>\n";
+    os << "<text transform=\"translate(13," << num(mt + ph / 2)
+       << ") rotate(-90)\" text-anchor=\"middle\" font-size=\"11\">" << html_escape(o.y_label)
+       << "</text>\n";
+  }
+  auto x_text = [&o](double x) {
+    const double r = std::round(x);
+    if (!o.x_categories.empty() && r == x && r >= 0 &&
+        r < static_cast<double>(o.x_categories.size()))
+      return o.x_categories[static_cast<std::size_t>(r)];
+    return format_number(x);
+  };
   // Series.
   for (std::size_t k = 0; k < series.size(); ++k) {
     const Series& s = series[k];
     const char* color = kColors[k % (sizeof kColors / sizeof kColors[0])];
+    // Band (linear y only): upper edge left to right, lower edge back.
+    if (!o.log_y && !s.band_lo.empty() && s.band_lo.size() == s.y.size() &&
+        s.band_hi.size() == s.y.size()) {
+      std::ostringstream upper, lower;
+      std::vector<std::string> lows;
+      for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
+        if (!usable(s.x[i], s.y[i]) || !std::isfinite(s.band_lo[i]) || !std::isfinite(s.band_hi[i]))
+          continue;
+        const double x = px(o.log_x ? std::log10(s.x[i]) : s.x[i]);
+        // A one-point band is drawn 6 px wide so that it shows.
+        const bool single = s.y.size() == 1;
+        upper << num(single ? x - 3 : x) << "," << num(py(s.band_hi[i])) << " ";
+        if (single) upper << num(x + 3) << "," << num(py(s.band_hi[i])) << " ";
+        if (single) lows.push_back(num(x + 3) + "," + num(py(s.band_lo[i])));
+        lows.push_back(num(single ? x - 3 : x) + "," + num(py(s.band_lo[i])));
+      }
+      for (auto it = lows.rbegin(); it != lows.rend(); ++it) lower << *it << " ";
+      if (!lows.empty())
+        os << "<polygon class=\"band\" fill=\"" << color << "\" fill-opacity=\"0.22\" stroke=\""
+           << color << "\" stroke-opacity=\"0.35\" stroke-width=\"0.5\" points=\"" << upper.str()
+           << lower.str() << "\"/>\n";
+    }
     std::ostringstream pts, marks;
+    const double r = o.compact ? 2.2 : 3;
     for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
       if (!usable(s.x[i], s.y[i])) continue;
       const double x = px(o.log_x ? std::log10(s.x[i]) : s.x[i]);
@@ -212,13 +262,19 @@ std::string svg_line_plot(const std::vector<Series>& series, const PlotOptions& 
                 << "\" y2=\"" << num(y2) << "\" stroke=\"" << color << "\"/>";
         }
       }
-      marks << "<circle cx=\"" << num(x) << "\" cy=\"" << num(y) << "\" r=\"3\" fill=\"" << color
-            << "\"><title>" << html_escape(s.label) << ": (" << format_number(s.x[i]) << ", "
-            << format_number(s.y[i]) << ")</title></circle>";
+      marks << "<circle cx=\"" << num(x) << "\" cy=\"" << num(y) << "\" r=\"" << r << "\" fill=\""
+            << color << "\"><title>" << html_escape(s.label) << (s.label.empty() ? "" : ": ")
+            << html_escape(x_text(s.x[i])) << ", " << html_escape(y_text(s.y[i]));
+      if (!o.log_y && i < s.band_lo.size() && i < s.band_hi.size() && std::isfinite(s.band_lo[i]) &&
+          std::isfinite(s.band_hi[i]))
+        marks << " (" << html_escape(y_text(s.band_lo[i])) << " \xE2\x80\x93 "
+              << html_escape(y_text(s.band_hi[i])) << ")";
+      marks << "</title></circle>";
     }
     os << "<polyline class=\"series\" fill=\"none\" stroke=\"" << color << "\" stroke-width=\"1.5\""
        << (s.dashed ? " stroke-dasharray=\"5,3\"" : "") << " points=\"" << pts.str() << "\"/>\n"
        << marks.str() << "\n";
+    if (o.compact) continue;
     // Legend entry.
     const double ly = mt + 12 + 13.0 * static_cast<double>(k);
     os << "<line x1=\"" << num(ml + 8) << "\" x2=\"" << num(ml + 26) << "\" y1=\"" << num(ly - 4)

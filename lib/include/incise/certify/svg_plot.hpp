@@ -3,6 +3,7 @@
 /// Inline SVG line charts and HTML helpers for the certification report and the benchmark
 /// dashboard. Emitted directly as text (no plotting tool, nothing downloaded at view time).
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,9 @@ struct Series {
   std::vector<double> y;
   std::vector<double> y_err;  ///< ± half-height of an error bar per point (same units as y)
   bool dashed = false;        ///< dashed line (e.g. a reference / slope guide)
+  /// Optional shaded band per point (e.g. min..max over repetitions): both empty or both the
+  /// same length as y; drawn as one filled polygon under the line (linear y axis only).
+  std::vector<double> band_lo = {}, band_hi = {};
 };
 
 /// Axes, size and labels of a chart.
@@ -29,6 +33,13 @@ struct PlotOptions {
   int height = 300;  ///< pixels
   /// Categorical x axis: when non-empty, x values are indices 0..n−1 labelled by these strings.
   std::vector<std::string> x_categories;
+  /// Linear y axis always reaches 0, so heights compare as ratios and noise is not magnified.
+  bool include_zero = false;
+  /// Small multiple: narrow margins, small fonts, no axis labels and no legend (the caption
+  /// outside the chart names it); a categorical x axis labels only its first and last category.
+  bool compact = false;
+  /// Formats y tick labels and point tooltips (default: 4 significant digits).
+  std::function<std::string(double)> y_format;
 };
 
 /// An `<svg>` element (class "incise-plot") with axes, ticks, a legend and one polyline per
