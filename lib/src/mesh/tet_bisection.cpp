@@ -228,6 +228,19 @@ double TetBisectionMesh::longest_edge(ElementHandle e) const {
   return std::sqrt(l);
 }
 
+std::array<long, 6> TetBisectionMesh::similarity_signature(ElementHandle e) const {
+  const Simplex& s = conn_.simplex(e);
+  std::array<double, 6> l{};
+  std::size_t k = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j)
+      l[k++] = (points_.col(s.vertex(i)) - points_.col(s.vertex(j))).squaredNorm();
+  std::sort(l.begin(), l.end());
+  std::array<long, 6> key{};
+  for (std::size_t i = 0; i < 6; ++i) key[i] = std::lround(l[i] / l[5] * 1e9);
+  return key;
+}
+
 std::vector<ElementHandle> TetBisectionMesh::around_edge(Index p, Index q) const {
   std::vector<ElementHandle> out;
   for (const ElementHandle e : conn_.star(p))
