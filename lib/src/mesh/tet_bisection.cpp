@@ -155,10 +155,13 @@ TetBisectionMesh::TetBisectionMesh(const MeshData& tets)
           }
           for (int a = 0; a < 3; ++a) {
             const int na = grid_n_[static_cast<std::size_t>(a)];
+            // The box grows by 1e-6 of a cell so that points within locate's tolerance of
+            // the tetrahedron fall into one of its cells whatever the rounding.
+            const double pad = 1e-6 * grid_cell_(a);
             rg[static_cast<std::size_t>(a)] = std::clamp(
-                static_cast<int>(std::floor((blo(a) - lo(a)) / grid_cell_(a))) - 1, 0, na - 1);
+                static_cast<int>(std::floor((blo(a) - pad - lo(a)) / grid_cell_(a))), 0, na - 1);
             rg[static_cast<std::size_t>(a + 3)] = std::clamp(
-                static_cast<int>(std::floor((bhi(a) - lo(a)) / grid_cell_(a))) + 1, 0, na - 1);
+                static_cast<int>(std::floor((bhi(a) + pad - lo(a)) / grid_cell_(a))), 0, na - 1);
           }
         }
         for (int k = rg[2]; k <= rg[5]; ++k)
@@ -410,7 +413,8 @@ std::vector<int> TetBisectionMesh::roots_near(const Vec3& lo, const Vec3& hi) co
     const int na = grid_n_[static_cast<std::size_t>(a)];
     const double flo = std::floor((lo(a) - grid_lo_(a)) / grid_cell_(a));
     const double fhi = std::floor((hi(a) - grid_lo_(a)) / grid_cell_(a));
-    // Roots' boxes are padded by one cell, so a query up to one cell outside is clamped in.
+    // A query outside the grid by less than a cell is clamped in (the candidates' own test
+    // decides); farther out nothing is near.
     if (!(fhi >= -1.0 && flo <= na)) return out;
     rg[static_cast<std::size_t>(a)] = static_cast<int>(std::clamp(flo, 0.0, na - 1.0));
     rg[static_cast<std::size_t>(a + 3)] = static_cast<int>(std::clamp(fhi, 0.0, na - 1.0));

@@ -31,8 +31,8 @@
 ///
 /// Cycles. AMP §3 states that the closure terminates; on the shipped liver we nevertheless
 /// observe, rarely, a cycle: the refinement edge of a tetrahedron around (p, q) is itself waiting,
-/// through a chain of neighbours, for (p, q) (4 of 25,739 splits in 5000 random bisect calls,
-/// test TetBisection.RandomBisectionsOnTheLiver; never on Kuhn cubes, where the test asserts 0).
+/// through a chain of neighbours, for (p, q) (rare; counts in docs/tet_bisection.md; never on
+/// Kuhn cubes, where TetBisection.RandomBisectionsOnKuhnCubes asserts 0).
 /// Then (p, q) is split at once in every tetrahedron around it with the rule of an unflagged
 /// non-planar parent (children's refinement edges are the marks of the faces they inherit, the
 /// new face marks cd), which keeps every face's mark the same in both its tetrahedra and the mesh
