@@ -73,6 +73,19 @@ TEST(SceneParser, ValidCantileverParses) {
   EXPECT_TRUE(s.outputs.probes[0].use_region);
 }
 
+// The box split "kuhn" names the mirrored Kuhn pattern of tetrahedral bisection
+// (mesh::CubeSplit::kKuhn, docs/tet_bisection.md); an unknown split names the three.
+TEST(SceneParser, KuhnSplitParsesAndUnknownSplitIsRefused) {
+  Json j = valid_scene();
+  j["mesh"]["split"] = "kuhn";
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").mesh.split, incise::mesh::CubeSplit::kKuhn);
+  j["mesh"]["split"] = "seven";
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/mesh/split"), std::string::npos) << e;
+  EXPECT_NE(e.find("kuhn"), std::string::npos) << e;
+  EXPECT_NE(e.find("five"), std::string::npos) << e;
+}
+
 // One bad-scene kind per test: the message must name the path and the expected form.
 
 TEST(SceneParserBad, JsonSyntaxErrorGivesLine) {

@@ -91,9 +91,10 @@ inline constexpr NameTable<MeshSpec::Source, 4> kMeshSourceNames{{{
 }}};
 
 /// Names of mesh::CubeSplit (scene key `split` of a box mesh; only scenes name the splits).
-inline constexpr NameTable<mesh::CubeSplit, 2> kCubeSplitNames{{{
+inline constexpr NameTable<mesh::CubeSplit, 3> kCubeSplitNames{{{
     {mesh::CubeSplit::kSix, "six"},
     {mesh::CubeSplit::kFive, "five"},
+    {mesh::CubeSplit::kKuhn, "kuhn"},
 }}};
 
 /// Material model and parameters (scene keys `model`, `E`, `nu`, `gamma`, `rho`).
