@@ -1,8 +1,11 @@
 #include <incise/core/error.hpp>
+#include <incise/core/timer.hpp>
 #include <incise/needle/insertion.hpp>
 #include <incise/needle/needle_problem.hpp>
 #include <incise/solver/linear_cg.hpp>
 #include <incise/solver/nonlinear_cg.hpp>
+
+#include "stick_slip.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -230,41 +233,11 @@ bool NeedleInsertion::solve(StepReport& rep) {
 }
 
 int NeedleInsertion::rearrange() {
-  const std::vector<double>& fd = thresholds_;
-  int changes = 0;
-  for (std::size_t k = 0; k < nodes_.size(); ++k) {
-    NeedleNode& n = nodes_[k];
-    if (n.state == NodeState::kStick) {
-      const double r = last_gradient_[2 * n.vertex];  // tangential reaction g̃_t
-      if (std::abs(r) > friction_.static_factor * fd[k]) {
-        n.state = NodeState::kSlip;
-        n.friction_sign = r > 0.0 ? 1 : -1;
-        n.anchor = n.coords.s;
-        ++changes;
-      }
-    } else if (n.friction_sign * (n.coords.s - n.anchor) < 0.0) {
-      n.state = NodeState::kStick;
-      n.friction_sign = 0;
-      n.anchor = n.coords.s;
-      ++changes;
-    }
-  }
-  return changes;
+  return detail::rearrange<2>(nodes_, thresholds_, friction_.static_factor, last_gradient_);
 }
 
 int NeedleInsertion::release() {
-  const std::size_t before = nodes_.size();
-  std::size_t kept = 0;
-  for (std::size_t k = 0; k < nodes_.size(); ++k) {
-    const NeedleNode& n = nodes_[k];
-    if (n.coords.s < 0.0 || n.coords.s > pose_.length) continue;
-    nodes_[kept] = n;
-    thresholds_[kept] = thresholds_[k];
-    ++kept;
-  }
-  nodes_.resize(kept);
-  thresholds_.resize(kept);
-  return static_cast<int>(before - kept);
+  return detail::release(nodes_, thresholds_, pose_.length);
 }
 
 void NeedleInsertion::fill_counts(StepReport& rep, bool converged) {
@@ -289,29 +262,14 @@ void NeedleInsertion::fill_counts(StepReport& rep, bool converged) {
 }
 
 StepReport NeedleInsertion::run(StepReport rep) {
+  Timer timer;
   for (NeedleNode& n : nodes_) n.anchor = n.coords.s;
   update_thresholds();
-  for (;;) {
-    if (!solve(rep)) {
-      fill_counts(rep, false);
-      return rep;
-    }
-    const int changes = rearrange();
-    if (changes == 0) break;
-    if (rep.rearrangements >= options_.max_rearrangements) {
-      rep.status = StepStatus::kRearrangementCycle;
-      rep.message = std::to_string(changes) + " needle nodes still change state after " +
-                    std::to_string(rep.rearrangements) +
-                    " rearrangements (max_rearrangements): the stick-slip iteration cycles";
-      fill_counts(rep, false);
-      return rep;
-    }
-    ++rep.rearrangements;
-  }
-  fill_counts(rep, true);
-  rep.released = release();
-  rep.status = StepStatus::kOk;
-  return rep;
+  rep.rearrange_seconds += timer.seconds();
+  return detail::stick_slip_loop(
+      rep, options_.max_rearrangements, [&](StepReport& r) { return solve(r); },
+      [&] { return rearrange(); }, [&](StepReport& r, bool c) { fill_counts(r, c); },
+      [&] { return release(); });
 }
 
 StepReport NeedleInsertion::step(const NeedlePose& pose) {
@@ -322,12 +280,16 @@ StepReport NeedleInsertion::step(const NeedlePose& pose) {
   has_pose_ = true;
   place_needle_nodes();
   StepReport rep;
+  Timer timer;
   const long before = mesh_.num_bisections();
   refined_at_.setConstant(std::numeric_limits<double>::quiet_NaN());
   refine_at_tip();
   rep.refined_at = refined_at_;
   rep.bisections = mesh_.num_bisections() - before;
+  rep.refine_seconds = timer.seconds();
+  timer.restart();
   rep.intercepted = intercept();
+  rep.rearrange_seconds = timer.seconds();
   return run(rep);
 }
 

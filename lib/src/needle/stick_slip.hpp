@@ -1,0 +1,97 @@
+#pragma once
+// Private to the needle module: the stick–slip rearrangements (§6.3.2), the release of nodes
+// that slid off, and the solve/rearrange loop of §6.7 — shared by NeedleInsertion (2D) and
+// NeedleInsertion3D; their contracts are in insertion.hpp (items 5 and 6).
+
+#include <incise/core/types.hpp>
+#include <incise/core/timer.hpp>
+#include <incise/needle/insertion.hpp>
+#include <incise/needle/needle.hpp>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace incise::needle::detail {
+
+// One rearrangement pass over all needle nodes (insertion.hpp item 5): `g` is the rotated
+// gradient at the last solution (D components per vertex, the first along t), `fd` the dynamic
+// thresholds. Returns the number of state changes.
+template <int D, class Node>
+int rearrange(std::vector<Node>& nodes, const std::vector<double>& fd, double static_factor,
+              const VecX& g) {
+  int changes = 0;
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    Node& n = nodes[k];
+    if (n.state == NodeState::kStick) {
+      const double r = g[D * n.vertex];  // tangential reaction g̃_t
+      if (std::abs(r) > static_factor * fd[k]) {
+        n.state = NodeState::kSlip;
+        n.friction_sign = r > 0.0 ? 1 : -1;
+        n.anchor = n.coords.s;
+        ++changes;
+      }
+    } else if (n.friction_sign * (n.coords.s - n.anchor) < 0.0) {
+      n.state = NodeState::kStick;
+      n.friction_sign = 0;
+      n.anchor = n.coords.s;
+      ++changes;
+    }
+  }
+  return changes;
+}
+
+// Releases the needle nodes with s < 0 or s > length (item 6), keeping `thresholds` aligned.
+template <class Node>
+int release(std::vector<Node>& nodes, std::vector<double>& thresholds, double length) {
+  const std::size_t before = nodes.size();
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    const Node& n = nodes[k];
+    if (n.coords.s < 0.0 || n.coords.s > length) continue;
+    nodes[kept] = n;
+    thresholds[kept] = thresholds[k];
+    ++kept;
+  }
+  nodes.resize(kept);
+  thresholds.resize(kept);
+  return static_cast<int>(before - kept);
+}
+
+// The solve → rearrange loop of one step (items 4–6): solve(rep) → bool, rearrange() → changes,
+// fill(rep, converged) fills counts and the needle force, release() → released count. Adds
+// the solves' wall time to rep.solve_seconds and the rest to rep.rearrange_seconds.
+template <class Report, class Solve, class Rearrange, class Fill, class Release>
+Report stick_slip_loop(Report rep, int max_rearrangements, Solve&& solve, Rearrange&& rearrange,
+                       Fill&& fill, Release&& release) {
+  for (;;) {
+    Timer timer;
+    const bool solved = solve(rep);
+    rep.solve_seconds += timer.seconds();
+    if (!solved) {
+      fill(rep, false);
+      return rep;
+    }
+    timer.restart();
+    const int changes = rearrange();
+    rep.rearrange_seconds += timer.seconds();
+    if (changes == 0) break;
+    if (rep.rearrangements >= max_rearrangements) {
+      rep.status = StepStatus::kRearrangementCycle;
+      rep.message = std::to_string(changes) + " needle nodes still change state after " +
+                    std::to_string(rep.rearrangements) +
+                    " rearrangements (max_rearrangements): the stick-slip iteration cycles";
+      fill(rep, false);
+      return rep;
+    }
+    ++rep.rearrangements;
+  }
+  Timer timer;
+  fill(rep, true);
+  rep.released = release();
+  rep.rearrange_seconds += timer.seconds();
+  rep.status = StepStatus::kOk;
+  return rep;
+}
+
+}  // namespace incise::needle::detail
