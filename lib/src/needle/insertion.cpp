@@ -28,6 +28,7 @@ const char* to_string(StepStatus s) {
     case StepStatus::kOk: return "ok";
     case StepStatus::kSolverFailed: return "solver-failed";
     case StepStatus::kRearrangementCycle: return "rearrangement-cycle";
+    case StepStatus::kRefinementBudget: return "refinement-budget";
     case StepStatus::kNotRun: return "not-run";
   }
   return "?";
@@ -197,39 +198,8 @@ int NeedleInsertion::intercept() {
 }
 
 bool NeedleInsertion::solve(StepReport& rep) {
-  NeedleProblem np(*problem_, pose_, nodes_, thresholds_);
-  VecX ur = np.to_rotated(u_);
-  solver::SolverReport sr;
-  if (options_.relaxation == Relaxation::kLinearCg) {
-    solver::LinearCgOptions o;
-    o.stop = stop_;
-    o.budget.max_iterations = options_.max_iterations;
-    sr = solver::linear_cg(np, ur, o);
-  } else {
-    solver::NonlinearCgOptions o;
-    o.stop = stop_;
-    o.budget.max_iterations = options_.max_iterations;
-    sr = solver::nonlinear_cg(np, ur, o);
-  }
-  ++rep.solves;
-  rep.cg_iterations += sr.iterations;
-  rep.flops += sr.flops;
-  rep.max_cg_iterations = std::max(rep.max_cg_iterations, sr.iterations);
-  rep.last_solver_status = sr.status;
-  if (!sr.ok()) {
-    rep.status = StepStatus::kSolverFailed;
-    rep.message = "solve " + std::to_string(rep.solves) + ": " + sr.brief();
-    return false;
-  }
-  u_ = np.to_original(ur);
-  const Eigen::Matrix2Xd x = deformed();
-  for (NeedleNode& n : nodes_) n.coords = pose_.coordinates(x.col(n.vertex));
-  if (np.gradient(ur, last_gradient_) != EvalStatus::kOk) {
-    rep.status = StepStatus::kSolverFailed;
-    rep.message = "gradient at the solution could not be evaluated";
-    return false;
-  }
-  return true;
+  return detail::solve<2>(*problem_, pose_, nodes_, thresholds_, options_, stop_, mesh_.points(),
+                          u_, last_gradient_, rep);
 }
 
 int NeedleInsertion::rearrange() {
@@ -241,24 +211,8 @@ int NeedleInsertion::release() {
 }
 
 void NeedleInsertion::fill_counts(StepReport& rep, bool converged) {
-  rep.sticking = rep.slipping = 0;
-  for (const NeedleNode& n : nodes_) (n.state == NodeState::kStick ? rep.sticking : rep.slipping)++;
-  rep.needle_force.setZero();
-  if (converged) {
-    // No state changed since the last solve: its rotated gradient g̃ = Rᵀ(∇Π_el − f_friction)
-    // gives ∇Π_el at each needle node without another sweep over the elements.
-    const Vec2 t = pose_.tangent(), n = pose_.normal();
-    for (std::size_t k = 0; k < nodes_.size(); ++k) {
-      const NeedleNode& nd = nodes_[k];
-      const Vec2 g = last_gradient_[2 * nd.vertex] * t + last_gradient_[2 * nd.vertex + 1] * n;
-      rep.needle_force +=
-          g + (nd.state == NodeState::kSlip ? nd.friction_sign * thresholds_[k] : 0.0) * t;
-    }
-    return;
-  }
-  VecX g;
-  if (problem_->gradient(u_, g) == EvalStatus::kOk)
-    for (const NeedleNode& nd : nodes_) rep.needle_force += g.segment<2>(2 * nd.vertex);
+  detail::fill_counts<2>(*problem_, pose_.frame(), nodes_, thresholds_, last_gradient_, u_,
+                         converged, rep);
 }
 
 StepReport NeedleInsertion::run(StepReport rep) {

@@ -7,6 +7,11 @@
 #include <incise/core/timer.hpp>
 #include <incise/needle/insertion.hpp>
 #include <incise/needle/needle.hpp>
+#include <incise/needle/needle_problem.hpp>
+#include <incise/solver/linear_cg.hpp>
+#include <incise/solver/nonlinear_cg.hpp>
+
+#include <algorithm>
 
 #include <cmath>
 #include <string>
@@ -92,6 +97,79 @@ Report stick_slip_loop(Report rep, int max_rearrangements, Solve&& solve, Rearra
   rep.rearrange_seconds += timer.seconds();
   rep.status = StepStatus::kOk;
   return rep;
+}
+
+// One solve of (6.7) from the current state (item 4): builds the projected problem on `base`,
+// runs the relaxation of `options` stopped by `stop` from u (original frame, updated on
+// success), then refreshes the needle nodes' coordinates from the deformed positions
+// (`points`: 3 × n reference positions) and stores the rotated gradient at the solution in
+// `gradient`. Fills the solve counts of rep; false (status kSolverFailed) on failure.
+template <int D, class Report>
+bool solve(typename NeedleSpace<D>::Base& base, const typename NeedleSpace<D>::Pose& pose,
+           std::vector<typename NeedleSpace<D>::Node>& nodes, const std::vector<double>& friction,
+           const InsertionOptions& options, const solver::StoppingRule& stop,
+           const Eigen::Matrix3Xd& points, VecX& u, VecX& gradient, Report& rep) {
+  NeedleProblemT<D> np(base, pose, nodes, friction);
+  VecX ur = np.to_rotated(u);
+  solver::SolverReport sr;
+  if (options.relaxation == Relaxation::kLinearCg) {
+    solver::LinearCgOptions o;
+    o.stop = stop;
+    o.budget.max_iterations = options.max_iterations;
+    sr = solver::linear_cg(np, ur, o);
+  } else {
+    solver::NonlinearCgOptions o;
+    o.stop = stop;
+    o.budget.max_iterations = options.max_iterations;
+    sr = solver::nonlinear_cg(np, ur, o);
+  }
+  ++rep.solves;
+  rep.cg_iterations += sr.iterations;
+  rep.flops += sr.flops;
+  rep.max_cg_iterations = std::max(rep.max_cg_iterations, sr.iterations);
+  rep.last_solver_status = sr.status;
+  if (!sr.ok()) {
+    rep.status = StepStatus::kSolverFailed;
+    rep.message = "solve " + std::to_string(rep.solves) + ": " + sr.brief();
+    return false;
+  }
+  u = np.to_original(ur);
+  for (auto& n : nodes)
+    n.coords = pose.coordinates(points.col(n.vertex).template head<D>() +
+                                u.template segment<D>(D * n.vertex));
+  if (np.gradient(ur, gradient) != EvalStatus::kOk) {
+    rep.status = StepStatus::kSolverFailed;
+    rep.message = "gradient at the solution could not be evaluated";
+    return false;
+  }
+  return true;
+}
+
+// Node counts and StepReport::needle_force (item 6 of the report): from the last solve's
+// rotated gradient g̃ = Rᵀ(∇Π_el − f_friction) when no state changed since (`converged`),
+// otherwise from a fresh gradient of `base` at u.
+template <int D, class Report>
+void fill_counts(typename NeedleSpace<D>::Base& base, const Eigen::Matrix<double, D, D>& frame,
+                 const std::vector<typename NeedleSpace<D>::Node>& nodes,
+                 const std::vector<double>& thresholds, const VecX& gradient, const VecX& u,
+                 bool converged, Report& rep) {
+  rep.sticking = rep.slipping = 0;
+  for (const auto& n : nodes) (n.state == NodeState::kStick ? rep.sticking : rep.slipping)++;
+  rep.needle_force.setZero();
+  if (converged) {
+    // No state changed since the last solve: its rotated gradient gives ∇Π_el at each needle
+    // node without another sweep over the elements.
+    for (std::size_t k = 0; k < nodes.size(); ++k) {
+      const auto& nd = nodes[k];
+      rep.needle_force += frame * gradient.template segment<D>(D * nd.vertex) +
+                          (nd.state == NodeState::kSlip ? nd.friction_sign * thresholds[k] : 0.0) *
+                              frame.col(0);
+    }
+    return;
+  }
+  VecX g;
+  if (base.gradient(u, g) == EvalStatus::kOk)
+    for (const auto& nd : nodes) rep.needle_force += g.template segment<D>(D * nd.vertex);
 }
 
 }  // namespace incise::needle::detail

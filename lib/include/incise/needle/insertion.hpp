@@ -78,6 +78,7 @@ enum class StepStatus {
   kOk,                  ///< solved, no node wants to change state
   kSolverFailed,        ///< a solve did not converge (message: the solver's report)
   kRearrangementCycle,  ///< max_rearrangements passed with nodes still changing state
+  kRefinementBudget,    ///< 3D: the mesh reached max_elements before refining (insertion3d.hpp)
   kNotRun               ///< nothing done yet
 };
 
