@@ -71,7 +71,7 @@ MeshSize box_size(int nx, int ny, int nz, double lx, double ly, double lz, CubeS
   check_cell_size("make_box", "lz", "nz", lz, nz);
   const std::int64_t cubes = std::int64_t{nx} * ny * nz;
   return {(std::int64_t{nx} + 1) * (std::int64_t{ny} + 1) * (std::int64_t{nz} + 1),
-          cubes * (split == CubeSplit::kSix ? 6 : 5)};
+          cubes * (split == CubeSplit::kFive ? 5 : 6)};
 }
 
 MeshData make_box(int nx, int ny, int nz, double lx, double ly, double lz, CubeSplit split) {
@@ -86,7 +86,7 @@ MeshData make_box(int nx, int ny, int nz, double lx, double ly, double lz, CubeS
       for (int i = 0; i < px; ++i)
         m.points.col(node(i, j, k)) = Vec3(lx * i / nx, ly * j / ny, lz * k / nz);
 
-  const int per_cube = split == CubeSplit::kSix ? 6 : 5;
+  const int per_cube = split == CubeSplit::kFive ? 5 : 6;
   m.cells.resize(4, static_cast<Eigen::Index>(nx) * ny * nz * per_cube);
   Eigen::Index c = 0;
   for (int k = 0; k < nz; ++k)
@@ -98,14 +98,17 @@ MeshData make_box(int nx, int ny, int nz, double lx, double ly, double lz, CubeS
           v[b] = node(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
         std::array<std::array<int, 4>, 6> local;
         int count = 0;
-        if (split == CubeSplit::kSix) {
-          // Paths 0 → e_a → e_a + e_b → 7 over the 6 axis permutations (a, b, c).
+        if (split != CubeSplit::kFive) {
+          // Paths 0 → e_a → e_a + e_b → 7 over the 6 axis permutations (a, b, c); kKuhn
+          // reflects the cube's corners (bit flips) by the parity of (i, j, k).
           const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2},
                                    {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+          const int mirror =
+              split == CubeSplit::kKuhn ? (i & 1) | ((j & 1) << 1) | ((k & 1) << 2) : 0;
           for (const auto& p : perms) {
             const int b1 = 1 << p[0];
             const int b2 = b1 | (1 << p[1]);
-            local[count++] = {0, b1, b2, 7};
+            local[count++] = {mirror, b1 ^ mirror, b2 ^ mirror, 7 ^ mirror};
           }
         } else {
           // Corner tetrahedra cut off the corners of one parity class; central one remains.
@@ -128,6 +131,10 @@ MeshData make_box(int nx, int ny, int nz, double lx, double ly, double lz, CubeS
         }
       }
   return m;
+}
+
+MeshData make_kuhn_cube(int n, double side) {
+  return make_box(n, n, n, side, side, side, CubeSplit::kKuhn);
 }
 
 MeshData make_beam(int h, double spacing) {

@@ -44,10 +44,14 @@ struct MeshSize {
 
 /// How each cube of a structured box is split into tetrahedra.
 enum class CubeSplit {
-  kSix,  ///< Kuhn/Freudenthal split: 6 tetrahedra around the main diagonal of every cube;
-         ///< conforming with identical cubes, all tetrahedra positively oriented.
-  kFive  ///< 5-tetrahedron split (one central tetrahedron) with alternating mirror parity so
-         ///< that neighbouring cubes conform.
+  kSix,   ///< Kuhn/Freudenthal split: 6 tetrahedra around the main diagonal of every cube;
+          ///< conforming with identical cubes, all tetrahedra positively oriented.
+  kFive,  ///< 5-tetrahedron split (one central tetrahedron) with alternating mirror parity so
+          ///< that neighbouring cubes conform.
+  kKuhn   ///< reflected Kuhn split: the kSix split of cube (i,j,k) mirrored in x when i is odd,
+          ///< in y when j is odd, in z when k is odd, so all main diagonals meet at the corners
+          ///< of even parity — the mesh of Maubach's uniform bisection of a Kuhn cube (the
+          ///< thesis' level-k cube meshes of §6.9); conforming, all tetrahedra positive.
 };
 
 /// Box [0,lx]×[0,ly]×[0,lz] divided into nx×ny×nz cubes (cells), each split into tetrahedra.
@@ -62,6 +66,13 @@ MeshData make_box(int nx, int ny, int nz, double lx, double ly, double lz,
 /// beyond the Index range (which make_box refuses).
 MeshSize box_size(int nx, int ny, int nz, double lx, double ly, double lz,
                   CubeSplit split = CubeSplit::kSix);
+
+/// Kuhn cube for tetrahedral bisection (tet_bisection.hpp, thesis §6.9 Fig. 6.13): the cube
+/// [0, side]³ divided into n×n×n cubes, each split into 6 tetrahedra around a main diagonal,
+/// mirrored from cube to cube (CubeSplit::kKuhn): make_box(n, n, n, side, side, side,
+/// CubeSplit::kKuhn), 6n³ tetrahedra (24,576 for n = 16) and (n+1)³ nodes. Throws
+/// GeneratorError for inadmissible parameters (file comment).
+MeshData make_kuhn_cube(int n, double side);
 
 /// Elongated beam of Yeung, Crouch & Pothen 2016, §4 item (1): nodes on a regular 5×5×h grid
 /// (h = 4…1024 in the paper; the largest, h = 1024, has 25,600 nodes and 81,840 elements), i.e.
