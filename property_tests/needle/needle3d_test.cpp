@@ -75,8 +75,8 @@ TEST(Needle3D, ShaftApproachAgreesWithSampling) {
   INCISE_SEEDED_RNG(rng, 6913);
   std::uniform_real_distribution<double> uni(-0.05, 0.05);
   for (int trial = 0; trial < 200; ++trial) {
-    const NeedlePose3D p = NeedlePose3D::make(Vec3(uni(rng), uni(rng), uni(rng)),
-                                              random_unit(rng), 0.05, 1e-3);
+    const NeedlePose3D p =
+        NeedlePose3D::make(Vec3(uni(rng), uni(rng), uni(rng)), random_unit(rng), 0.05, 1e-3);
     const Vec3 a(uni(rng), uni(rng), uni(rng));
     const Vec3 b = trial % 10 == 0 ? Vec3(a + 0.01 * p.tangent())  // parallel edge
                                    : Vec3(uni(rng), uni(rng), uni(rng));
@@ -94,7 +94,9 @@ TEST(Needle3D, ShaftApproachAgreesWithSampling) {
     double best = INFINITY;
     for (int i = 0; i <= 400; ++i)
       for (int j = 0; j <= 400; ++j)
-        best = std::min(best, ((a + (i / 400.0) * (b - a)) - (p.base() + (j / 400.0) * (p.tip - p.base()))).norm());
+        best = std::min(
+            best,
+            ((a + (i / 400.0) * (b - a)) - (p.base() + (j / 400.0) * (p.tip - p.base()))).norm());
     EXPECT_LE(r.distance, best + 1e-12);
     EXPECT_GE(r.distance, best - 0.17 / 400);
   }

@@ -59,8 +59,8 @@ std::vector<double> FrictionProfile::dynamic_thresholds(const std::vector<double
 }
 
 std::vector<double> FrictionProfile::surface_thresholds(const std::vector<double>& s,
-                                                       const std::vector<double>& area,
-                                                       double radius) const {
+                                                        const std::vector<double>& area,
+                                                        double radius) const {
   INCISE_CHECK(s.size() == area.size(), "surface_thresholds: s and area differ in size");
   INCISE_CHECK_PARAM(std::isfinite(radius) && radius > 0.0,
                      "needle radius must be finite and > 0, got " + std::to_string(radius));

@@ -126,8 +126,8 @@ mesh::CellMatrix needle_surface(const mesh::CellMatrix& tets, const std::vector<
     int count = 0;
     for (int i = 0; i < 4; ++i) {
       const Index v = tets(i, c);
-      INCISE_CHECK(v >= 0 && v < n, "needle_surface: vertex " + std::to_string(v) +
-                                        " out of range of is_needle");
+      INCISE_CHECK(v >= 0 && v < n,
+                   "needle_surface: vertex " + std::to_string(v) + " out of range of is_needle");
       count += is_needle[static_cast<std::size_t>(v)] ? 1 : 0;
     }
     if (count < 3) continue;
@@ -152,7 +152,8 @@ mesh::CellMatrix needle_surface(const mesh::CellMatrix& tets, const std::vector<
   }
   mesh::CellMatrix out(3, static_cast<Eigen::Index>(kept.size()));
   for (std::size_t k = 0; k < kept.size(); ++k)
-    for (int i = 0; i < 3; ++i) out(i, static_cast<Eigen::Index>(k)) = kept[k][static_cast<std::size_t>(i)];
+    for (int i = 0; i < 3; ++i)
+      out(i, static_cast<Eigen::Index>(k)) = kept[k][static_cast<std::size_t>(i)];
   return out;
 }
 

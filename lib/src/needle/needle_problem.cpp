@@ -26,8 +26,8 @@ NeedleProblemT<D>::NeedleProblemT(Base& base, const Pose& pose, const std::vecto
                  "NeedleProblem: needle vertex " + std::to_string(v) + " is listed twice");
     seen[static_cast<std::size_t>(v)] = 1;
     for (int c = 0; c < D; ++c)
-      INCISE_CHECK(!base.is_fixed(D * v + c), "NeedleProblem: needle vertex " + std::to_string(v) +
-                                                  " is fixed in the body");
+      INCISE_CHECK(!base.is_fixed(D * v + c),
+                   "NeedleProblem: needle vertex " + std::to_string(v) + " is fixed in the body");
     needle_vertices_.push_back(v);
     for (int c = 1; c < D; ++c) fixed_[static_cast<std::size_t>(D * v + c)] = 1;
     if (nd.state == NodeState::kStick) {

@@ -3,8 +3,8 @@
 // that slid off, and the solve/rearrange loop of §6.7 — shared by NeedleInsertion (2D) and
 // NeedleInsertion3D; their contracts are in insertion.hpp (items 5 and 6).
 
-#include <incise/core/types.hpp>
 #include <incise/core/timer.hpp>
+#include <incise/core/types.hpp>
 #include <incise/needle/insertion.hpp>
 #include <incise/needle/needle.hpp>
 #include <incise/needle/needle_problem.hpp>
@@ -161,9 +161,9 @@ void fill_counts(typename NeedleSpace<D>::Base& base, const Eigen::Matrix<double
     // node without another sweep over the elements.
     for (std::size_t k = 0; k < nodes.size(); ++k) {
       const auto& nd = nodes[k];
-      rep.needle_force += frame * gradient.template segment<D>(D * nd.vertex) +
-                          (nd.state == NodeState::kSlip ? nd.friction_sign * thresholds[k] : 0.0) *
-                              frame.col(0);
+      rep.needle_force +=
+          frame * gradient.template segment<D>(D * nd.vertex) +
+          (nd.state == NodeState::kSlip ? nd.friction_sign * thresholds[k] : 0.0) * frame.col(0);
     }
     return;
   }

@@ -90,16 +90,16 @@ const char* to_string(StepStatus s);
 template <int D>
 struct StepReportT : Outcome<StepStatus, StepStatus::kOk, StepStatus::kNotRun> {
   using VecD = Eigen::Matrix<double, D, 1>;  ///< a point or force
-  int rearrangements = 0;      ///< state changes that triggered another solve
-  int solves = 0;              ///< solves run (rearrangements + 1 when ok)
-  long cg_iterations = 0;      ///< CG iterations over all solves
-  long max_cg_iterations = 0;  ///< CG iterations of the longest solve
-  std::uint64_t flops = 0;     ///< counted flops of the solves (SolverReport::flops summed)
-  long bisections = 0;         ///< simple bisections done by the refinement
-  int intercepted = 0;         ///< nodes that became needle nodes
-  int released = 0;            ///< needle nodes released (slid off)
-  int sticking = 0;            ///< needle nodes sticking at the end
-  int slipping = 0;            ///< needle nodes slipping at the end
+  int rearrangements = 0;                    ///< state changes that triggered another solve
+  int solves = 0;                            ///< solves run (rearrangements + 1 when ok)
+  long cg_iterations = 0;                    ///< CG iterations over all solves
+  long max_cg_iterations = 0;                ///< CG iterations of the longest solve
+  std::uint64_t flops = 0;  ///< counted flops of the solves (SolverReport::flops summed)
+  long bisections = 0;      ///< simple bisections done by the refinement
+  int intercepted = 0;      ///< nodes that became needle nodes
+  int released = 0;         ///< needle nodes released (slid off)
+  int sticking = 0;         ///< needle nodes sticking at the end
+  int slipping = 0;         ///< needle nodes slipping at the end
   /// Force the needle exerts on the material (N), Σ over needle nodes of −∇Π_el at the node,
   /// i.e. reactions plus friction; the needle feels its negative.
   VecD needle_force = VecD::Zero();

@@ -27,8 +27,8 @@ namespace incise::needle {
 
 /// Needle coordinates of a point in 3D (Fig. 6.5 with a two-component d_perp).
 struct NeedleCoordinates3D {
-  double s = 0.0;              ///< d_needle: distance along the shaft behind the tip (m)
-  Vec2 perp = Vec2::Zero();    ///< d_perp: offset along (n1, n2) (m)
+  double s = 0.0;            ///< d_needle: distance along the shaft behind the tip (m)
+  Vec2 perp = Vec2::Zero();  ///< d_perp: offset along (n1, n2) (m)
 };
 
 /// The 3D needle node (needle.hpp NeedleNodeT).
@@ -74,8 +74,8 @@ struct NeedlePose3D {
 /// Closest approach of a segment [a, b] to the needle's axis segment [base, tip].
 struct ShaftApproach {
   double distance = 0.0;  ///< least distance between the two segments (m)
-  double alpha = 0.0;     ///< where on [a, b] it is attained: a + alpha·(b − a), alpha ∈ [0, 1]
-  double s = 0.0;         ///< and on the axis: s behind the tip, in [0, L]
+  double alpha = 0.0;  ///< where on [a, b] it is attained: a + alpha·(b − a), alpha ∈ [0, 1]
+  double s = 0.0;      ///< and on the axis: s behind the tip, in [0, L]
 };
 
 /// Closest approach of [a, b] to the axis of `pose` (Ericson, Real-Time Collision Detection,
