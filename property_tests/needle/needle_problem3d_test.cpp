@@ -2,8 +2,9 @@
 /// thesis §6.6 and §6.9) on seeded random needles through a Kuhn-split box fixed at the bottom:
 /// P_W = R P̃ Rᵀ with the 3×3 needle frame per node is the orthogonal projection onto the
 /// admissible movements (sticking nodes still, slipping nodes along the shaft); the rotated
-/// problem's gradient and Hessian product are the derivatives of its energy; and projected
-/// linear CG stopped tightly agrees with a direct CHOLMOD solve of the same constrained system
+/// problem's gradient and Hessian product are the derivatives of its energy; the Jacobi diagonal
+/// is the body's, rotated at needle nodes; and projected linear CG (plain and Jacobi) stopped
+/// tightly agrees with a direct CHOLMOD solve of the same constrained system
 /// to ≤ 1e-9 relative.
 
 #include <incise/fem/elastic_problem.hpp>
@@ -152,6 +153,33 @@ TEST(NeedleProblem3D, GradientAndHessianAreDerivativesOfTheEnergy) {
   }
 }
 
+TEST(NeedleProblem3D, JacobiDiagonalIsTheRotatedBodyDiagonal) {
+  INCISE_SEEDED_RNG(rng, 6904);
+  Case c = make_case(rng);
+  NeedleProblem3D p(*c.base, c.pose, c.nodes, c.friction);
+  const VecX u = random_vector(rng, p.size(), 1e-4);
+  VecX d, db;
+  ASSERT_TRUE(p.hessian_diagonal(u, d));
+  ASSERT_TRUE(c.base->hessian_diagonal(p.to_original(u), db));
+  std::vector<char> needle(static_cast<std::size_t>(c.base->num_nodes()), 0);
+  const incise::Mat3 r = c.pose.frame();
+  for (const NeedleNode3D& n : c.nodes) {
+    needle[static_cast<std::size_t>(n.vertex)] = 1;
+    for (int k = 0; k < 3; ++k) {
+      const double expected = p.is_fixed(3 * n.vertex + k)
+                                  ? 1.0
+                                  : r.col(k).cwiseAbs2().dot(db.segment<3>(3 * n.vertex));
+      // The same three products summed (rounding of O(K_ii) terms).
+      EXPECT_NEAR(d[3 * n.vertex + k], expected, 1e-14 * db.norm());
+    }
+  }
+  for (Index v = 0; v < c.base->num_nodes(); ++v)
+    if (!needle[static_cast<std::size_t>(v)]) {
+      EXPECT_EQ(d.segment<3>(3 * v), db.segment<3>(3 * v));
+    }
+  EXPECT_GT(d.minCoeff(), 0.0);
+}
+
 TEST(NeedleProblem3D, ProjectedCgMatchesDirectCholmodSolve) {
   INCISE_SEEDED_RNG(rng, 6903);
   for (int trial = 0; trial < 12; ++trial) {
@@ -166,23 +194,29 @@ TEST(NeedleProblem3D, ProjectedCgMatchesDirectCholmodSolve) {
     VecX direct = u0;
     const auto d = incise::needle::direct_solve(p, direct);
     ASSERT_TRUE(d.ok()) << d.brief();
-    VecX cg = u0;
-    incise::solver::LinearCgOptions o;
-    o.stop.rule = incise::solver::ResidualRule::kWithReactions;
-    // Tight: ‖r‖ ≤ 1e-14·‖f‖ leaves ‖Δu‖/‖u‖ ≲ κ·1e-14 ≈ 1e-11 for κ ~ 1e3.
-    o.stop.epsilon = 1e-14;
-    o.stop.epsilon_round = 0.0;
-    const auto rep = incise::solver::linear_cg(p, cg, o);
-    EXPECT_TRUE(rep.ok() || rep.status == incise::solver::StopReason::kStagnated) << rep.brief();
-    // Issue 21: ≤ 1e-9 relative.
-    EXPECT_LE((cg - direct).norm(), 1e-9 * direct.norm())
-        << "cg iterations " << rep.iterations << " residual " << rep.residual_norm;
-    // Both keep the prescribed components; the solution moved the free ones.
-    for (Eigen::Index i = 0; i < p.size(); ++i)
-      if (p.is_fixed(i)) {
-        EXPECT_EQ(cg[i], u0[i]);
-        EXPECT_EQ(direct[i], u0[i]);
-      }
+    // Plain CG (the thesis') and Jacobi-preconditioned CG (NeedleProblemT::hessian_diagonal).
+    for (const auto pre :
+         {incise::solver::Preconditioner::kNone, incise::solver::Preconditioner::kJacobi}) {
+      SCOPED_TRACE(incise::solver::to_string(pre));
+      VecX cg = u0;
+      incise::solver::LinearCgOptions o;
+      o.preconditioner = pre;
+      o.stop.rule = incise::solver::ResidualRule::kWithReactions;
+      // Tight: ‖r‖ ≤ 1e-14·‖f‖ leaves ‖Δu‖/‖u‖ ≲ κ·1e-14 ≈ 1e-11 for κ ~ 1e3.
+      o.stop.epsilon = 1e-14;
+      o.stop.epsilon_round = 0.0;
+      const auto rep = incise::solver::linear_cg(p, cg, o);
+      EXPECT_TRUE(rep.ok() || rep.status == incise::solver::StopReason::kStagnated) << rep.brief();
+      // Issue 21: ≤ 1e-9 relative.
+      EXPECT_LE((cg - direct).norm(), 1e-9 * direct.norm())
+          << "cg iterations " << rep.iterations << " residual " << rep.residual_norm;
+      // Both keep the prescribed components.
+      for (Eigen::Index i = 0; i < p.size(); ++i)
+        if (p.is_fixed(i)) {
+          EXPECT_EQ(cg[i], u0[i]);
+          EXPECT_EQ(direct[i], u0[i]);
+        }
+    }
     EXPECT_GT((direct - u0).norm(), 1e-3 * u0.norm());
   }
 }

@@ -342,8 +342,10 @@ TEST(SceneNeedleBad, SlabSceneRefusesTetrahedralParts) {
   j["solver"]["method"] = "newton";
   expect_error(j, "/solver/method", "a needle scene is solved by \"cg\" or");
   j = small_needle_scene();
+  j["solver"]["method"] = "nonlinear-cg";
   j["solver"]["preconditioner"] = "jacobi";
-  expect_error(j, "/solver/preconditioner", "not allowed here: the needle's projected problem");
+  expect_error(j, "/solver/preconditioner",
+               "not allowed here: in a needle scene only \"cg\" takes a preconditioner");
   j = small_needle_scene();
   j["solver"]["time_budget"] = 1;
   expect_error(j, "/solver/time_budget", "not allowed here: a needle run has no wall-clock");

@@ -1,5 +1,6 @@
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
+#include <incise/mesh/tet_faces.hpp>
 #include <incise/needle/insertion3d.hpp>
 #include <incise/needle/needle_problem.hpp>
 
@@ -59,7 +60,8 @@ NeedleInsertion3D::~NeedleInsertion3D() = default;
 bool NeedleInsertion3D::is_fixed_vertex(Index v) const {
   const Vec3 p = mesh_->points().col(v);
   for (const FixedBox& b : fixed_)
-    if (((p - b.lo).array() >= -kBoxTolerance).all() && ((b.hi - p).array() >= -kBoxTolerance).all())
+    if (((p - b.lo).array() >= -kBoxTolerance).all() &&
+        ((b.hi - p).array() >= -kBoxTolerance).all())
       return true;
   return false;
 }
@@ -114,8 +116,10 @@ void NeedleInsertion3D::refine_at_tip(StepReport3D& rep) {
   const Index before = mesh_->connectivity().num_vertices();
   mesh_->refine_around(reference, options_.h_ref);
   if (options_.h_shaft > 0.0) {
-    if (has_trace_) mesh_->refine_along_segment(trace_, reference, options_.h_shaft);
-    else mesh_->refine_around(reference, options_.h_shaft);
+    if (has_trace_)
+      mesh_->refine_along_segment(trace_, reference, options_.h_shaft);
+    else
+      mesh_->refine_around(reference, options_.h_shaft);
   }
   trace_ = reference;
   has_trace_ = true;
@@ -147,51 +151,61 @@ int NeedleInsertion3D::intercept() {
   const Eigen::Matrix3Xd x = deformed();
   const mesh::CellMatrix& cells = problem_->cells();
   const double r = pose_.radius, len = pose_.length;
-  // Per vertex: needle coordinates, for a cheap rejection of edges far from the shaft (a point
-  // of edge (p, q) is within |q − p| of p, so an edge with s_p, s_q both < −r − |e| … misses).
+  const Vec3 base = pose_.base(), d = pose_.tip - base;
+  // The shaft's bounding box widened by r: tetrahedra outside it cannot meet the cylinder.
+  const Vec3 lo = base.cwiseMin(pose_.tip).array() - r, hi = base.cwiseMax(pose_.tip).array() + r;
   const auto nv = static_cast<std::size_t>(x.cols());
-  std::vector<NeedleCoordinates3D> c(nv);
-  for (std::size_t v = 0; v < nv; ++v) c[v] = pose_.coordinates(x.col(static_cast<Eigen::Index>(v)));
-  std::vector<std::pair<std::pair<Index, Index>, double>> edges;
-  static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-  for (Eigen::Index e = 0; e < cells.cols(); ++e)
-    for (const auto& ed : kEdge) {
-      Index p = cells(ed[0], e), q = cells(ed[1], e);
-      if (p > q) std::swap(p, q);
-      const auto& cp = c[static_cast<std::size_t>(p)];
-      const auto& cq = c[static_cast<std::size_t>(q)];
-      const double el = (x.col(q) - x.col(p)).norm();
-      if (std::min(cp.perp.norm(), cq.perp.norm()) > r + el) continue;
-      if (std::max(cp.s, cq.s) < -r || std::min(cp.s, cq.s) > len + r) continue;
-      const ShaftApproach a = shaft_approach(pose_, x.col(p), x.col(q));
-      if (a.distance <= r) edges.push_back({{p, q}, a.alpha});
-    }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end(),
-                          [](const auto& a, const auto& b) { return a.first == b.first; }),
-              edges.end());
   std::vector<char> is_needle(nv, 0);
   for (const NeedleNode3D& n : nodes_) is_needle[static_cast<std::size_t>(n.vertex)] = 1;
+  static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
   int added = 0;
-  for (const auto& [edge, alpha] : edges) {
-    const auto [p, q] = edge;
-    const Index v = alpha < 0.5 ? p : q;
-    if (is_needle[static_cast<std::size_t>(v)] || problem_->is_fixed(3 * v)) continue;
-    NeedleNode3D n;
-    n.vertex = v;
-    n.state = NodeState::kStick;
-    n.coords = c[static_cast<std::size_t>(v)];
-    if (n.coords.s < 0.0 || n.coords.s > len) continue;
-    if (options_.relocate) {
-      // §6.8.6 in 3D: onto the needle's surface (or the axis when the node lies on it).
-      const double d = n.coords.perp.norm();
-      n.coords.perp = d > 0.0 ? Vec2(n.coords.perp * (r / d)) : Vec2::Zero();
-      u_.segment<3>(3 * v) = pose_.point(n.coords) - mesh_->points().col(v);
+  for (Eigen::Index e = 0; e < cells.cols(); ++e) {
+    Vec3 p[4];
+    for (int i = 0; i < 4; ++i) p[i] = x.col(cells(i, e));
+    const Vec3 tlo = p[0].cwiseMin(p[1]).cwiseMin(p[2]).cwiseMin(p[3]);
+    const Vec3 thi = p[0].cwiseMax(p[1]).cwiseMax(p[2]).cwiseMax(p[3]);
+    if ((thi.array() < lo.array()).any() || (tlo.array() > hi.array()).any()) continue;
+    // Does the axis segment base + β·d, β ∈ [0, 1], meet the tetrahedron? Clip β against its
+    // four face planes (Cyrus–Beck; the deformed tetrahedron may be inverted: orient by the
+    // opposite vertex).
+    double b0 = 0.0, b1 = 1.0;
+    bool meets = true;
+    for (int f = 0; f < 4 && meets; ++f) {
+      const Vec3& a = p[mesh::kTetFace[f][0]];
+      Vec3 nrm = (p[mesh::kTetFace[f][1]] - a).cross(p[mesh::kTetFace[f][2]] - a);
+      if (nrm.dot(p[f] - a) > 0.0) nrm = -nrm;  // outward: away from the opposite vertex
+      const double num = nrm.dot(base - a), den = nrm.dot(d);  // inside: num + β·den ≤ 0
+      if (den == 0.0) {
+        meets = num <= 0.0;
+      } else if (den > 0.0) {
+        b1 = std::min(b1, -num / den);
+      } else {
+        b0 = std::max(b0, -num / den);
+      }
+      meets = meets && b0 <= b1;
     }
-    n.anchor = n.coords.s;
-    nodes_.push_back(n);
-    is_needle[static_cast<std::size_t>(v)] = 1;
-    ++added;
+    for (int k = 0; k < 6 && !meets; ++k)
+      meets = shaft_approach(pose_, p[kEdge[k][0]], p[kEdge[k][1]]).distance <= r;
+    if (!meets) continue;
+    for (int i = 0; i < 4; ++i) {
+      const Index v = cells(i, e);
+      if (is_needle[static_cast<std::size_t>(v)] || problem_->is_fixed(3 * v)) continue;
+      NeedleNode3D n;
+      n.vertex = v;
+      n.state = NodeState::kStick;
+      n.coords = pose_.coordinates(p[i]);
+      if (n.coords.s < 0.0 || n.coords.s > len) continue;
+      if (options_.relocate) {
+        // §6.8.6 in 3D: onto the needle's surface (or the axis when the node lies on it).
+        const double dist = n.coords.perp.norm();
+        n.coords.perp = dist > 0.0 ? Vec2(n.coords.perp * (r / dist)) : Vec2::Zero();
+        u_.segment<3>(3 * v) = pose_.point(n.coords) - mesh_->points().col(v);
+      }
+      n.anchor = n.coords.s;
+      nodes_.push_back(n);
+      is_needle[static_cast<std::size_t>(v)] = 1;
+      ++added;
+    }
   }
   return added;
 }

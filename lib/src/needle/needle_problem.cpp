@@ -137,6 +137,20 @@ EvalStatus NeedleProblemT<D>::hessian_product(const VecX& u, const VecX& d, VecX
 }
 
 template <int D>
+bool NeedleProblemT<D>::hessian_diagonal(const VecX& u, VecX& diag) {
+  x_ = u;
+  rotate(x_, false);
+  if (!base_.hessian_diagonal(x_, diag)) return false;
+  for (const Index i : needle_vertices_) {
+    const VecD k = diag.template segment<D>(D * i);
+    diag.template segment<D>(D * i) = frame_.cwiseAbs2().transpose() * k;
+  }
+  for (Eigen::Index i = 0; i < diag.size(); ++i)
+    if (fixed_[static_cast<std::size_t>(i)]) diag[i] = 1.0;
+  return true;
+}
+
+template <int D>
 void NeedleProblemT<D>::project(VecX& v) const {
   for (Eigen::Index i = 0; i < v.size(); ++i)
     if (fixed_[static_cast<std::size_t>(i)]) v[i] = 0.0;

@@ -116,6 +116,7 @@ bool solve(typename NeedleSpace<D>::Base& base, const typename NeedleSpace<D>::P
     solver::LinearCgOptions o;
     o.stop = stop;
     o.budget.max_iterations = options.max_iterations;
+    o.preconditioner = options.preconditioner;
     sr = solver::linear_cg(np, ur, o);
   } else {
     solver::NonlinearCgOptions o;

@@ -218,6 +218,7 @@ BuiltScene build_needle_scene(const SceneSpec& spec) {
   o.max_iterations = spec.solver.max_iterations;
   o.max_rearrangements = tool.max_rearrangements;
   o.relocate = tool.relocate;
+  o.preconditioner = spec.solver.preconditioner;
   b.needle = std::make_unique<needle::NeedleInsertion>(b.mesh, make_material(spec.material),
                                                        ms.thickness, lines, tool.friction, o);
   b.needle_plan = needle_updates(tool);
@@ -419,6 +420,7 @@ BuiltScene build_needle3d_scene(const SceneSpec& spec) {
   o.max_iterations = spec.solver.max_iterations;
   o.max_rearrangements = tool.max_rearrangements;
   o.relocate = tool.relocate;
+  o.preconditioner = spec.solver.preconditioner;
   b.needle3d = std::make_unique<needle::NeedleInsertion3D>(b.mesh, make_material(spec.material),
                                                            boxes, tool.friction, o);
   b.needle_plan = needle_updates(tool, true);

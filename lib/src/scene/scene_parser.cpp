@@ -236,9 +236,6 @@ SolverSpec parse_solver(JsonObject o, bool slab) {
     o.forbid("time_budget",
              "a needle run has no wall-clock budget (max_iterations caps each solve)");
     s.tolerance_round = o.number("tolerance_round", Range{0.0, 1.0, false, true}, 1e-8);
-    o.forbid("preconditioner",
-             "the needle's projected problem (6.7) has no Jacobi diagonal; a needle scene runs "
-             "plain CG, as the thesis does");
   } else {
     s.time_budget = o.number("time_budget", detail::non_negative(), 0.0);
     o.forbid("tolerance_round",
@@ -247,8 +244,10 @@ SolverSpec parse_solver(JsonObject o, bool slab) {
              "(6.9) stopping rule; this scene stops by (6.8), ||r|| <= tol ||f_ext||");
   }
   const bool dynamic = s.method == SolverSpec::Method::kDynamicSS22;
-  if (slab) {
-    // preconditioner: refused above
+  if (slab && s.method != SolverSpec::Method::kCG) {
+    o.forbid("preconditioner",
+             "in a needle scene only \"cg\" takes a preconditioner (\"jacobi\": the diagonal of "
+             "the projected problem (6.7), needle::NeedleProblemT::hessian_diagonal)");
   } else if (s.method == SolverSpec::Method::kCG || s.method == SolverSpec::Method::kNewton) {
     s.preconditioner =
         o.choice("preconditioner", solver::kPreconditionerNames, solver::Preconditioner::kNone);

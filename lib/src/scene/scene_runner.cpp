@@ -424,7 +424,9 @@ void run_needle(BuiltScene& scene, Insertion& sim, SceneRunResult& res, const Ob
     detail << ", tetrahedral bisection; h_shaft = " << o.h_shaft << " m along the trace";
   detail << "), intercept needle nodes (§6.4" << (o.relocate ? ", relocated §6.8.6" : "")
          << "), solve (6.7) by "
-         << (o.relaxation == needle::Relaxation::kLinearCg ? "linear" : "nonlinear")
+         << (o.relaxation != needle::Relaxation::kLinearCg         ? "nonlinear"
+             : o.preconditioner == solver::Preconditioner::kJacobi ? "Jacobi-preconditioned linear"
+                                                                   : "linear")
          << " CG to (6.9) with eps = " << o.epsilon << ", eps_round = " << o.epsilon_round
          << ", rearrange stick/slip (§6.3.2, at most " << o.max_rearrangements << " per update); "
          << res.needle_updates.size() << " of " << scene.needle_plan.size() << " updates, "

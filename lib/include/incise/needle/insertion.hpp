@@ -38,6 +38,7 @@
 #include <incise/mesh/bisection.hpp>
 #include <incise/needle/friction.hpp>
 #include <incise/needle/needle.hpp>
+#include <incise/solver/linear_cg.hpp>
 #include <incise/solver/report.hpp>
 
 #include <Eigen/Core>
@@ -71,6 +72,9 @@ struct InsertionOptions {
   long max_iterations = 100000;  ///< CG iterations per solve
   int max_rearrangements = 100;  ///< rearrangements per step before kRearrangementCycle
   bool relocate = false;         ///< §6.8.6: project intercepted nodes onto the needle
+  /// Linear CG only: kJacobi preconditions with NeedleProblemT::hessian_diagonal (the thesis
+  /// runs plain CG, the default); nonlinear CG ignores it.
+  solver::Preconditioner preconditioner = solver::Preconditioner::kNone;
 };
 
 /// Status of one step.

@@ -18,11 +18,15 @@
 ///     (exact for linear elements: Π is unchanged); new vertices in a fixed box are fixed. When
 ///     the mesh already has max_elements tetrahedra the step stops with kRefinementBudget
 ///     before refining (the needle nodes are then at the new pose, nothing else changed);
-///  3. intercept (§6.4 in 3D): every mesh edge whose least distance to the shaft's axis segment
-///     [base, tip] is ≤ r in the deformed configuration makes its endpoint closer to the point
-///     of closest approach a needle node (sticking, coordinates from its current position),
-///     unless it already is one, is fixed, or lies outside 0 ≤ s ≤ L — the 2D rule (an edge
-///     crossing the shaft) with the shaft thickened to the needle's cylinder;
+///  3. intercept (§6.4 in 3D): every tetrahedron that the needle meets in the deformed
+///     configuration — its axis segment [base, tip] passes through it, or one of its edges comes
+///     within r of that segment — makes its four vertices needle nodes (sticking, coordinates
+///     from their current positions), except vertices that already are, are fixed, or lie
+///     outside 0 ≤ s ≤ L. In 2D the closest vertex of each crossed edge suffices, since the
+///     needle is a line of edges there; in 3D one vertex per crossed face would leave no face
+///     with three needle vertices at coarse refinement, so the needle occupies the tetrahedra it
+///     crosses and the needle surface (item 4) is the boundary of their union — the jagged
+///     surface of Fig. 6.14, within about one element of the shaft;
 ///  4. friction thresholds (once per step, as in 2D): the needle surface of the current needle
 ///     nodes (needle3d.hpp), each node's third of its faces' deformed area A_k and
 ///     F_d,k = f(s_k)·A_k/(2πr) (FrictionProfile::surface_thresholds), F_s = static_factor·F_d;

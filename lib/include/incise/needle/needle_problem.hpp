@@ -87,6 +87,12 @@ class NeedleProblemT : public Problem {
   [[nodiscard]] EvalStatus energy(const VecX& u, double& energy) override;
   [[nodiscard]] EvalStatus gradient(const VecX& u, VecX& g, double* energy = nullptr) override;
   [[nodiscard]] EvalStatus hessian_product(const VecX& u, const VecX& d, VecX& out) override;
+  /// A positive diagonal for Jacobi preconditioning (linear CG, solver::Preconditioner::
+  /// kJacobi): the body's diag K(u) (base hessian_diagonal at R·u) at the other DOFs; at a
+  /// needle node, component c gets Σ_i R_ic²·K_ii, the diagonal of RᵀKR without the node
+  /// block's off-diagonal terms (still positive: any positive diagonal is a valid preconditioner,
+  /// the solution is unchanged); 1 at fixed components. False when the base's fails.
+  bool hessian_diagonal(const VecX& u, VecX& diag) override;
   void project(VecX& v) const override;
   bool is_fixed(Eigen::Index i) const override { return fixed_[static_cast<std::size_t>(i)] != 0; }
   /// ‖P̃ Rᵀ(f_ext + f_friction)‖₂.
