@@ -164,17 +164,31 @@ std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion& inse
   return {u, state};
 }
 
-void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_updates,
-                                const needle::NeedleInsertion& insertion) {
-  const OutputSpec& outs = scene_.spec.outputs;
+namespace {
+
+/// The zero-padded update index of a needle frame that is due (every vtu_every updates and the
+/// last planned one, finite displacement), "" when none is.
+template <class Insertion>
+std::string needle_frame_index(const OutputSpec& outs, const NeedleUpdateRow& row,
+                               std::size_t total_updates, const Insertion& insertion) {
   const long last = static_cast<long>(total_updates) - 1;
   if (outs.vtu.empty() || outs.vtu_every <= 0 ||
       (row.update % outs.vtu_every != 0 && row.update != last) ||
       !insertion.displacement().allFinite())
-    return;
+    return "";
   const std::size_t width = std::max<std::size_t>(4, std::to_string(std::max(last, 0L)).size());
   std::string index = std::to_string(row.update);
   index.insert(0, width > index.size() ? width - index.size() : 0, '0');
+  return index;
+}
+
+}  // namespace
+
+void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_updates,
+                                const needle::NeedleInsertion& insertion) {
+  const OutputSpec& outs = scene_.spec.outputs;
+  const std::string index = needle_frame_index(outs, row, total_updates, insertion);
+  if (index.empty()) return;
   const std::string file = outs.vtu + "_" + index + ".vtu";
   const mesh::MeshData m = insertion.mesh().to_mesh_data();
   const std::vector<io::DataArray> data = needle_point_data(insertion);
@@ -234,14 +248,8 @@ void write_needle_surface_vtu(const std::string& path, const needle::NeedleInser
 void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_updates,
                                 const needle::NeedleInsertion3D& insertion) {
   const OutputSpec& outs = scene_.spec.outputs;
-  const long last = static_cast<long>(total_updates) - 1;
-  if (outs.vtu.empty() || outs.vtu_every <= 0 ||
-      (row.update % outs.vtu_every != 0 && row.update != last) ||
-      !insertion.displacement().allFinite())
-    return;
-  const std::size_t width = std::max<std::size_t>(4, std::to_string(std::max(last, 0L)).size());
-  std::string index = std::to_string(row.update);
-  index.insert(0, width > index.size() ? width - index.size() : 0, '0');
+  const std::string index = needle_frame_index(outs, row, total_updates, insertion);
+  if (index.empty()) return;
   const std::string file = outs.vtu + "_" + index + ".vtu";
   const std::string surface = outs.vtu + "_needle_" + index + ".vtu";
   const mesh::MeshData m = insertion.mesh().to_mesh_data();
