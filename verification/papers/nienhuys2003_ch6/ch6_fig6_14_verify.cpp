@@ -6,14 +6,15 @@
 /// friction profile, a Kuhn cube of 6 tetrahedra as the starting mesh, the needle along +x at
 /// y = 52 mm, z = 49 mm (off the cube's diagonal planes) from x = −5 mm to x = 60 mm at 0.5 h
 /// per update (linear) or 0.1 h (neo-Hookean: at 0.5 h a warm start inverts an element, a
-/// reported solver failure, as in 2D; the thesis' Fig. 6.12 uses 0.01 h_ref for neo-Hookean), and "k-fold refinement" = bisection level k of the Kuhn cube around the tip
-/// and along the trace: longest edge a√3·2^−m, a√2·2^−m, a·2^−m at levels 3m, 3m+1, 3m+2
-/// (tet_bisection.hpp: three similarity classes), i.e. 10.83 mm at level 12 and 1.5625 mm at
-/// level 20. Per run: elements, nodes, needle nodes and surface, CPU seconds, and the tip-force
-/// history (written to fig6_14_<material>.csv). Asserted: every update converges, the mesh is
-/// valid, and the needle drags the cube forward (force on the material along +x, growing with
-/// depth on average); element counts and times are reported beside the thesis', not asserted
-/// (our starting mesh, path and speed are our choices).
+/// reported solver failure, as in 2D; the thesis' Fig. 6.12 uses 0.01 h_ref for neo-Hookean), and
+/// "k-fold refinement" = bisection level k of the Kuhn cube around the tip and along the trace:
+/// longest edge a√3·2^−m, a√2·2^−m, a·2^−m at levels 3m, 3m+1, 3m+2 (tet_bisection.hpp: three
+/// similarity classes), i.e. 10.83 mm at level 12 and 1.5625 mm at level 20. Per run: elements,
+/// nodes, needle nodes and surface, CPU seconds, and the tip-force history (written to
+/// fig6_14_<material>.csv). Asserted: every update converges, the mesh is valid, and the needle
+/// drags the cube forward (force on the material along +x, growing with depth on average); element
+/// counts and times are reported beside the thesis', not asserted (our starting mesh, path and
+/// speed are our choices).
 
 #include <incise/core/timer.hpp>
 #include <incise/material/material.hpp>
@@ -76,8 +77,7 @@ Fig614 run(const std::string& model, int level, double speed, const std::string&
   const double start = incise::thread_cpu_seconds();
   for (long k = 0;; ++k) {
     const double x = std::min(x0 + static_cast<double>(k) * step, depth);
-    const auto rep =
-        sim.step(NeedlePose3D::make(Vec3(x, 0.052, 0.049), Vec3::UnitX(), 0.1, 1e-3));
+    const auto rep = sim.step(NeedlePose3D::make(Vec3(x, 0.052, 0.049), Vec3::UnitX(), 0.1, 1e-3));
     ++r.updates;
     r.cg += rep.cg_iterations;
     r.refine += rep.refine_seconds;
