@@ -123,7 +123,8 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   scene::BuiltScene built = scene::build_scene(spec);
 
   out << "scene: " << scene_path << (spec.name.empty() ? "" : "  (" + spec.name + ")") << "\n";
-  const bool needle_run = built.needle != nullptr;
+  const bool needle_run = built.is_needle();
+  const bool needle3d_run = built.needle3d != nullptr;
   out << "solver: " << scene::to_string(spec.solver.method) << ", tolerance "
       << spec.solver.tolerance
       << (needle_run ? " (eps of (6.9), eps_round " + num(spec.solver.tolerance_round) + ")"
@@ -187,9 +188,7 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     }
   };
   // Needle scene: one line (or bar frame) per update.
-  auto needle_observer = [&](const scene::NeedleUpdateRow& row, std::size_t total_updates,
-                             const needle::NeedleInsertion& insertion) {
-    frames.needle_update(row, total_updates, insertion);
+  auto needle_progress = [&](const scene::NeedleUpdateRow& row, std::size_t total_updates) {
     if (progress == "bar") {
       const double frac = total_updates ? double(row.update + 1) / double(total_updates) : 1.0;
       const int width = 30, filled = static_cast<int>(frac * width);
@@ -205,8 +204,18 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
           << " it, update " << row.seconds * 1e3 << " ms, " << row.status << "\n";
     }
   };
+  auto needle_observer = [&](const scene::NeedleUpdateRow& row, std::size_t total_updates,
+                             const needle::NeedleInsertion& insertion) {
+    frames.needle_update(row, total_updates, insertion);
+    needle_progress(row, total_updates);
+  };
+  auto needle3d_observer = [&](const scene::NeedleUpdateRow& row, std::size_t total_updates,
+                               const needle::NeedleInsertion3D& insertion) {
+    frames.needle_update(row, total_updates, insertion);
+    needle_progress(row, total_updates);
+  };
   const scene::SceneRunResult res =
-      scene::run_scene(built, observer, cut_observer, needle_observer);
+      scene::run_scene(built, observer, cut_observer, needle_observer, needle3d_observer);
   if (progress == "bar") out << "\n";
 
   const auto& rep = res.report;
@@ -226,16 +235,22 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     if (!res.needle_updates.empty()) {
       const auto& last = res.needle_updates.back();
       out << "final needle:    tip [" << num(last.tip.x()) << ", " << num(last.tip.y())
-          << "] m, depth " << num(last.depth) << " m, " << last.sticking << " sticking, "
-          << last.slipping << " slipping needle nodes; force on the material ["
-          << num(last.needle_force.x()) << ", " << num(last.needle_force.y()) << "] N\n";
+          << (needle3d_run ? ", " + num(last.tip.z()) : std::string()) << "] m, depth "
+          << num(last.depth) << " m, " << last.sticking << " sticking, " << last.slipping
+          << " slipping needle nodes; force on the material [" << num(last.needle_force.x()) << ", "
+          << num(last.needle_force.y())
+          << (needle3d_run ? ", " + num(last.needle_force.z()) : std::string()) << "] N\n";
+      if (needle3d_run)
+        out << "needle surface:  " << last.surface_faces << " faces, " << num(last.surface_area)
+            << " m^2\n";
     }
+    const char* cells = needle3d_run ? " tetrahedra" : " triangles";
     out << "final mesh:      " << built.mesh.num_points() << " nodes, " << built.mesh.num_cells()
-        << " triangles\n";
+        << cells << "\n";
     out << "energy:          " << num(rep.energy) << " J\n";
     if (res.inverted_elements >= 0)
       out << "inverted:        " << res.inverted_elements << " of " << built.mesh.num_cells()
-          << " triangles (deformed area <= 0)"
+          << cells << (needle3d_run ? " (deformed volume <= 0)" : " (deformed area <= 0)")
           << (spec.material.allow_inversion ? ", allowed by the scene (material.allow_inversion)"
                                             : "")
           << "\n";

@@ -309,11 +309,13 @@ TEST(SceneNeedle, NumericalFailureIsAReportedStatusNamingTheUpdate) {
 }
 
 TEST(SceneNeedleBad, NeedleOnATetrahedralMeshAndScalpelOnTheSlab) {
+  // A needle on a tetrahedral mesh is a 3D needle scene (§6.9): loaded by the needle only, its
+  // path in [x, y, z].
   Json j = box_scene();
   j["tools"] = small_needle_scene()["tools"];
-  expect_error(j, "/tools/0/type",
-               "a needle is inserted into a 2D slab (thesis ch. 6): it needs a \"slab2d\" mesh, "
-               "got a tetrahedral (3D) mesh of type \"box\" at /mesh");
+  expect_error(j, "/loads", "not allowed here: a needle scene is loaded by its needle only");
+  j.erase("loads");
+  expect_error(j, "/tools/0/path/0", "[x, y, z]");
   j = small_needle_scene();
   j["tools"] = Json::parse(
       R"([{"type": "scalpel", "path": [[0, 0, 0], [0.05, 0, 0]], "blade": [0, 0, -0.01]}])");
@@ -335,13 +337,15 @@ TEST(SceneNeedleBad, SlabWithoutOneNeedle) {
 TEST(SceneNeedleBad, SlabSceneRefusesTetrahedralParts) {
   Json j = small_needle_scene();
   j["loads"] = box_scene()["loads"];
-  expect_error(j, "/loads", "not allowed here: a slab2d scene is loaded by its needle only");
+  expect_error(j, "/loads", "not allowed here: a needle scene is loaded by its needle only");
   j = small_needle_scene();
   j["solver"]["method"] = "newton";
-  expect_error(j, "/solver/method", "a slab2d (needle) scene is solved by \"cg\" or");
+  expect_error(j, "/solver/method", "a needle scene is solved by \"cg\" or");
   j = small_needle_scene();
+  j["solver"]["method"] = "nonlinear-cg";
   j["solver"]["preconditioner"] = "jacobi";
-  expect_error(j, "/solver/preconditioner", "not allowed here: the needle's projected problem");
+  expect_error(j, "/solver/preconditioner",
+               "not allowed here: in a needle scene only \"cg\" takes a preconditioner");
   j = small_needle_scene();
   j["solver"]["time_budget"] = 1;
   expect_error(j, "/solver/time_budget", "not allowed here: a needle run has no wall-clock");
@@ -362,7 +366,8 @@ TEST(SceneNeedleBad, SlabSceneRefusesTetrahedralParts) {
   j = box_scene();
   j["solver"]["tolerance_round"] = 1e-8;
   expect_error(j, "/solver/tolerance_round",
-               "not allowed here: only a needle scene (a \"slab2d\" mesh) has the rounding term");
+               "not allowed here: only a needle scene (a \"slab2d\" mesh, or a needle tool) has "
+               "the rounding term");
   j = box_scene();
   j["mesh"]["thickness"] = 0.01;
   expect_error(j, "/mesh/thickness", "unknown key \"thickness\"");
@@ -475,3 +480,138 @@ TEST(SceneNeedleBad, FrictionValues) {
 }
 
 }  // namespace
+
+// --- 3D needle scenes (thesis §6.9; docs/scenes.md "Needle scenes", 3D) ----------------------
+
+namespace {
+
+// A small 3D needle scene: a 0.1 m box of 6·4³ tetrahedra fixed at z = 0, a needle of radius
+// 2.5 mm along x at y = 52 mm, z = 49 mm from outside to 40 mm depth, refined to 8 mm.
+Json small_needle3d_scene() {
+  return Json::parse(R"({
+    "version": 1,
+    "name": "small 3D needle",
+    "mesh": {"type": "box", "nx": 4, "ny": 4, "nz": 4, "lx": 0.1, "ly": 0.1, "lz": 0.1},
+    "material": {"model": "linear", "E": 3.4e4, "nu": 0.34},
+    "fixed": [{"type": "plane", "axis": "z", "value": 0.0}],
+    "solver": {"method": "cg", "tolerance": 0.01},
+    "tools": [{"type": "needle", "path": [[-0.01, 0.052, 0.049], [0.04, 0.052, 0.049]],
+               "length": 0.1, "radius": 0.0025, "speed": 0.5, "h_ref": 0.008}]
+  })");
+}
+
+}  // namespace
+
+TEST(SceneNeedle3D, SmallInsertionRunsAndWritesCsvVtuSeriesAndNeedleSurface) {
+  const fs::path dir = fresh_dir("small3d");
+  Json j = small_needle3d_scene();
+  j["outputs"] = {{"csv", (dir / "updates.csv").string()},
+                  {"vtu", (dir / "needle").string()},
+                  {"vtu_every", 4}};
+  scene::BuiltScene b = scene::build_scene(parse_scene(j.dump(), "scene.json", ""));
+  ASSERT_NE(b.needle3d, nullptr);
+  EXPECT_EQ(b.needle, nullptr);
+  EXPECT_EQ(b.problem, nullptr);
+  ASSERT_EQ(b.needle_plan.size(), 14u);  // 50 mm at 0.5·8 mm per update: updates 0…13
+  EXPECT_DOUBLE_EQ(b.needle3d->options().h_shaft, 0.005);  // default 2·radius
+  scene::FrameWriter frames(b);
+  const scene::SceneRunResult res =
+      scene::run_scene(b, {}, {}, {},
+                       [&](const scene::NeedleUpdateRow& row, std::size_t total,
+                           const needle::NeedleInsertion3D& in) {
+                         EXPECT_EQ(row.nodes, in.mesh().connectivity().num_vertices());
+                         frames.needle_update(row, total, in);
+                       });
+  ASSERT_TRUE(res.report.ok()) << res.report.brief();
+  ASSERT_EQ(res.needle_updates.size(), 14u);
+  for (const auto& r : res.needle_updates) {
+    EXPECT_EQ(r.status, "ok");
+    EXPECT_GE(r.seconds, r.seconds_refine + r.seconds_solve + r.seconds_rearrange - 1e-9);
+  }
+  const auto& last = res.needle_updates.back();
+  EXPECT_GT(last.sticking + last.slipping, 0);
+  EXPECT_GT(last.surface_faces, 0);
+  EXPECT_GT(last.triangles, 384);         // refined along the path
+  EXPECT_GT(last.needle_force.x(), 0.0);  // the needle drags the material in +x
+  EXPECT_EQ(res.inverted_elements, 0);
+  EXPECT_EQ(b.mesh.dimension, 3);
+  EXPECT_EQ(b.mesh.num_cells(), last.triangles);
+  ASSERT_EQ(res.u.size(), 3 * b.mesh.num_points());
+
+  // Frames 0, 4, 8, 12 and 13 (the last), each with its needle surface; two indices.
+  EXPECT_EQ(frames.frames(), 5);
+  const auto written = scene::write_outputs(b, res, {"", 0.0, frames.frames()});
+  ASSERT_EQ(written.size(), 4u);
+  EXPECT_EQ(written[2], (dir / "needle_needle.vtu").string());
+  // CSV: the 2D columns with "tetrahedra", then the 3D ones.
+  const auto csv = lines_of(read(dir / "updates.csv"));
+  ASSERT_EQ(csv.size(), 15u);
+  EXPECT_NE(csv[0].find(",nodes,tetrahedra,flops,tip_z,needle_force_z,surface_faces,"
+                        "surface_area,refine_seconds,solve_seconds,rearrange_seconds"),
+            std::string::npos)
+      << csv[0];
+  for (const char* k : {"0000", "0004", "0008", "0012", "0013"}) {
+    EXPECT_TRUE(fs::exists(dir / ("needle_" + std::string(k) + ".vtu"))) << k;
+    EXPECT_TRUE(fs::exists(dir / ("needle_needle_" + std::string(k) + ".vtu"))) << k;
+  }
+  EXPECT_NE(read(dir / "needle_needle.pvd").find("file=\"needle_needle_0013.vtu\""),
+            std::string::npos);
+  // The final VTU: tetrahedra, the needle-face counts of each; the surface VTU: triangles whose
+  // areas sum to the reported surface area.
+  const std::string vtu = read(dir / "needle.vtu");
+  const auto types = vtu_array(vtu, "types");
+  ASSERT_EQ(types.size(), static_cast<std::size_t>(last.triangles));
+  for (double t : types) EXPECT_EQ(t, 10.0);
+  const auto faces = vtu_array(vtu, "needle_faces");
+  ASSERT_EQ(faces.size(), types.size());
+  double incident = 0.0;
+  for (double f : faces) {
+    EXPECT_GE(f, 0.0);
+    EXPECT_LE(f, 4.0);
+    incident += f;
+  }
+  // Every needle face lies on one or two tetrahedra.
+  EXPECT_GE(incident, last.surface_faces);
+  EXPECT_LE(incident, 2.0 * last.surface_faces);
+  const std::string surface = read(dir / "needle_needle.vtu");
+  const auto stypes = vtu_array(surface, "types");
+  ASSERT_EQ(stypes.size(), static_cast<std::size_t>(last.surface_faces));
+  for (double t : stypes) EXPECT_EQ(t, 5.0);
+  double area = 0.0;
+  for (double a : vtu_array(surface, "area")) area += a;
+  // The same areas summed in the same order, printed with 17 digits: rounding only.
+  EXPECT_NEAR(area, last.surface_area, 1e-12 * last.surface_area);
+}
+
+TEST(SceneNeedle3DBad, PathRadiusFixedAndKeys) {
+  // A path that never enters the body.
+  Json j = small_needle3d_scene();
+  j["tools"][0]["path"] = Json::parse("[[-0.05, 0.05, 0.05], [-0.02, 0.05, 0.05]]");
+  expect_error(j, "/tools/0/path", "the needle's path never enters the body");
+  // A radius whose refinement cannot fit the budget.
+  j = small_needle3d_scene();
+  j["tools"][0]["radius"] = 1e-6;
+  j["tools"][0]["max_elements"] = 1000;
+  expect_error(j, "/tools/0/radius",
+               "needle radius 1e-06 m: refining to h_shaft = 2e-06 m (2 radius) along the");
+  j["tools"][0]["h_shaft"] = 1e-6;
+  expect_error(j, "/tools/0/h_shaft", "more than max_elements = 1000");
+  // The 3D needle needs its radius; the slab's needle refuses it.
+  j = small_needle3d_scene();
+  j["tools"][0].erase("radius");
+  expect_error(j, "/tools/0", "radius");
+  Json s = small_needle_scene();
+  s["tools"][0]["radius"] = 0.001;
+  expect_error(s, "/tools/0/radius", "not allowed here: a needle in a slab2d scene is a line");
+  // Fixed regions: planes and boxes only.
+  j = small_needle3d_scene();
+  j["fixed"][0] = Json::parse(R"({"type": "sphere", "center": [0, 0, 0], "radius": 0.02})");
+  expect_error(j, "/fixed/0", "a 3D needle scene is held on planes and boxes");
+  // One tool; a solver of the projected problem.
+  j = small_needle3d_scene();
+  j["tools"].push_back(j["tools"][0]);
+  expect_error(j, "/tools/1", "a needle scene has exactly one tool");
+  j = small_needle3d_scene();
+  j["solver"]["method"] = "newton";
+  expect_error(j, "/solver/method", "a needle scene is solved by \"cg\" or");
+}

@@ -58,4 +58,16 @@ std::vector<double> FrictionProfile::dynamic_thresholds(const std::vector<double
   return out;
 }
 
+std::vector<double> FrictionProfile::surface_thresholds(const std::vector<double>& s,
+                                                        const std::vector<double>& area,
+                                                        double radius) const {
+  INCISE_CHECK(s.size() == area.size(), "surface_thresholds: s and area differ in size");
+  INCISE_CHECK_PARAM(std::isfinite(radius) && radius > 0.0,
+                     "needle radius must be finite and > 0, got " + std::to_string(radius));
+  const double per_area = 1.0 / (2.0 * M_PI * radius);
+  std::vector<double> out(s.size());
+  for (std::size_t k = 0; k < s.size(); ++k) out[k] = density(s[k]) * area[k] * per_area;
+  return out;
+}
+
 }  // namespace incise::needle

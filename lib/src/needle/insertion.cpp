@@ -1,8 +1,11 @@
 #include <incise/core/error.hpp>
+#include <incise/core/timer.hpp>
 #include <incise/needle/insertion.hpp>
 #include <incise/needle/needle_problem.hpp>
 #include <incise/solver/linear_cg.hpp>
 #include <incise/solver/nonlinear_cg.hpp>
+
+#include "stick_slip.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -25,6 +28,7 @@ const char* to_string(StepStatus s) {
     case StepStatus::kOk: return "ok";
     case StepStatus::kSolverFailed: return "solver-failed";
     case StepStatus::kRearrangementCycle: return "rearrangement-cycle";
+    case StepStatus::kRefinementBudget: return "refinement-budget";
     case StepStatus::kNotRun: return "not-run";
   }
   return "?";
@@ -194,124 +198,32 @@ int NeedleInsertion::intercept() {
 }
 
 bool NeedleInsertion::solve(StepReport& rep) {
-  NeedleProblem np(*problem_, pose_, nodes_, thresholds_);
-  VecX ur = np.to_rotated(u_);
-  solver::SolverReport sr;
-  if (options_.relaxation == Relaxation::kLinearCg) {
-    solver::LinearCgOptions o;
-    o.stop = stop_;
-    o.budget.max_iterations = options_.max_iterations;
-    sr = solver::linear_cg(np, ur, o);
-  } else {
-    solver::NonlinearCgOptions o;
-    o.stop = stop_;
-    o.budget.max_iterations = options_.max_iterations;
-    sr = solver::nonlinear_cg(np, ur, o);
-  }
-  ++rep.solves;
-  rep.cg_iterations += sr.iterations;
-  rep.flops += sr.flops;
-  rep.max_cg_iterations = std::max(rep.max_cg_iterations, sr.iterations);
-  rep.last_solver_status = sr.status;
-  if (!sr.ok()) {
-    rep.status = StepStatus::kSolverFailed;
-    rep.message = "solve " + std::to_string(rep.solves) + ": " + sr.brief();
-    return false;
-  }
-  u_ = np.to_original(ur);
-  const Eigen::Matrix2Xd x = deformed();
-  for (NeedleNode& n : nodes_) n.coords = pose_.coordinates(x.col(n.vertex));
-  if (np.gradient(ur, last_gradient_) != EvalStatus::kOk) {
-    rep.status = StepStatus::kSolverFailed;
-    rep.message = "gradient at the solution could not be evaluated";
-    return false;
-  }
-  return true;
+  return detail::solve<2>(*problem_, pose_, nodes_, thresholds_, options_, stop_, mesh_.points(),
+                          u_, last_gradient_, rep);
 }
 
 int NeedleInsertion::rearrange() {
-  const std::vector<double>& fd = thresholds_;
-  int changes = 0;
-  for (std::size_t k = 0; k < nodes_.size(); ++k) {
-    NeedleNode& n = nodes_[k];
-    if (n.state == NodeState::kStick) {
-      const double r = last_gradient_[2 * n.vertex];  // tangential reaction g̃_t
-      if (std::abs(r) > friction_.static_factor * fd[k]) {
-        n.state = NodeState::kSlip;
-        n.friction_sign = r > 0.0 ? 1 : -1;
-        n.anchor = n.coords.s;
-        ++changes;
-      }
-    } else if (n.friction_sign * (n.coords.s - n.anchor) < 0.0) {
-      n.state = NodeState::kStick;
-      n.friction_sign = 0;
-      n.anchor = n.coords.s;
-      ++changes;
-    }
-  }
-  return changes;
+  return detail::rearrange<2>(nodes_, thresholds_, friction_.static_factor, last_gradient_);
 }
 
 int NeedleInsertion::release() {
-  const std::size_t before = nodes_.size();
-  std::size_t kept = 0;
-  for (std::size_t k = 0; k < nodes_.size(); ++k) {
-    const NeedleNode& n = nodes_[k];
-    if (n.coords.s < 0.0 || n.coords.s > pose_.length) continue;
-    nodes_[kept] = n;
-    thresholds_[kept] = thresholds_[k];
-    ++kept;
-  }
-  nodes_.resize(kept);
-  thresholds_.resize(kept);
-  return static_cast<int>(before - kept);
+  return detail::release(nodes_, thresholds_, pose_.length);
 }
 
 void NeedleInsertion::fill_counts(StepReport& rep, bool converged) {
-  rep.sticking = rep.slipping = 0;
-  for (const NeedleNode& n : nodes_) (n.state == NodeState::kStick ? rep.sticking : rep.slipping)++;
-  rep.needle_force.setZero();
-  if (converged) {
-    // No state changed since the last solve: its rotated gradient g̃ = Rᵀ(∇Π_el − f_friction)
-    // gives ∇Π_el at each needle node without another sweep over the elements.
-    const Vec2 t = pose_.tangent(), n = pose_.normal();
-    for (std::size_t k = 0; k < nodes_.size(); ++k) {
-      const NeedleNode& nd = nodes_[k];
-      const Vec2 g = last_gradient_[2 * nd.vertex] * t + last_gradient_[2 * nd.vertex + 1] * n;
-      rep.needle_force +=
-          g + (nd.state == NodeState::kSlip ? nd.friction_sign * thresholds_[k] : 0.0) * t;
-    }
-    return;
-  }
-  VecX g;
-  if (problem_->gradient(u_, g) == EvalStatus::kOk)
-    for (const NeedleNode& nd : nodes_) rep.needle_force += g.segment<2>(2 * nd.vertex);
+  detail::fill_counts<2>(*problem_, pose_.frame(), nodes_, thresholds_, last_gradient_, u_,
+                         converged, rep);
 }
 
 StepReport NeedleInsertion::run(StepReport rep) {
+  Timer timer;
   for (NeedleNode& n : nodes_) n.anchor = n.coords.s;
   update_thresholds();
-  for (;;) {
-    if (!solve(rep)) {
-      fill_counts(rep, false);
-      return rep;
-    }
-    const int changes = rearrange();
-    if (changes == 0) break;
-    if (rep.rearrangements >= options_.max_rearrangements) {
-      rep.status = StepStatus::kRearrangementCycle;
-      rep.message = std::to_string(changes) + " needle nodes still change state after " +
-                    std::to_string(rep.rearrangements) +
-                    " rearrangements (max_rearrangements): the stick-slip iteration cycles";
-      fill_counts(rep, false);
-      return rep;
-    }
-    ++rep.rearrangements;
-  }
-  fill_counts(rep, true);
-  rep.released = release();
-  rep.status = StepStatus::kOk;
-  return rep;
+  rep.rearrange_seconds += timer.seconds();
+  return detail::stick_slip_loop(
+      rep, options_.max_rearrangements, [&](StepReport& r) { return solve(r); },
+      [&] { return rearrange(); }, [&](StepReport& r, bool c) { fill_counts(r, c); },
+      [&] { return release(); });
 }
 
 StepReport NeedleInsertion::step(const NeedlePose& pose) {
@@ -322,12 +234,16 @@ StepReport NeedleInsertion::step(const NeedlePose& pose) {
   has_pose_ = true;
   place_needle_nodes();
   StepReport rep;
+  Timer timer;
   const long before = mesh_.num_bisections();
   refined_at_.setConstant(std::numeric_limits<double>::quiet_NaN());
   refine_at_tip();
   rep.refined_at = refined_at_;
   rep.bisections = mesh_.num_bisections() - before;
+  rep.refine_seconds = timer.seconds();
+  timer.restart();
   rep.intercepted = intercept();
+  rep.rearrange_seconds = timer.seconds();
   return run(rep);
 }
 

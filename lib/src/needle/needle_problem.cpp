@@ -7,10 +7,10 @@
 
 namespace incise::needle {
 
-NeedleProblem::NeedleProblem(fem::PlaneStressProblem& base, const NeedlePose& pose,
-                             const std::vector<NeedleNode>& nodes,
-                             const std::vector<double>& friction)
-    : base_(base), t_(pose.tangent()), n_(pose.normal()) {
+template <int D>
+NeedleProblemT<D>::NeedleProblemT(Base& base, const Pose& pose, const std::vector<Node>& nodes,
+                                  const std::vector<double>& friction)
+    : base_(base), frame_(pose.frame()) {
   INCISE_CHECK(friction.size() == nodes.size(), "NeedleProblem: friction has the wrong size");
   const auto n = static_cast<std::size_t>(base.size());
   fixed_.assign(n, 0);
@@ -18,82 +18,85 @@ NeedleProblem::NeedleProblem(fem::PlaneStressProblem& base, const NeedlePose& po
   f_fric_ = VecX::Zero(base.size());
   std::vector<char> seen(static_cast<std::size_t>(base.num_nodes()), 0);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
-    const NeedleNode& nd = nodes[k];
+    const Node& nd = nodes[k];
     const Index v = nd.vertex;
     INCISE_CHECK(v >= 0 && v < base.num_nodes(),
                  "NeedleProblem: needle vertex " + std::to_string(v) + " is out of range");
     INCISE_CHECK(!seen[static_cast<std::size_t>(v)],
                  "NeedleProblem: needle vertex " + std::to_string(v) + " is listed twice");
     seen[static_cast<std::size_t>(v)] = 1;
-    INCISE_CHECK(!base.is_fixed(2 * v) && !base.is_fixed(2 * v + 1),
-                 "NeedleProblem: needle vertex " + std::to_string(v) + " is fixed in the slab");
+    for (int c = 0; c < D; ++c)
+      INCISE_CHECK(!base.is_fixed(D * v + c),
+                   "NeedleProblem: needle vertex " + std::to_string(v) + " is fixed in the body");
     needle_vertices_.push_back(v);
-    fixed_[static_cast<std::size_t>(2 * v + 1)] = 1;
+    for (int c = 1; c < D; ++c) fixed_[static_cast<std::size_t>(D * v + c)] = 1;
     if (nd.state == NodeState::kStick) {
-      fixed_[static_cast<std::size_t>(2 * v)] = 1;
+      fixed_[static_cast<std::size_t>(D * v)] = 1;
     } else {
       INCISE_CHECK(
           nd.friction_sign == 1 || nd.friction_sign == -1,
           "NeedleProblem: slipping vertex " + std::to_string(v) + " needs friction_sign +1 or -1");
-      f_fric_.segment<2>(2 * v) = (nd.friction_sign * friction[k]) * t_;
+      f_fric_.template segment<D>(D * v) = (nd.friction_sign * friction[k]) * frame_.col(0);
     }
   }
 }
 
-void NeedleProblem::rotate(VecX& v, bool transpose) const {
-  // Rᵀ maps (x, y) to (x·t, x·n); R maps (a, b) back to a·t + b·n.
+template <int D>
+void NeedleProblemT<D>::rotate(VecX& v, bool transpose) const {
+  // Rᵀ maps x to its frame components (x·t, x·n…); R maps them back.
   for (const Index i : needle_vertices_) {
-    const Vec2 x = v.segment<2>(2 * i);
+    const VecD x = v.template segment<D>(D * i);
     if (transpose)
-      v.segment<2>(2 * i) = Vec2(x.dot(t_), x.dot(n_));
+      v.template segment<D>(D * i) = frame_.transpose() * x;
     else
-      v.segment<2>(2 * i) = x(0) * t_ + x(1) * n_;
+      v.template segment<D>(D * i) = frame_ * x;
   }
-  own_flops_ += 6 * needle_vertices_.size();
+  own_flops_ += (2 * D * D - D) * needle_vertices_.size();
 }
 
-VecX NeedleProblem::to_rotated(const VecX& u) const {
+template <int D>
+VecX NeedleProblemT<D>::to_rotated(const VecX& u) const {
   INCISE_CHECK(u.size() == size(), "NeedleProblem::to_rotated: wrong size");
   VecX r = u;
   rotate(r, true);
   return r;
 }
 
-VecX NeedleProblem::to_original(const VecX& rotated) const {
+template <int D>
+VecX NeedleProblemT<D>::to_original(const VecX& rotated) const {
   INCISE_CHECK(rotated.size() == size(), "NeedleProblem::to_original: wrong size");
   VecX u = rotated;
   rotate(u, false);
   return u;
 }
 
-void NeedleProblem::project_original(VecX& v) const {
+template <int D>
+void NeedleProblemT<D>::project_original(VecX& v) const {
   rotate(v, true);
   project(v);
   rotate(v, false);
 }
 
-Eigen::SparseMatrix<double> NeedleProblem::rotation() const {
+template <int D>
+Eigen::SparseMatrix<double> NeedleProblemT<D>::rotation() const {
   std::vector<Eigen::Triplet<double>> t;
   std::vector<char> needle(static_cast<std::size_t>(base_.num_nodes()), 0);
   for (const Index i : needle_vertices_) {
     needle[static_cast<std::size_t>(i)] = 1;
-    // Columns: rotated component a (along t) and b (along n) of node i.
-    t.emplace_back(2 * i, 2 * i, t_(0));
-    t.emplace_back(2 * i + 1, 2 * i, t_(1));
-    t.emplace_back(2 * i, 2 * i + 1, n_(0));
-    t.emplace_back(2 * i + 1, 2 * i + 1, n_(1));
+    // Column D·i + c: rotated component c of node i (along frame column c).
+    for (int c = 0; c < D; ++c)
+      for (int r = 0; r < D; ++r) t.emplace_back(D * i + r, D * i + c, frame_(r, c));
   }
   for (Index i = 0; i < base_.num_nodes(); ++i)
-    if (!needle[static_cast<std::size_t>(i)]) {
-      t.emplace_back(2 * i, 2 * i, 1.0);
-      t.emplace_back(2 * i + 1, 2 * i + 1, 1.0);
-    }
+    if (!needle[static_cast<std::size_t>(i)])
+      for (int c = 0; c < D; ++c) t.emplace_back(D * i + c, D * i + c, 1.0);
   Eigen::SparseMatrix<double> r(size(), size());
   r.setFromTriplets(t.begin(), t.end());
   return r;
 }
 
-EvalStatus NeedleProblem::energy(const VecX& u, double& energy) {
+template <int D>
+EvalStatus NeedleProblemT<D>::energy(const VecX& u, double& energy) {
   const VecX x = to_original(u);
   const EvalStatus s = base_.energy(x, energy);
   if (s == EvalStatus::kOk) energy -= f_fric_.dot(x);
@@ -101,10 +104,11 @@ EvalStatus NeedleProblem::energy(const VecX& u, double& energy) {
   return s;
 }
 
-EvalStatus NeedleProblem::gradient(const VecX& u, VecX& g, double* energy) {
-  // The base problem keeps its last gradient: the interaction loop's repeated requests at the
-  // solver's final iterate, and the next solve's start after the needle moved a few nodes, are
-  // answered without a sweep (PlaneStressProblem::gradient).
+template <int D>
+EvalStatus NeedleProblemT<D>::gradient(const VecX& u, VecX& g, double* energy) {
+  // The 2D base problem keeps its last gradient: the interaction loop's repeated requests at
+  // the solver's final iterate, and the next solve's start after the needle moved a few nodes,
+  // are answered without a sweep (PlaneStressProblem::gradient).
   x_ = u;
   rotate(x_, false);
   const EvalStatus s = base_.gradient(x_, g, energy);
@@ -116,32 +120,52 @@ EvalStatus NeedleProblem::gradient(const VecX& u, VecX& g, double* energy) {
   return s;
 }
 
-EvalStatus NeedleProblem::hessian_product(const VecX& u, const VecX& d, VecX& out) {
+template <int D>
+EvalStatus NeedleProblemT<D>::hessian_product(const VecX& u, const VecX& d, VecX& out) {
   dx_ = d;
   rotate(dx_, false);
   // A constant tangent does not depend on the point: u need not be rotated back then.
-  if (!base_.has_constant_tangent()) {
+  bool constant = false;
+  if constexpr (D == 2) constant = base_.has_constant_tangent();
+  if (!constant) {
     x_ = u;
     rotate(x_, false);
   }
-  const EvalStatus s = base_.hessian_product(base_.has_constant_tangent() ? u : x_, dx_, out);
+  const EvalStatus s = base_.hessian_product(constant ? u : x_, dx_, out);
   if (s == EvalStatus::kOk) rotate(out, true);
   return s;
 }
 
-void NeedleProblem::project(VecX& v) const {
+template <int D>
+bool NeedleProblemT<D>::hessian_diagonal(const VecX& u, VecX& diag) {
+  x_ = u;
+  rotate(x_, false);
+  if (!base_.hessian_diagonal(x_, diag)) return false;
+  for (const Index i : needle_vertices_) {
+    const VecD k = diag.template segment<D>(D * i);
+    diag.template segment<D>(D * i) = frame_.cwiseAbs2().transpose() * k;
+  }
+  for (Eigen::Index i = 0; i < diag.size(); ++i)
+    if (fixed_[static_cast<std::size_t>(i)]) diag[i] = 1.0;
+  return true;
+}
+
+template <int D>
+void NeedleProblemT<D>::project(VecX& v) const {
   for (Eigen::Index i = 0; i < v.size(); ++i)
     if (fixed_[static_cast<std::size_t>(i)]) v[i] = 0.0;
 }
 
-double NeedleProblem::external_force_norm() const {
+template <int D>
+double NeedleProblemT<D>::external_force_norm() const {
   VecX f = base_.external_force() + f_fric_;
   rotate(f, true);
   project(f);
   return f.norm();
 }
 
-std::uint64_t NeedleProblem::flops() const {
+template <int D>
+std::uint64_t NeedleProblemT<D>::flops() const {
   return base_.flops() + own_flops_;
 }
 
@@ -154,9 +178,10 @@ const char* to_string(DirectStatus s) {
   return "?";
 }
 
-DirectOutcome direct_solve(NeedleProblem& problem, VecX& rotated) {
+template <int D>
+DirectOutcome direct_solve(NeedleProblemT<D>& problem, VecX& rotated) {
   DirectOutcome out;
-  fem::PlaneStressProblem& base = problem.base();
+  auto& base = problem.base();
   const VecX x = problem.to_original(rotated);
   Eigen::SparseMatrix<double> k;
   EvalStatus s = base.tangent(x, k);
@@ -206,5 +231,10 @@ DirectOutcome direct_solve(NeedleProblem& problem, VecX& rotated) {
   out.status = DirectStatus::kOk;
   return out;
 }
+
+template class NeedleProblemT<2>;
+template class NeedleProblemT<3>;
+template DirectOutcome direct_solve<2>(NeedleProblemT<2>&, VecX&);
+template DirectOutcome direct_solve<3>(NeedleProblemT<3>&, VecX&);
 
 }  // namespace incise::needle

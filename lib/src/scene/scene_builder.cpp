@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace incise::scene {
@@ -217,6 +218,7 @@ BuiltScene build_needle_scene(const SceneSpec& spec) {
   o.max_iterations = spec.solver.max_iterations;
   o.max_rearrangements = tool.max_rearrangements;
   o.relocate = tool.relocate;
+  o.preconditioner = spec.solver.preconditioner;
   b.needle = std::make_unique<needle::NeedleInsertion>(b.mesh, make_material(spec.material),
                                                        ms.thickness, lines, tool.friction, o);
   b.needle_plan = needle_updates(tool);
@@ -240,9 +242,13 @@ BuiltScene build_needle_scene(const SceneSpec& spec) {
   return b;
 }
 
+/// A 3D needle scene (scene_builder.hpp): the tetrahedral mesh, its fixed boxes and the 3D
+/// needle insertion (thesis §6.9).
+BuiltScene build_needle3d_scene(const SceneSpec& spec);
+
 }  // namespace
 
-std::vector<NeedleUpdatePlan> needle_updates(const ToolSpec& tool) {
+std::vector<NeedleUpdatePlan> needle_updates(const ToolSpec& tool, bool three_d) {
   std::vector<NeedleUpdatePlan> plan;
   const std::vector<Vec3>& p = tool.path;
   double total = 0.0;
@@ -263,7 +269,10 @@ std::vector<NeedleUpdatePlan> needle_updates(const ToolSpec& tool) {
     const double len = d.stableNorm();
     const Vec3 tip = p[seg] + std::min(1.0, (depth - seg_start) / len) * d;
     NeedleUpdatePlan u;
-    u.pose = needle::NeedlePose::make(tip.head<2>(), d.head<2>(), tool.length);
+    if (three_d)
+      u.pose3d = needle::NeedlePose3D::make(tip, d, tool.length, tool.radius);
+    else
+      u.pose = needle::NeedlePose::make(tip.head<2>(), d.head<2>(), tool.length);
     u.depth = depth;
     plan.push_back(u);
   }
@@ -352,8 +361,120 @@ mesh::MeshData live_mesh_data(const cut::CutMesh& cm) {
   return m;
 }
 
+namespace {
+
+BuiltScene build_needle3d_scene(const SceneSpec& spec) {
+  BuiltScene b;
+  b.spec = spec;
+  const ToolSpec& tool = *spec.needle();
+  Timer t;
+  std::string what;
+  b.mesh = make_mesh(spec, what);
+  if (b.mesh.dimension != 3)
+    throw ParseError(spec.file, spec.lines.line("/mesh"),
+                     "/mesh: expected a tetrahedral (3D) mesh, got dimension " +
+                         std::to_string(b.mesh.dimension));
+  what += " -> " + std::to_string(b.mesh.num_cells()) + " tets, " +
+          std::to_string(b.mesh.num_points()) + " nodes";
+  b.record(what, t.seconds(), matrix_bytes(b.mesh));
+  // Fixed regions as boxes: each must hold a node of the starting mesh.
+  t.restart();
+  const double inf = std::numeric_limits<double>::infinity();
+  const Eigen::Matrix3Xd& x = b.mesh.points;
+  const double diagonal = (x.rowwise().maxCoeff() - x.rowwise().minCoeff()).norm();
+  std::vector<needle::FixedBox> boxes;
+  for (const Region& r : spec.fixed) {
+    const auto sel = select_nodes(b.mesh, r);
+    if (sel.empty()) region_error(spec, r.path, "region selects no node of the mesh", b.mesh);
+    b.fixed_nodes.insert(b.fixed_nodes.end(), sel.begin(), sel.end());
+    needle::FixedBox box;
+    if (r.kind == Region::Kind::kPlane) {
+      // select_nodes' tolerance: 0 means 1e-9 × the bounding-box diagonal.
+      const double tol = r.tolerance > 0 ? r.tolerance : 1e-9 * diagonal;
+      box.lo = Vec3::Constant(-inf);
+      box.hi = Vec3::Constant(inf);
+      box.lo[r.axis] = r.value - tol;
+      box.hi[r.axis] = r.value + tol;
+    } else {
+      box.lo = r.lo;
+      box.hi = r.hi;
+    }
+    boxes.push_back(box);
+  }
+  std::sort(b.fixed_nodes.begin(), b.fixed_nodes.end());
+  b.fixed_nodes.erase(std::unique(b.fixed_nodes.begin(), b.fixed_nodes.end()), b.fixed_nodes.end());
+  b.record("fixed regions: " + std::to_string(boxes.size()) + ", " +
+               std::to_string(b.fixed_nodes.size()) + " of " + std::to_string(b.mesh.num_points()) +
+               " starting nodes (nodes refinement creates in them are fixed too)",
+           t.seconds(), b.fixed_nodes.size() * sizeof(Index));
+  t.restart();
+  needle::InsertionOptions3D o;
+  o.h_ref = tool.h_ref;
+  o.h_shaft = tool.h_shaft;
+  o.max_elements = tool.max_elements;
+  o.epsilon = spec.solver.tolerance;
+  o.epsilon_round = spec.solver.tolerance_round;
+  o.relaxation = spec.solver.method == SolverSpec::Method::kNonlinearCG
+                     ? needle::Relaxation::kNonlinearCg
+                     : needle::Relaxation::kLinearCg;
+  o.max_iterations = spec.solver.max_iterations;
+  o.max_rearrangements = tool.max_rearrangements;
+  o.relocate = tool.relocate;
+  o.preconditioner = spec.solver.preconditioner;
+  b.needle3d = std::make_unique<needle::NeedleInsertion3D>(b.mesh, make_material(spec.material),
+                                                           boxes, tool.friction, o);
+  b.needle_plan = needle_updates(tool, true);
+  // The path against the body: the planned tips inside the reference mesh.
+  std::size_t inside = 0;
+  for (const NeedleUpdatePlan& u : b.needle_plan)
+    inside += b.needle3d->mesh().locate(u.pose3d.tip).valid() ? 1 : 0;
+  const std::string path_at = tool.path_json + "/path";
+  if (inside == 0) {
+    std::ostringstream e;
+    e << path_at << ": the needle's path never enters the body: none of the "
+      << b.needle_plan.size() << " planned tip positions lies inside the mesh (bounding box ["
+      << x.rowwise().minCoeff().transpose() << "] to [" << x.rowwise().maxCoeff().transpose()
+      << "] m)";
+    throw ParseError(spec.file, spec.lines.line(path_at), e.str());
+  }
+  const double step = tool.speed * tool.h_ref;
+  const double inside_length = static_cast<double>(inside) * step;
+  const double at_least = inside_length / tool.h_shaft;
+  if (at_least > static_cast<double>(tool.max_elements)) {
+    const bool given = spec.lines.contains(tool.path_json + "/h_shaft");
+    const std::string at = tool.path_json + (given ? "/h_shaft" : "/radius");
+    std::ostringstream e;
+    e << at << ": needle radius " << tool.radius << " m: refining to h_shaft = " << tool.h_shaft
+      << " m" << (given ? "" : " (2 radius)") << " along the " << inside_length
+      << " m of path inside the body needs at least " << at_least
+      << " tetrahedra (each covers at most h_shaft of the path), more than max_elements = "
+      << tool.max_elements << " (the refinement budget): expected a larger radius or h_shaft, or "
+      << "a larger max_elements";
+    throw ParseError(spec.file, spec.lines.line(at), e.str());
+  }
+  std::ostringstream ns;
+  ns << "needle insertion (3D, §6.9): elastic problem (material \"" << spec.material.model
+     << "\"), needle of length " << tool.length << " m and radius " << tool.radius << " m, "
+     << b.needle_plan.size() << " updates at " << tool.speed << " h_ref (h_ref = " << tool.h_ref
+     << " m around the tip, h_shaft = " << tool.h_shaft << " m along the trace, at most "
+     << tool.max_elements << " tetrahedra), friction " << tool.friction.shaft_density
+     << " N/m shaft, " << tool.friction.tip_density << " N/m tip over "
+     << tool.friction.bulge_length << " m (per area: / 2 pi r), static factor "
+     << tool.friction.static_factor << (tool.relocate ? ", relocation (§6.8.6)" : "");
+  b.record(ns.str(), t.seconds(), 0);
+  b.not_built.push_back(
+      "loads and probes: a needle scene is loaded by its needle and refines its mesh at every "
+      "update");
+  b.not_built.push_back("sparse stiffness factorization: the needle run relaxes with CG");
+  b.not_built.push_back("cut mesh and sweep triangles: the needle refines, it does not cut");
+  return b;
+}
+
+}  // namespace
+
 BuiltScene build_scene(const SceneSpec& spec) {
   if (spec.mesh.source == MeshSpec::Source::kSlab2d) return build_needle_scene(spec);
+  if (spec.needle()) return build_needle3d_scene(spec);
   BuiltScene b;
   b.spec = spec;
   Timer t;

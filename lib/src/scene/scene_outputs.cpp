@@ -3,10 +3,12 @@
 #include <incise/core/atomic_file.hpp>
 #include <incise/interactive/augmented_cut_session.hpp>
 #include <incise/io/write_mesh.hpp>
+#include <incise/mesh/tet_faces.hpp>
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -72,17 +74,30 @@ std::string csv_text(std::string s) {
 std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
   std::ostringstream csv;
   csv << std::setprecision(10);
-  if (scene.needle) {
+  if (scene.is_needle()) {
+    // The 2D columns; a 3D scene names the element count "tetrahedra" and appends its own.
+    const bool three_d = scene.needle3d != nullptr;
     csv << "update,depth,tip_x,tip_y,sticking,slipping,rearrangements,cg_iterations,"
            "update_seconds,needle_force_x,needle_force_y,status,solves,max_cg_iterations,"
-           "bisections,intercepted,released,nodes,triangles,flops\n";
-    for (const auto& r : res.needle_updates)
+           "bisections,intercepted,released,nodes,"
+        << (three_d ? "tetrahedra" : "triangles") << ",flops"
+        << (three_d ? ",tip_z,needle_force_z,surface_faces,surface_area,refine_seconds,"
+                      "solve_seconds,rearrange_seconds"
+                    : "")
+        << "\n";
+    for (const auto& r : res.needle_updates) {
       csv << r.update << "," << Field{r.depth} << "," << Field{r.tip.x()} << "," << Field{r.tip.y()}
           << "," << r.sticking << "," << r.slipping << "," << r.rearrangements << ","
           << r.cg_iterations << "," << r.seconds << "," << Field{r.needle_force.x()} << ","
           << Field{r.needle_force.y()} << "," << csv_text(r.status) << "," << r.solves << ","
           << r.max_cg_iterations << "," << r.bisections << "," << r.intercepted << "," << r.released
-          << "," << r.nodes << "," << r.triangles << "," << r.flops << "\n";
+          << "," << r.nodes << "," << r.triangles << "," << r.flops;
+      if (three_d)
+        csv << "," << Field{r.tip.z()} << "," << Field{r.needle_force.z()} << "," << r.surface_faces
+            << "," << Field{r.surface_area} << "," << r.seconds_refine << "," << r.seconds_solve
+            << "," << r.seconds_rearrange;
+      csv << "\n";
+    }
     return csv.str();
   }
   if (!res.cut_steps.empty()) {
@@ -149,17 +164,31 @@ std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion& inse
   return {u, state};
 }
 
-void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_updates,
-                                const needle::NeedleInsertion& insertion) {
-  const OutputSpec& outs = scene_.spec.outputs;
+namespace {
+
+/// The zero-padded update index of a needle frame that is due (every vtu_every updates and the
+/// last planned one, finite displacement), "" when none is.
+template <class Insertion>
+std::string needle_frame_index(const OutputSpec& outs, const NeedleUpdateRow& row,
+                               std::size_t total_updates, const Insertion& insertion) {
   const long last = static_cast<long>(total_updates) - 1;
   if (outs.vtu.empty() || outs.vtu_every <= 0 ||
       (row.update % outs.vtu_every != 0 && row.update != last) ||
       !insertion.displacement().allFinite())
-    return;
+    return "";
   const std::size_t width = std::max<std::size_t>(4, std::to_string(std::max(last, 0L)).size());
   std::string index = std::to_string(row.update);
   index.insert(0, width > index.size() ? width - index.size() : 0, '0');
+  return index;
+}
+
+}  // namespace
+
+void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_updates,
+                                const needle::NeedleInsertion& insertion) {
+  const OutputSpec& outs = scene_.spec.outputs;
+  const std::string index = needle_frame_index(outs, row, total_updates, insertion);
+  if (index.empty()) return;
   const std::string file = outs.vtu + "_" + index + ".vtu";
   const mesh::MeshData m = insertion.mesh().to_mesh_data();
   const std::vector<io::DataArray> data = needle_point_data(insertion);
@@ -168,6 +197,74 @@ void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_up
   pvd_.push_back(
       {static_cast<double>(row.update), std::filesystem::path(file).filename().string()});
   write_atomically(outs.vtu + ".pvd", [&](const std::string& tmp) { io::write_pvd(tmp, pvd_); });
+}
+
+std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion3D& insertion) {
+  const VecX& u3 = insertion.displacement();
+  const Eigen::Index n = u3.size() / 3;
+  io::DataArray u{"displacement", 3, std::vector<double>(u3.data(), u3.data() + u3.size())};
+  io::DataArray state{"needle_state", 1, std::vector<double>(static_cast<std::size_t>(n), 0.0)};
+  for (const needle::NeedleNode3D& nd : insertion.needle_nodes())
+    state.values[static_cast<std::size_t>(nd.vertex)] =
+        nd.state == needle::NodeState::kStick ? 1.0 : 2.0;
+  return {u, state};
+}
+
+io::DataArray needle_cell_data(const needle::NeedleInsertion3D& insertion,
+                               const mesh::MeshData& mesh) {
+  std::vector<std::array<Index, 3>> faces;
+  const mesh::CellMatrix& surface = insertion.needle_surface();
+  for (Eigen::Index f = 0; f < surface.cols(); ++f)
+    faces.push_back({surface(0, f), surface(1, f), surface(2, f)});  // sorted triples
+  std::sort(faces.begin(), faces.end());
+  io::DataArray a{"needle_faces", 1,
+                  std::vector<double>(static_cast<std::size_t>(mesh.num_cells()))};
+  for (Eigen::Index c = 0; c < mesh.cells.cols(); ++c)
+    for (const auto& lf : mesh::kTetFace) {
+      std::array<Index, 3> t{mesh.cells(lf[0], c), mesh.cells(lf[1], c), mesh.cells(lf[2], c)};
+      std::sort(t.begin(), t.end());
+      if (std::binary_search(faces.begin(), faces.end(), t))
+        a.values[static_cast<std::size_t>(c)] += 1.0;
+    }
+  return a;
+}
+
+void write_needle_surface_vtu(const std::string& path, const needle::NeedleInsertion3D& insertion) {
+  mesh::MeshData m;
+  m.dimension = 2;
+  m.points = insertion.mesh().points();
+  m.cells = insertion.needle_surface();
+  const Eigen::Matrix3Xd x = insertion.deformed();
+  io::DataArray area{"area", 1, std::vector<double>(static_cast<std::size_t>(m.cells.cols()))};
+  for (Eigen::Index f = 0; f < m.cells.cols(); ++f)
+    area.values[static_cast<std::size_t>(f)] =
+        0.5 * (x.col(m.cells(1, f)) - x.col(m.cells(0, f)))
+                  .cross(x.col(m.cells(2, f)) - x.col(m.cells(0, f)))
+                  .norm();
+  const std::vector<io::DataArray> point = {needle_point_data(insertion)[0]};
+  write_atomically(path, [&](const std::string& tmp) { io::write_vtu(tmp, m, point, {area}); });
+}
+
+void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_updates,
+                                const needle::NeedleInsertion3D& insertion) {
+  const OutputSpec& outs = scene_.spec.outputs;
+  const std::string index = needle_frame_index(outs, row, total_updates, insertion);
+  if (index.empty()) return;
+  const std::string file = outs.vtu + "_" + index + ".vtu";
+  const std::string surface = outs.vtu + "_needle_" + index + ".vtu";
+  const mesh::MeshData m = insertion.mesh().to_mesh_data();
+  const std::vector<io::DataArray> data = needle_point_data(insertion);
+  const io::DataArray cells = needle_cell_data(insertion, m);
+  write_atomically(file, [&](const std::string& tmp) { io::write_vtu(tmp, m, data, {cells}); });
+  write_needle_surface_vtu(surface, insertion);
+  ++frames_;
+  pvd_.push_back(
+      {static_cast<double>(row.update), std::filesystem::path(file).filename().string()});
+  surface_pvd_.push_back(
+      {static_cast<double>(row.update), std::filesystem::path(surface).filename().string()});
+  write_atomically(outs.vtu + ".pvd", [&](const std::string& tmp) { io::write_pvd(tmp, pvd_); });
+  write_atomically(outs.vtu + "_needle.pvd",
+                   [&](const std::string& tmp) { io::write_pvd(tmp, surface_pvd_); });
 }
 
 std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunResult& result,
@@ -180,16 +277,29 @@ std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunRe
   }
   if (!outs.vtu.empty() && result.u.allFinite()) {  // else: summary "not_written"
     const std::string f = outs.vtu + ".vtu";
+    std::string f_extra;  // 3D needle: the final needle surface, listed after f
     if (scene.needle) {
       const std::vector<io::DataArray> data = needle_point_data(*scene.needle);
       write_atomically(f, [&](const std::string& tmp) { io::write_vtu(tmp, scene.mesh, data); });
+    } else if (scene.needle3d) {
+      const std::vector<io::DataArray> data = needle_point_data(*scene.needle3d);
+      const io::DataArray cells = needle_cell_data(*scene.needle3d, scene.mesh);
+      write_atomically(
+          f, [&](const std::string& tmp) { io::write_vtu(tmp, scene.mesh, data, {cells}); });
+      const std::string sf = outs.vtu + "_needle.vtu";
+      write_needle_surface_vtu(sf, *scene.needle3d);
+      written.push_back(f);
+      f_extra = sf;
     } else {
       write_vtu_atomic(f, scene.mesh, result.u);
     }
-    written.push_back(f);
+    written.push_back(f_extra.empty() ? f : f_extra);
     if (options.frames > 0)
       written.push_back(std::to_string(options.frames) + " frames " + outs.vtu +
-                        (scene.needle               ? "_<update>.vtu, index " + outs.vtu + ".pvd"
+                        (scene.needle3d
+                             ? "_<update>.vtu and " + outs.vtu + "_needle_<update>.vtu, indices " +
+                                   outs.vtu + ".pvd and " + outs.vtu + "_needle.pvd"
+                         : scene.needle             ? "_<update>.vtu, index " + outs.vtu + ".pvd"
                          : result.cut_steps.empty() ? "_<it>.vtu"
                                                     : "_<step>.vtu"));
   }
@@ -280,7 +390,8 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
     j["needle_updates"].push_back(
         {{"update", r.update},
          {"depth", num(r.depth)},
-         {"tip", Json::array({num(r.tip.x()), num(r.tip.y())})},
+         {"tip", scene.needle3d ? Json::array({num(r.tip.x()), num(r.tip.y()), num(r.tip.z())})
+                                : Json::array({num(r.tip.x()), num(r.tip.y())})},
          {"status", r.status},
          {"sticking", r.sticking},
          {"slipping", r.slipping},
@@ -293,9 +404,22 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
          {"released", r.released},
          {"nodes", r.nodes},
          {"triangles", r.triangles},
-         {"needle_force", Json::array({num(r.needle_force.x()), num(r.needle_force.y())})},
+         {"needle_force", scene.needle3d
+                              ? Json::array({num(r.needle_force.x()), num(r.needle_force.y()),
+                                             num(r.needle_force.z())})
+                              : Json::array({num(r.needle_force.x()), num(r.needle_force.y())})},
          {"flops", r.flops},
          {"update_seconds", r.seconds}});
+  if (scene.needle3d)
+    for (std::size_t k = 0; k < result.needle_updates.size(); ++k) {
+      const auto& r = result.needle_updates[k];
+      Json& row = j["needle_updates"][k];
+      row["surface_faces"] = r.surface_faces;
+      row["surface_area"] = num(r.surface_area);
+      row["refine_seconds"] = r.seconds_refine;
+      row["solve_seconds"] = r.seconds_solve;
+      row["rearrange_seconds"] = r.seconds_rearrange;
+    }
   if (!result.cut_steps.empty()) {
     int dropped = 0;
     for (const auto& c : result.cut_steps) dropped += c.preconditioner_dropped ? 1 : 0;

@@ -219,14 +219,15 @@ LoadSpec parse_load(const Json& j, const std::string& path, const std::string& f
   return l;
 }
 
-// `slab`: the scene's mesh is a slab2d, i.e. a needle scene (thesis ch. 6): linear or nonlinear
-// CG on the projected problem (6.7) of §6.6, stopped by (6.9) with ε_round, plain CG.
+// `slab`: a needle scene (thesis ch. 6: a slab2d mesh, or a tetrahedral mesh with a needle):
+// linear or nonlinear CG on the projected problem (6.7) of §6.6, stopped by (6.9) with ε_round,
+// plain CG.
 SolverSpec parse_solver(JsonObject o, bool slab) {
   SolverSpec s;
   s.method = o.choice("method", kMethodNames);
   if (slab && s.method != SolverSpec::Method::kCG && s.method != SolverSpec::Method::kNonlinearCG)
     fail(o.file(), detail::child_path(o.path(), "method"),
-         "a slab2d (needle) scene is solved by \"cg\" or \"nonlinear-cg\" on the projected "
+         "a needle scene is solved by \"cg\" or \"nonlinear-cg\" on the projected "
          "problem (6.7) of thesis §6.6, got \"" +
              std::string(to_string(s.method)) + "\"");
   s.tolerance = o.number("tolerance", Range{0.0, 1.0, true, true}, 1e-8);
@@ -235,18 +236,18 @@ SolverSpec parse_solver(JsonObject o, bool slab) {
     o.forbid("time_budget",
              "a needle run has no wall-clock budget (max_iterations caps each solve)");
     s.tolerance_round = o.number("tolerance_round", Range{0.0, 1.0, false, true}, 1e-8);
-    o.forbid("preconditioner",
-             "the needle's projected problem (6.7) has no Jacobi diagonal; a needle scene runs "
-             "plain CG, as the thesis does");
   } else {
     s.time_budget = o.number("time_budget", detail::non_negative(), 0.0);
     o.forbid("tolerance_round",
-             "only a needle scene (a \"slab2d\" mesh) has the rounding term epsilon_round of the "
+             "only a needle scene (a \"slab2d\" mesh, or a needle tool) has the rounding term "
+             "epsilon_round of the "
              "(6.9) stopping rule; this scene stops by (6.8), ||r|| <= tol ||f_ext||");
   }
   const bool dynamic = s.method == SolverSpec::Method::kDynamicSS22;
-  if (slab) {
-    // preconditioner: refused above
+  if (slab && s.method != SolverSpec::Method::kCG) {
+    o.forbid("preconditioner",
+             "in a needle scene only \"cg\" takes a preconditioner (\"jacobi\": the diagonal of "
+             "the projected problem (6.7), needle::NeedleProblemT::hessian_diagonal)");
   } else if (s.method == SolverSpec::Method::kCG || s.method == SolverSpec::Method::kNewton) {
     s.preconditioner =
         o.choice("preconditioner", solver::kPreconditionerNames, solver::Preconditioner::kNone);
@@ -292,18 +293,26 @@ SolverSpec parse_solver(JsonObject o, bool slab) {
   return s;
 }
 
-// The needle of a `slab2d` scene (docs/scenes.md, "Needle scenes"). The checks that need the
-// mesh (h_ref ≤ h_start, the path entering the body) are parse_root's.
-void parse_needle(JsonObject& o, ToolSpec& t) {
+// The needle of a needle scene (docs/scenes.md, "Needle scenes"): on a slab2d (`slab`) a line
+// in the plane, on a tetrahedral mesh a shaft of radius r (§6.9). The checks that need the
+// mesh (h_ref ≤ h_start, the path entering the body) are parse_root's (2D) and the builder's
+// (3D).
+void parse_needle(JsonObject& o, ToolSpec& t, bool slab) {
   const std::string& file = o.file();
   const std::string& path = t.path_json;
-  const std::string form = "an array of at least 2 points [[x, y], ...] (the tip's path)";
+  const std::string form = slab ? "an array of at least 2 points [[x, y], ...] (the tip's path)"
+                                : "an array of at least 2 points [[x, y, z], ...] (the tip's path)";
   const Json* p = o.array("path", form, false);
   if (p->size() < 2) detail::fail_expected(file, detail::child_path(path, "path"), form, *p);
   double total = 0.0;
   for (std::size_t i = 0; i < p->size(); ++i) {
-    const Vec2 x = detail::as_vec2((*p)[i], file, detail::child_path(path + "/path", i));
-    t.path.push_back(Vec3(x[0], x[1], 0.0));
+    const std::string at = detail::child_path(path + "/path", i);
+    if (slab) {
+      const Vec2 x = detail::as_vec2((*p)[i], file, at);
+      t.path.push_back(Vec3(x[0], x[1], 0.0));
+    } else {
+      t.path.push_back(detail::as_vec3((*p)[i], file, at));
+    }
     if (i == 0) continue;
     const double seg = (t.path[i] - t.path[i - 1]).stableNorm();
     if (!(seg > 0.0))
@@ -316,6 +325,18 @@ void parse_needle(JsonObject& o, ToolSpec& t) {
   t.length = o.number("length", detail::positive(), total);
   t.speed = o.number("speed", detail::positive());
   t.h_ref = length_or_level(o, "h_ref", t.h_ref_level);
+  if (slab) {
+    const std::string why =
+        "a needle in a slab2d scene is a line in the plane (thesis §6.4); "
+        "radius, h_shaft and max_elements belong to the 3D needle (§6.9)";
+    o.forbid("radius", why);
+    o.forbid("h_shaft", why);
+    o.forbid("max_elements", why);
+  } else {
+    t.radius = o.number("radius", detail::positive());
+    t.h_shaft = o.number("h_shaft", detail::positive(), 2.0 * t.radius);
+    t.max_elements = o.integer("max_elements", 1, std::numeric_limits<Index>::max(), 1000000);
+  }
   if (o.has("friction")) {
     JsonObject f = o.object("friction",
                             "a friction object {\"shaft_density\": N/m, \"tip_density\": N/m, "
@@ -335,13 +356,13 @@ void parse_needle(JsonObject& o, ToolSpec& t) {
   t.max_rearrangements = o.integer("max_rearrangements", 0, 100000, 100);
 }
 
-ToolSpec parse_tool(const Json& j, const std::string& path, const std::string& file) {
+ToolSpec parse_tool(const Json& j, const std::string& path, const std::string& file, bool slab) {
   JsonObject o(j, path, file, typed_object("tool", kToolKindNames));
   ToolSpec t;
   t.path_json = path;
   t.kind = o.choice("type", kToolKindNames);
   if (t.kind == ToolSpec::Kind::kNeedle) {
-    parse_needle(o, t);
+    parse_needle(o, t, slab);
     o.finish();
     return t;
   }
@@ -422,16 +443,12 @@ const char* mesh_kind(const MeshSpec& m) {
                                                : "a tetrahedral (3D)";
 }
 
-// A needle needs the 2D slab, a scalpel a tetrahedral mesh.
+// A scalpel needs a tetrahedral mesh (a needle goes into either).
 void check_tool_dimension(const ToolSpec& t, const MeshSpec& m, const std::string& file) {
   const bool slab = m.source == MeshSpec::Source::kSlab2d;
   const std::string at = detail::child_path(t.path_json, "type");
   const std::string got = std::string(mesh_kind(m)) + " mesh of type \"" +
                           kMeshSourceNames.name(m.source) + "\" at /mesh";
-  if (t.kind == ToolSpec::Kind::kNeedle && !slab)
-    fail(file, at,
-         "a needle is inserted into a 2D slab (thesis ch. 6): it needs a \"slab2d\" mesh, got " +
-             got);
   if (t.kind == ToolSpec::Kind::kScalpel && slab)
     fail(file, at,
          "a scalpel cuts tetrahedral meshes (thesis ch. 3): it needs a \"box\", \"cylinder\" or "
@@ -525,6 +542,45 @@ void check_needle(const SceneSpec& s, const std::string& file) {
   }
 }
 
+// Whether the scene's "tools" array names a needle (read before the tools are parsed: the
+// solver and loads of a needle scene follow other rules).
+bool names_needle(const Json& root) {
+  if (!root.is_object() || !root.contains("tools") || !root["tools"].is_array()) return false;
+  for (const Json& t : root["tools"])
+    if (t.is_object() && t.contains("type") && t["type"] == "needle") return true;
+  return false;
+}
+
+// A fixed region of a 3D needle scene: a plane or a box (needle::FixedBox).
+void check_needle3d_fixed(const Region& r, const Json& j, const std::string& file) {
+  if (r.kind != Region::Kind::kPlane && r.kind != Region::Kind::kBox)
+    fail(file, r.path,
+         "a 3D needle scene is held on planes and boxes (needle::FixedBox, also the nodes "
+         "refinement creates there): expected a region of type \"plane\" or \"box\", got " +
+             detail::show(j));
+}
+
+// The 3D needle: one needle, a bounded number of updates. Whether the path enters the body
+// and fits the refinement budget needs the mesh (scene_builder.cpp).
+void check_needle3d(const SceneSpec& s, const std::string& file) {
+  if (s.tools.size() != 1)
+    fail(file, "/tools/1",
+         "a needle scene has exactly one tool, the needle (needle::NeedleInsertion3D drives one), "
+         "got " +
+             std::to_string(s.tools.size()) + " tools");
+  const ToolSpec& t = s.tools[0];
+  double total = 0.0;
+  for (std::size_t i = 0; i + 1 < t.path.size(); ++i)
+    total += (t.path[i + 1] - t.path[i]).stableNorm();
+  const double updates = total / (t.speed * t.h_ref);
+  if (!(updates <= kMaxNeedleUpdates)) {
+    std::ostringstream os;
+    os << "the path of " << total << " m at " << t.speed << " h_ref per update (h_ref = " << t.h_ref
+       << " m) takes " << updates << " updates, more than the limit of 1e6";
+    fail(file, t.path_json + "/speed", os.str());
+  }
+}
+
 SceneSpec parse_root(const Json& root_json, const std::string& file, const std::string& base_dir) {
   JsonObject root(root_json, "", file, "a scene object {\"mesh\": ..., \"material\": ..., ...}");
   SceneSpec s;
@@ -536,14 +592,17 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
   // A slab2d mesh is the 2D (plane-stress) body of a needle insertion (thesis ch. 6); every
   // other mesh is tetrahedral.
   const bool slab = s.mesh.source == MeshSpec::Source::kSlab2d;
-  s.solver = parse_solver(root.object("solver", "a solver object {\"method\": ...}"), slab);
+  // A tetrahedral mesh with a needle tool is a 3D needle scene (thesis §6.9).
+  const bool needle3d = !slab && names_needle(root_json);
+  const bool needle_scene = slab || needle3d;
+  s.solver = parse_solver(root.object("solver", "a solver object {\"method\": ...}"), needle_scene);
   const bool dynamic = s.solver.method == SolverSpec::Method::kDynamicSS22;
   const Json* solver_json = root.get("solver");
 
   std::string rho_reason;
-  if (slab) {
+  if (needle_scene) {
     root.forbid("loads",
-                "a slab2d scene is loaded by its needle only (the needle insertion applies no "
+                "a needle scene is loaded by its needle only (the needle insertion applies no "
                 "other force); remove \"loads\"");
   } else {
     const Json* loads = root.array("loads", "an array of load objects", false);
@@ -576,6 +635,7 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
   for (std::size_t i = 0; i < fixed->size(); ++i) {
     s.fixed.push_back(parse_region((*fixed)[i], detail::child_path("/fixed", i), file));
     if (slab) check_slab_fixed_line(s.fixed.back(), (*fixed)[i], file);
+    if (needle3d) check_needle3d_fixed(s.fixed.back(), (*fixed)[i], file);
   }
   if (s.fixed.empty() && !dynamic)
     fail(file, "/fixed",
@@ -584,11 +644,12 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
 
   if (const Json* tools = root.array("tools", "an array of tool objects", true)) {
     for (std::size_t i = 0; i < tools->size(); ++i) {
-      s.tools.push_back(parse_tool((*tools)[i], detail::child_path("/tools", i), file));
+      s.tools.push_back(parse_tool((*tools)[i], detail::child_path("/tools", i), file, slab));
       check_tool_dimension(s.tools.back(), s.mesh, file);
     }
   }
   if (slab) check_needle(s, file);
+  if (needle3d) check_needle3d(s, file);
   // Keys of the interactive cutting run (augmented solver with a tool) in a scene without one.
   if (s.tools.empty() && solver_json && solver_json->is_object()) {
     const std::pair<const char*, const char*> cut_only_keys[] = {
@@ -607,7 +668,7 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
   }
   if (root.has("outputs")) {
     s.outputs = parse_outputs(root.object("outputs", "an outputs object"));
-    if (slab && !s.outputs.probes.empty())
+    if (needle_scene && !s.outputs.probes.empty())
       fail(file, "/outputs/probes",
            "not allowed here: a needle scene refines its mesh at every update, so a probe has no "
            "fixed node; its per-update CSV records the tip, the needle nodes and the needle force");

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <type_traits>
 
 namespace incise::scene {
 
@@ -302,11 +303,13 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   scene.problem = std::move(check);
 }
 
-/// A slab2d scene: the needle insertion, one NeedleInsertion::step per planned update.
-void run_needle(BuiltScene& scene, SceneRunResult& res, const NeedleUpdateObserver& observer,
+/// A needle scene (2D: NeedleInsertion on a slab2d, 3D: NeedleInsertion3D): one step per
+/// planned update.
+template <class Insertion, class Observer>
+void run_needle(BuiltScene& scene, Insertion& sim, SceneRunResult& res, const Observer& observer,
                 std::ostringstream& detail) {
+  constexpr bool kThreeD = std::is_same_v<Insertion, needle::NeedleInsertion3D>;
   const SceneSpec& spec = scene.spec;
-  needle::NeedleInsertion& sim = *scene.needle;
   solver::SolverReport& rep = res.report;
   double update_seconds = 0;  // the updates' own time, without the observer's (frame writing)
   long cg = 0, rearrangements = 0;
@@ -315,12 +318,23 @@ void run_needle(BuiltScene& scene, SceneRunResult& res, const NeedleUpdateObserv
   for (std::size_t k = 0; k < scene.needle_plan.size(); ++k) {
     const NeedleUpdatePlan& plan = scene.needle_plan[k];
     Timer t;
-    const needle::StepReport r = sim.step(plan.pose);
+    const auto r = [&] {
+      if constexpr (kThreeD)
+        return sim.step(plan.pose3d);
+      else
+        return sim.step(plan.pose);
+    }();
     NeedleUpdateRow row;
     row.seconds = t.seconds();
     row.update = static_cast<long>(k);
     row.depth = plan.depth;
-    row.tip = plan.pose.tip;
+    if constexpr (kThreeD) {
+      row.tip = plan.pose3d.tip;
+      row.needle_force = r.needle_force;
+    } else {
+      row.tip.head<2>() = plan.pose.tip;
+      row.needle_force.head<2>() = r.needle_force;
+    }
     row.status = r.brief();
     row.sticking = r.sticking;
     row.slipping = r.slipping;
@@ -333,8 +347,12 @@ void run_needle(BuiltScene& scene, SceneRunResult& res, const NeedleUpdateObserv
     row.released = r.released;
     row.nodes = sim.mesh().connectivity().num_vertices();
     row.triangles = sim.mesh().connectivity().num_elements();
-    row.needle_force = r.needle_force;
     row.flops = r.flops;
+    row.seconds_refine = r.refine_seconds;
+    row.seconds_solve = r.solve_seconds;
+    row.seconds_rearrange = r.rearrange_seconds;
+    row.surface_faces = r.surface_faces;
+    row.surface_area = r.surface_area;
     update_seconds += row.seconds;
     cg += r.cg_iterations;
     rearrangements += r.rearrangements;
@@ -346,7 +364,7 @@ void run_needle(BuiltScene& scene, SceneRunResult& res, const NeedleUpdateObserv
                        ? (r.last_solver_status == solver::StopReason::kConverged
                               ? solver::StopReason::kNonFinite  // the gradient at the solution
                               : r.last_solver_status)
-                       : solver::StopReason::kMaxIterations;  // the stick–slip cap
+                       : solver::StopReason::kMaxIterations;  // stick–slip cap or budget
       std::ostringstream m;
       m << "update " << k << " of " << scene.needle_plan.size() << " (depth " << plan.depth
         << " m): " << r.brief();
@@ -354,14 +372,15 @@ void run_needle(BuiltScene& scene, SceneRunResult& res, const NeedleUpdateObserv
       break;
     }
   }
-  // The final refined slab and its displacement, three components per node (z = 0).
+  constexpr int kD = kThreeD ? 3 : 2;
+  // The final refined mesh and its displacement, three components per node (z = 0 in 2D).
   scene.mesh = sim.mesh().to_mesh_data();
-  const VecX& u2 = sim.displacement();
-  const Eigen::Index n = u2.size() / 2;
+  const VecX& ud = sim.displacement();
+  const Eigen::Index n = ud.size() / kD;
   res.u = VecX::Zero(3 * n);
-  for (Eigen::Index v = 0; v < n; ++v) res.u.segment<2>(3 * v) = u2.segment<2>(2 * v);
+  for (Eigen::Index v = 0; v < n; ++v) res.u.segment<kD>(3 * v) = ud.segment<kD>(kD * v);
   double energy = std::numeric_limits<double>::quiet_NaN();
-  if (sim.problem().energy(u2, energy) != EvalStatus::kOk)
+  if (sim.problem().energy(ud, energy) != EvalStatus::kOk)
     energy = std::numeric_limits<double>::quiet_NaN();
   rep.iterations = static_cast<long>(res.needle_updates.size());
   rep.inner_iterations = cg;
@@ -370,36 +389,44 @@ void run_needle(BuiltScene& scene, SceneRunResult& res, const NeedleUpdateObserv
   rep.residual_norm = std::numeric_limits<double>::quiet_NaN();
   rep.seconds = update_seconds;
   res.external_force_norm = std::numeric_limits<double>::quiet_NaN();
-  // Final checks (as check_final_state for tetrahedra): finite displacement, inverted triangles.
-  if (!u2.allFinite()) {
+  // Final checks (as check_final_state for tetrahedra): finite displacement, inverted elements.
+  if (!ud.allFinite()) {
     if (rep.ok()) {
       rep.status = solver::StopReason::kNonFinite;
       rep.message = "the needle run ended with a displacement that is not finite";
     }
   } else {
-    const Eigen::Matrix2Xd x = sim.deformed();
+    const auto x = sim.deformed();
     Index inverted = 0;
     for (Eigen::Index c = 0; c < scene.mesh.cells.cols(); ++c) {
-      const Vec2 a = x.col(scene.mesh.cells(0, c)), b = x.col(scene.mesh.cells(1, c)),
-                 d = x.col(scene.mesh.cells(2, c));
-      const Vec2 e = b - a, f = d - a;
-      inverted += e.x() * f.y() - e.y() * f.x() <= 0.0 ? 1 : 0;
+      Eigen::Matrix<double, kD, kD> e;
+      for (int i = 0; i < kD; ++i)
+        e.col(i) = x.col(scene.mesh.cells(i + 1, c)) - x.col(scene.mesh.cells(0, c));
+      inverted += e.determinant() <= 0.0 ? 1 : 0;
     }
     res.inverted_elements = inverted;
     if (inverted > 0 && rep.ok() && !spec.material.allow_inversion) {
       rep.status = solver::StopReason::kInverted;
       rep.message = "the needle run ended with " + std::to_string(inverted) + " of " +
                     std::to_string(scene.mesh.num_cells()) +
-                    " triangles inverted (deformed area <= 0): material \"" + spec.material.model +
+                    (kThreeD ? " tetrahedra inverted (deformed volume <= 0)"
+                             : " triangles inverted (deformed area <= 0)") +
+                    ": material \"" + spec.material.model +
                     "\"; use a smaller speed, or set \"allow_inversion\": true under /material "
                     "(linear, stvk) to accept it";
     }
   }
-  const needle::InsertionOptions& o = sim.options();
-  detail << "needle insertion (thesis §6.7): per update move the needle, refine to h_ref = "
-         << o.h_ref << " m around the tip (§6.5), intercept needle nodes (§6.4"
-         << (o.relocate ? ", relocated onto the shaft §6.8.6" : "") << "), solve (6.7) by "
-         << (o.relaxation == needle::Relaxation::kLinearCg ? "linear" : "nonlinear")
+  const auto& o = sim.options();
+  detail << "needle insertion (thesis §6.7" << (kThreeD ? ", in 3D §6.9" : "")
+         << "): per update move the needle, refine to h_ref = " << o.h_ref
+         << " m around the tip (§6.5";
+  if constexpr (kThreeD)
+    detail << ", tetrahedral bisection; h_shaft = " << o.h_shaft << " m along the trace";
+  detail << "), intercept needle nodes (§6.4" << (o.relocate ? ", relocated §6.8.6" : "")
+         << "), solve (6.7) by "
+         << (o.relaxation != needle::Relaxation::kLinearCg         ? "nonlinear"
+             : o.preconditioner == solver::Preconditioner::kJacobi ? "Jacobi-preconditioned linear"
+                                                                   : "linear")
          << " CG to (6.9) with eps = " << o.epsilon << ", eps_round = " << o.epsilon_round
          << ", rearrange stick/slip (§6.3.2, at most " << o.max_rearrangements << " per update); "
          << res.needle_updates.size() << " of " << scene.needle_plan.size() << " updates, "
@@ -539,12 +566,16 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
 
 SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
                          const CutStepObserver& cut_observer,
-                         const NeedleUpdateObserver& needle_observer) {
+                         const NeedleUpdateObserver& needle_observer,
+                         const NeedleUpdateObserver3D& needle3d_observer) {
   SceneRunResult res;
   res.environment = capture_environment();
-  if (scene.needle) {
+  if (scene.is_needle()) {
     std::ostringstream detail;
-    run_needle(scene, res, needle_observer, detail);
+    if (scene.needle)
+      run_needle(scene, *scene.needle, res, needle_observer, detail);
+    else
+      run_needle(scene, *scene.needle3d, res, needle3d_observer, detail);
     res.method_detail = detail.str();
     return res;
   }

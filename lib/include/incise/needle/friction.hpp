@@ -17,7 +17,8 @@
 /// other needle nodes (lumped like a consistent load of linear elements): with the nodes sorted
 /// by s, node k owns [b_k, b_{k+1}] with b_0 = 0, b_k = (s_{k−1} + s_k)/2 and the last interval
 /// ending at the largest s. Its dynamic threshold is ∫ f over its interval (N), its static
-/// threshold twice that (§6.8.1).
+/// threshold twice that (§6.8.1). In 3D a node's threshold comes from the needle-surface area
+/// it owns instead (surface_thresholds()).
 
 #include <vector>
 
@@ -40,6 +41,13 @@ struct FrictionProfile {
   /// Dynamic thresholds (N) of needle nodes at shaft coordinates s (any order), lumped as in
   /// the file comment; entry k belongs to s[k].
   std::vector<double> dynamic_thresholds(const std::vector<double>& s) const;
+  /// Dynamic thresholds (N) of 3D needle nodes (§6.9, Fig. 6.14: friction from the needle
+  /// surface's geometry): the profile's force per shaft length spread over the circumference
+  /// is the per-area density f(s)/(2πr) (N/m²), and node k, at s[k] owning needle-surface area
+  /// area[k] (m², needle3d.hpp needle_node_areas), gets f(s[k])·area[k]/(2πr). Throws
+  /// UsageError when the sizes differ and ParameterError when radius is not finite and > 0.
+  std::vector<double> surface_thresholds(const std::vector<double>& s,
+                                         const std::vector<double>& area, double radius) const;
 };
 
 }  // namespace incise::needle

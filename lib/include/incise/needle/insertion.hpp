@@ -38,7 +38,10 @@
 #include <incise/mesh/bisection.hpp>
 #include <incise/needle/friction.hpp>
 #include <incise/needle/needle.hpp>
+#include <incise/solver/linear_cg.hpp>
 #include <incise/solver/report.hpp>
+
+#include <Eigen/Core>
 
 #include <cstdint>
 #include <limits>
@@ -69,6 +72,9 @@ struct InsertionOptions {
   long max_iterations = 100000;  ///< CG iterations per solve
   int max_rearrangements = 100;  ///< rearrangements per step before kRearrangementCycle
   bool relocate = false;         ///< §6.8.6: project intercepted nodes onto the needle
+  /// Linear CG only: kJacobi preconditions with NeedleProblemT::hessian_diagonal (the thesis
+  /// runs plain CG, the default); nonlinear CG ignores it.
+  solver::Preconditioner preconditioner = solver::Preconditioner::kNone;
 };
 
 /// Status of one step.
@@ -76,32 +82,45 @@ enum class StepStatus {
   kOk,                  ///< solved, no node wants to change state
   kSolverFailed,        ///< a solve did not converge (message: the solver's report)
   kRearrangementCycle,  ///< max_rearrangements passed with nodes still changing state
+  kRefinementBudget,    ///< 3D: the mesh reached max_elements before refining (insertion3d.hpp)
   kNotRun               ///< nothing done yet
 };
 
 /// Name of a StepStatus.
 const char* to_string(StepStatus s);
 
-/// Report of one step().
-struct StepReport : Outcome<StepStatus, StepStatus::kOk, StepStatus::kNotRun> {
-  int rearrangements = 0;      ///< state changes that triggered another solve
-  int solves = 0;              ///< solves run (rearrangements + 1 when ok)
-  long cg_iterations = 0;      ///< CG iterations over all solves
-  long max_cg_iterations = 0;  ///< CG iterations of the longest solve
-  std::uint64_t flops = 0;     ///< counted flops of the solves (SolverReport::flops summed)
-  long bisections = 0;         ///< simple bisections done by the refinement
-  int intercepted = 0;         ///< nodes that became needle nodes
-  int released = 0;            ///< needle nodes released (slid off)
-  int sticking = 0;            ///< needle nodes sticking at the end
-  int slipping = 0;            ///< needle nodes slipping at the end
+/// Report of one step() of a D-dimensional insertion (NeedleInsertion: D = 2,
+/// NeedleInsertion3D: D = 3, insertion3d.hpp).
+template <int D>
+struct StepReportT : Outcome<StepStatus, StepStatus::kOk, StepStatus::kNotRun> {
+  using VecD = Eigen::Matrix<double, D, 1>;  ///< a point or force
+  int rearrangements = 0;                    ///< state changes that triggered another solve
+  int solves = 0;                            ///< solves run (rearrangements + 1 when ok)
+  long cg_iterations = 0;                    ///< CG iterations over all solves
+  long max_cg_iterations = 0;                ///< CG iterations of the longest solve
+  std::uint64_t flops = 0;  ///< counted flops of the solves (SolverReport::flops summed)
+  long bisections = 0;      ///< simple bisections done by the refinement
+  int intercepted = 0;      ///< nodes that became needle nodes
+  int released = 0;         ///< needle nodes released (slid off)
+  int sticking = 0;         ///< needle nodes sticking at the end
+  int slipping = 0;         ///< needle nodes slipping at the end
   /// Force the needle exerts on the material (N), Σ over needle nodes of −∇Π_el at the node,
   /// i.e. reactions plus friction; the needle feels its negative.
-  Vec2 needle_force = Vec2::Zero();
+  VecD needle_force = VecD::Zero();
   /// Reference point refined around (the tip mapped to the reference configuration before the
   /// solve); NaN when the tip was outside the body.
-  Vec2 refined_at = Vec2::Constant(std::numeric_limits<double>::quiet_NaN());
+  VecD refined_at = VecD::Constant(std::numeric_limits<double>::quiet_NaN());
   solver::StopReason last_solver_status = solver::StopReason::kConverged;  ///< of the last solve
+  /// Wall time (s, core Timer) of the step's parts: refinement with the field transfer and the
+  /// problem rebuild; the solves; interception, thresholds, rearrangement tests and release.
+  double refine_seconds = 0.0, solve_seconds = 0.0, rearrange_seconds = 0.0;
+  /// 3D only (0 in 2D): needle-surface faces and their total area (m², deformed) at the end.
+  int surface_faces = 0;
+  double surface_area = 0.0;  ///< see surface_faces
 };
+
+/// Report of one 2D step().
+using StepReport = StepReportT<2>;
 
 /// A plane-stress slab pierced by a rigid needle (see file comment).
 class NeedleInsertion {

@@ -37,6 +37,12 @@ struct NeedlePose {
   Vec2 tangent() const { return direction; }
   /// Unit normal n = (−t_y, t_x).
   Vec2 normal() const { return Vec2(-direction.y(), direction.x()); }
+  /// The orthonormal needle frame (columns t, n): the rotation R of one needle node (§6.6).
+  Eigen::Matrix2d frame() const {
+    Eigen::Matrix2d r;
+    r << tangent(), normal();
+    return r;
+  }
   /// The base end tip − L·t.
   Vec2 base() const { return tip - length * direction; }
   /// (s, d_perp) of world point x.
@@ -54,11 +60,13 @@ enum class NodeState {
 /// Name of a NodeState ("stick", "slip").
 const char* to_string(NodeState s);
 
-/// A needle node: a mesh vertex attached to the needle (§6.4).
-struct NeedleNode {
+/// A needle node: a mesh vertex attached to the needle (§6.4), with needle coordinates of type
+/// `Coordinates` (NeedleCoordinates in 2D, NeedleCoordinates3D in 3D, needle3d.hpp).
+template <class Coordinates>
+struct NeedleNodeT {
   Index vertex = -1;                    ///< mesh vertex
   NodeState state = NodeState::kStick;  ///< stick or slip
-  NeedleCoordinates coords;             ///< (s, d_perp) relative to the current pose
+  Coordinates coords;                   ///< (s, d_perp) relative to the current pose
   /// s when the node was last fixed or at the start of the current update: the slip since then,
   /// s − anchor, must oppose the friction force for slipping to be admissible.
   double anchor = 0.0;
@@ -66,5 +74,8 @@ struct NeedleNode {
   /// of the tangential reaction when the node broke loose. 0 while sticking.
   int friction_sign = 0;
 };
+
+/// The 2D needle node (Fig. 6.5).
+using NeedleNode = NeedleNodeT<NeedleCoordinates>;
 
 }  // namespace incise::needle

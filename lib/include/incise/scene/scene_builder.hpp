@@ -14,6 +14,7 @@
 #include <incise/material/material.hpp>
 #include <incise/mesh/mesh_data.hpp>
 #include <incise/needle/insertion.hpp>
+#include <incise/needle/insertion3d.hpp>
 #include <incise/scene/scene_spec.hpp>
 
 #include <array>
@@ -40,8 +41,9 @@ struct ResolvedProbe {
 
 /// One planned update of a needle scene: the needle's pose and how far its tip has come.
 struct NeedleUpdatePlan {
-  needle::NeedlePose pose;  ///< tip on the path, direction of the path segment it is on
-  double depth = 0;         ///< distance travelled by the tip along the path from its start (m)
+  needle::NeedlePose pose;      ///< 2D: tip on the path, direction of the segment it is on
+  needle::NeedlePose3D pose3d;  ///< 3D: the same in space, with the tool's radius
+  double depth = 0;             ///< distance travelled by the tip along the path from its start (m)
 };
 
 /// The constructed scene. DOF numbering: node i has DOFs 3i, 3i+1, 3i+2 (x, y, z).
@@ -59,7 +61,14 @@ struct BuiltScene {
   /// `slab2d` scenes: the needle insertion on the starting slab (thesis §6.7; `mesh` is that
   /// slab, `problem` is null: the insertion holds its plane-stress problem) and its updates.
   std::unique_ptr<needle::NeedleInsertion> needle;
+  /// 3D needle scenes (a tetrahedral mesh with a needle tool, thesis §6.9): the insertion on
+  /// the starting mesh (`mesh` is that mesh, `problem` is null: the insertion holds its
+  /// elastic problem).
+  std::unique_ptr<needle::NeedleInsertion3D> needle3d;
+  /// Needle scenes (2D or 3D): the planned updates.
   std::vector<NeedleUpdatePlan> needle_plan;
+  /// True for a needle scene (2D or 3D).
+  bool is_needle() const { return needle || needle3d; }
   std::vector<BuildStep> steps;        ///< what was built, in order
   std::vector<std::string> not_built;  ///< parts skipped and why
 
@@ -79,7 +88,13 @@ struct BuiltScene {
 /// (mesh::make_right_triangle_slab; refused at /mesh/h_start or /mesh/h_start_level when width
 /// or height is no integer multiple of h_start, at /mesh when its estimate exceeds the budget),
 /// checks that every fixed line holds a node of it, and builds the needle::NeedleInsertion with
-/// the plan of needle_updates(); no ElasticProblem. Nothing is written anywhere.
+/// the plan of needle_updates(); no ElasticProblem. A 3D needle scene (a tetrahedral mesh whose
+/// tool is a needle) builds the mesh, turns the fixed regions into needle::FixedBox and builds
+/// the needle::NeedleInsertion3D; it throws ParseError at the tool's /path when no planned tip
+/// lies inside the body ("never enters the body"), and at /radius (or /h_shaft) when refining
+/// to h_shaft along the part of the path inside the body needs more tetrahedra than
+/// max_elements: at least ℓ_in/h_shaft (every tetrahedron meeting the path has diameter
+/// ≤ h_shaft, so it covers at most h_shaft of it). Nothing is written anywhere.
 BuiltScene build_scene(const SceneSpec& spec);
 
 /// The memory budget of a scene's build (bytes): limits.memory_mb MiB when set (the scene key,
@@ -98,8 +113,9 @@ std::vector<Index> select_nodes(const mesh::MeshData& mesh, const Region& region
 /// The updates of a needle (ToolSpec::Kind::kNeedle): update k puts the tip at distance
 /// min(k·speed·h_ref, ℓ) along the path (ℓ its length), k = 0 … ⌈ℓ/(speed·h_ref)⌉, pointing
 /// along the path segment the tip is on (the next one at a joint, the last one at the end),
-/// with the tool's length.
-std::vector<NeedleUpdatePlan> needle_updates(const ToolSpec& tool);
+/// with the tool's length; `three_d`: NeedleUpdatePlan::pose3d (with the tool's radius) instead
+/// of pose.
+std::vector<NeedleUpdatePlan> needle_updates(const ToolSpec& tool, bool three_d = false);
 
 /// Sweep triangles of a scalpel (thesis §3.2): for each path segment p_i → p_{i+1} the quad
 /// (p_i, p_{i+1}, p_{i+1}+b, p_i+b) split into two triangles, b the blade vector.

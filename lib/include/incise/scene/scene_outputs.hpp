@@ -27,7 +27,11 @@ namespace incise::scene {
 /// the refined slab (triangles; point arrays "displacement", z = 0, and "needle_state", 0 no
 /// needle node, 1 sticking, 2 slipping) every vtu_every updates and at the last planned update,
 /// the update zero-padded to max(4, digits of the last update), each frame followed by
-/// `<vtu>.pvd`, the ParaView index of the frames so far (timestep = update).
+/// `<vtu>.pvd`, the ParaView index of the frames so far (timestep = update). A 3D needle scene
+/// writes the refined tetrahedral mesh the same way (needle_point_data, and the cell array
+/// "needle_faces": how many needle-surface faces each tetrahedron has, 0–4) and beside it
+/// `<vtu>_needle_<update>.vtu`, the needle surface (needle3d.hpp) as triangles with point
+/// array "displacement" and cell array "area" (m², deformed), indexed by `<vtu>_needle.pvd`.
 class FrameWriter {
  public:
   /// Keeps a reference to `scene`, which must outlive the writer.
@@ -40,18 +44,32 @@ class FrameWriter {
   /// then the .pvd index.
   void needle_update(const NeedleUpdateRow& row, std::size_t total_updates,
                      const needle::NeedleInsertion& insertion);
+  /// The same for a 3D needle scene (run_scene's NeedleUpdateObserver3D).
+  void needle_update(const NeedleUpdateRow& row, std::size_t total_updates,
+                     const needle::NeedleInsertion3D& insertion);
   /// Frames written so far.
   long frames() const { return frames_; }
 
  private:
   const BuiltScene& scene_;
   long frames_ = 0;
-  std::vector<io::PvdFrame> pvd_;  ///< needle frames, for the .pvd index
+  std::vector<io::PvdFrame> pvd_;          ///< needle frames, for the .pvd index
+  std::vector<io::PvdFrame> surface_pvd_;  ///< 3D needle-surface frames, for their index
 };
 
 /// The point arrays of a needle insertion's mesh: "displacement" (m, 3 components, z = 0) and
 /// "needle_state" (0: no needle node, 1: sticking, 2: slipping; needle::NodeState).
 std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion& insertion);
+/// The same for a 3D needle insertion ("displacement" with its three components).
+std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion3D& insertion);
+/// The cell array "needle_faces" of a 3D insertion's mesh (cells in to_mesh_data() order): how
+/// many of each tetrahedron's faces are needle-surface faces.
+io::DataArray needle_cell_data(const needle::NeedleInsertion3D& insertion,
+                               const mesh::MeshData& mesh);
+/// The needle surface of a 3D insertion as a triangle mesh on all its vertices (reference
+/// positions), with point array "displacement" and cell array "area" (m², deformed); written
+/// beside every 3D needle frame.
+void write_needle_surface_vtu(const std::string& path, const needle::NeedleInsertion3D& insertion);
 
 /// Options of write_outputs().
 struct OutputOptions {

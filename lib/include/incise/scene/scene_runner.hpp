@@ -99,7 +99,7 @@ struct CutStepRow {
 struct NeedleUpdateRow {
   long update = 0;          ///< index into BuiltScene::needle_plan (0: the tip at the path's start)
   double depth = 0;         ///< distance travelled by the tip along the path (m)
-  Vec2 tip = Vec2::Zero();  ///< tip position (m)
+  Vec3 tip = Vec3::Zero();  ///< tip position (m; z = 0 in 2D)
   std::string status;       ///< "ok" or the needle::StepStatus name with the message
   int sticking = 0, slipping = 0;     ///< needle nodes in each state after the update
   int rearrangements = 0;             ///< stick–slip passes that changed a state (§6.3.2)
@@ -108,12 +108,17 @@ struct NeedleUpdateRow {
   long max_cg_iterations = 0;         ///< of its longest solve
   long bisections = 0;                ///< simple bisections of the refinement at the tip (§6.5)
   int intercepted = 0, released = 0;  ///< needle nodes added, released (slid off)
-  Index nodes = 0, triangles = 0;     ///< mesh size after the update
+  Index nodes = 0, triangles = 0;     ///< mesh size after the update (3D: tetrahedra)
   /// Force the needle exerts on the material (N), needle::StepReport::needle_force; the needle
-  /// feels its negative
-  Vec2 needle_force = Vec2::Zero();
+  /// feels its negative (z = 0 in 2D)
+  Vec3 needle_force = Vec3::Zero();
   std::uint64_t flops = 0;  ///< counted flops of the solves
   double seconds = 0;       ///< wall time of the update (move, refine, intercept, solves)
+  /// Its parts (needle::StepReportT): refinement, solves, rearrangement with interception.
+  double seconds_refine = 0, seconds_solve = 0, seconds_rearrange = 0;
+  /// 3D only: needle-surface faces and their area (m²) after the update (needle3d.hpp).
+  int surface_faces = 0;
+  double surface_area = 0;  ///< see surface_faces
 };
 
 /// Outcome of run_scene().
@@ -152,6 +157,9 @@ using CutStepObserver = std::function<void(const CutStepRow&, std::size_t total_
 /// and the insertion (its mesh, displacement and needle nodes those after the update).
 using NeedleUpdateObserver = std::function<void(const NeedleUpdateRow&, std::size_t total_updates,
                                                 const needle::NeedleInsertion& insertion)>;
+/// The same for a 3D needle scene.
+using NeedleUpdateObserver3D = std::function<void(const NeedleUpdateRow&, std::size_t total_updates,
+                                                  const needle::NeedleInsertion3D& insertion)>;
 
 /// Δt and η of a "dynamic-ss22" run (thesis §4.1) and where each came from. ok(): both are
 /// usable; otherwise status is that of the estimate that failed, the message names it and
@@ -190,11 +198,14 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
 /// An interactive cutting run replaces scene.mesh, scene.fixed_nodes and scene.problem by the
 /// final cut mesh, its held nodes (fixed from the start, fixed by the cutter, unused) and an
 /// elastic problem on it carrying the same nodal forces (used to verify the residual).
-/// A needle scene replaces scene.mesh by the final refined slab (2D) and returns u with three
-/// components per node (z = 0); its final check counts inverted triangles (deformed area ≤ 0:
-/// kInverted unless material.allow_inversion) and non-finite displacements (kNonFinite).
+/// A needle scene replaces scene.mesh by the final refined slab (2D; u with three components
+/// per node, z = 0) or tetrahedral mesh (3D); its final check counts inverted elements
+/// (deformed area or volume ≤ 0: kInverted unless material.allow_inversion) and non-finite
+/// displacements (kNonFinite). A 3D needle update that hits the refinement budget
+/// (needle::StepStatus::kRefinementBudget) ends the run with kMaxIterations and its message.
 SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer = {},
                          const CutStepObserver& cut_observer = {},
-                         const NeedleUpdateObserver& needle_observer = {});
+                         const NeedleUpdateObserver& needle_observer = {},
+                         const NeedleUpdateObserver3D& needle3d_observer = {});
 
 }  // namespace incise::scene

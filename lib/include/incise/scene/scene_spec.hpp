@@ -205,18 +205,18 @@ inline constexpr NameTable<SolverSpec::CutConfiguration, 2> kCutConfigurationNam
 inline constexpr const char* kExplicitSchurName = "explicit";
 
 /// A tool. The scalpel is swept along a path; consecutive blade positions span the sweep
-/// triangles of thesis §3.2. The needle (thesis ch. 6, 2D: a `slab2d` mesh only) is a rigid
-/// segment whose tip follows the path at `speed` × h_ref per update, pointing along the path
-/// segment it is on (scene_builder.hpp, needle_updates()).
+/// triangles of thesis §3.2. The needle (thesis ch. 6: in 2D on a `slab2d` mesh, in 3D (§6.9)
+/// on a tetrahedral one) is a rigid segment whose tip follows the path at `speed` × h_ref per
+/// update, pointing along the path segment it is on (scene_builder.hpp, needle_updates()).
 struct ToolSpec {
   /// Kind of tool.
   enum class Kind {
     kScalpel,  ///< 3D: a blade swept along the path (§3.2)
-    kNeedle    ///< 2D: a rigid needle inserted along the path (§6.4, §6.7)
+    kNeedle    ///< a rigid needle inserted along the path (§6.4, §6.7; 3D: §6.9)
   };
   Kind kind = Kind::kScalpel;
-  /// Scalpel: blade tip positions (m), ≥ 2. Needle: tip positions (m, z = 0; the scene gives
-  /// [x, y]), ≥ 2, consecutive points distinct.
+  /// Scalpel: blade tip positions (m), ≥ 2. Needle: tip positions (m; on a slab2d z = 0 and the
+  /// scene gives [x, y], in 3D [x, y, z]), ≥ 2, consecutive points distinct.
   std::vector<Vec3> path;
   Vec3 blade = Vec3::Zero();  ///< scalpel: vector from tip to the blade's back end (m), non-zero
   std::string path_json;      ///< JSON path, for messages
@@ -230,6 +230,13 @@ struct ToolSpec {
   needle::FrictionProfile friction;  ///< needle: shaft friction profile (friction.hpp)
   bool relocate = false;             ///< needle: §6.8.6 relocation of intercepted nodes
   int max_rearrangements = 100;      ///< needle: stick–slip passes per update before a status
+  /// 3D needle (tetrahedral mesh) only: radius r (m) of the shaft (needle3d.hpp).
+  double radius = 0;
+  /// 3D needle only: longest edge (m) along the tip's reference trace (InsertionOptions3D::
+  /// h_shaft); default 2·radius, the needle's diameter.
+  double h_shaft = 0;
+  /// 3D needle only: refinement budget in tetrahedra (InsertionOptions3D::max_elements).
+  Index max_elements = 1000000;
 };
 
 /// Names of ToolSpec::Kind (scene key `type` of a tool).
@@ -289,7 +296,7 @@ struct SceneSpec {
   std::vector<ToolSpec> tools;
   OutputSpec outputs;
   LimitsSpec limits;
-  /// The scene's needle (the one tool of a `slab2d` scene), nullptr otherwise.
+  /// The scene's needle (the one tool of a needle scene, 2D or 3D), nullptr otherwise.
   const ToolSpec* needle() const {
     return tools.size() == 1 && tools[0].kind == ToolSpec::Kind::kNeedle ? &tools[0] : nullptr;
   }
