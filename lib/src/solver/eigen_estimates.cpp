@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
+#include <vector>
 
 namespace incise::solver {
 namespace {
@@ -136,6 +138,123 @@ EigenEstimate smallest_eigenvalue(Problem& problem, const VecX& u, const EigenOp
       break;
     }
     rho_prev = rho;
+  }
+  est.flops = meter.flops();
+  return est;
+}
+
+namespace {
+
+/// Extreme eigenvalues of the symmetric tridiagonal matrix (diag, sub), scaled to order one
+/// first (see cg_lanczos_extremes).
+bool tridiagonal_extremes(const std::vector<double>& diag, const std::vector<double>& sub,
+                          double& lo, double& hi) {
+  const auto k = static_cast<Eigen::Index>(diag.size());
+  if (k == 1) {
+    lo = hi = diag[0];
+    return true;
+  }
+  VecX d = Eigen::Map<const VecX>(diag.data(), k);
+  VecX e = Eigen::Map<const VecX>(sub.data(), k - 1);
+  const double scale = std::max(d.cwiseAbs().maxCoeff(), e.cwiseAbs().maxCoeff());
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
+  es.computeFromTridiagonal(d / scale, e / scale, Eigen::EigenvaluesOnly);
+  if (es.info() != Eigen::Success) return false;
+  lo = scale * es.eigenvalues().minCoeff();
+  hi = scale * es.eigenvalues().maxCoeff();
+  return true;
+}
+
+}  // namespace
+
+SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& start,
+                                  const LanczosOptions& options) {
+  INCISE_CHECK_PARAM(options.min_steps >= 1 && options.max_steps >= options.min_steps,
+                     "lanczos_spectrum: need 1 <= min_steps <= max_steps");
+  INCISE_CHECK_PARAM(options.tolerance >= 0.0 && options.window >= 1,
+                     "lanczos_spectrum: tolerance must be >= 0 and window >= 1");
+  INCISE_CHECK_PARAM(options.random_fraction >= 0.0,
+                     "lanczos_spectrum: random_fraction must be >= 0");
+  INCISE_CHECK(start.size() == 0 || start.size() == problem.size(),
+               "lanczos_spectrum: start has the wrong size");
+  const VecX& m = checked_mass(problem);
+  CostMeter meter(problem);
+  const auto nn = static_cast<std::uint64_t>(u.size());
+  auto mnorm = [&](const VecX& v) { return std::sqrt(v.dot(m.cwiseProduct(v))); };
+  SpectrumEstimate est;
+  est.status = StopReason::kMaxIterations;
+  // q₁: the start direction plus a little of a random one, M-normalized.
+  VecX q = start.size() == 0 ? VecX::Zero(problem.size()) : start;
+  problem.project(q);
+  const double sn = mnorm(q);
+  VecX z = start_vector(problem, options.seed);
+  const double zn = mnorm(z);
+  if (sn > 0.0 && std::isfinite(sn))
+    q = q / sn + (options.random_fraction / zn) * z;
+  else
+    q = z / zn;
+  q /= mnorm(q);
+  VecX q_prev = VecX::Zero(q.size()), w;
+  double beta_prev = 0.0;
+  std::vector<double> diag, sub;
+  double lo_prev = 0.0, hi_prev = 0.0;
+  long calm = 0;  // consecutive steps with both changes ≤ tolerance
+  for (long j = 0; j < options.max_steps; ++j) {
+    const EvalStatus st = problem.hessian_product(u, q, w);
+    if (st != EvalStatus::kOk || !w.allFinite()) {
+      est.status = failure_reason(st);
+      break;
+    }
+    problem.project(w);  // P K q
+    const double alpha = q.dot(w);  // (q, M⁻¹PKq)_M
+    if (!std::isfinite(alpha)) {
+      est.status = StopReason::kNonFinite;
+      break;
+    }
+    if (alpha <= 0.0) {
+      est.status = StopReason::kIndefinite;
+      break;
+    }
+    w = w.cwiseQuotient(m) - alpha * q - beta_prev * q_prev;  // three-term recurrence
+    const double beta = mnorm(w);
+    meter.add(14 * nn);
+    diag.push_back(alpha);
+    double lo = 0.0, hi = 0.0;
+    if (!tridiagonal_extremes(diag, sub, lo, hi)) {
+      est.status = StopReason::kNonFinite;
+      break;
+    }
+    est.steps = j + 1;
+    est.smallest = lo;
+    est.largest = hi;
+    if (j > 0) {
+      est.smallest_change = std::abs(lo - lo_prev) / lo;
+      est.largest_change = std::abs(hi - hi_prev) / hi;
+      const bool still = est.smallest_change <= options.tolerance &&
+                         est.largest_change <= options.tolerance;
+      calm = still ? calm + 1 : 0;
+    }
+    lo_prev = lo;
+    hi_prev = hi;
+    if (!(beta > 1e-14 * hi) || !std::isfinite(beta)) {
+      // invariant subspace reached: the Ritz values are eigenvalues
+      est.status = std::isfinite(beta) ? StopReason::kConverged : StopReason::kNonFinite;
+      break;
+    }
+    if (est.steps >= options.min_steps && calm >= options.window) {
+      est.status = StopReason::kConverged;
+      break;
+    }
+    sub.push_back(beta);
+    q_prev.swap(q);
+    q = w / beta;
+    beta_prev = beta;
+  }
+  if (est.status == StopReason::kIndefinite || est.status == StopReason::kNonFinite ||
+      est.status == StopReason::kInverted) {
+    if (est.message.empty())
+      est.message = std::string("Lanczos step ") + std::to_string(est.steps + 1) + ": " +
+                    to_string(est.status);
   }
   est.flops = meter.flops();
   return est;

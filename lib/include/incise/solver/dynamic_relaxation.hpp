@@ -20,6 +20,14 @@ struct DynamicRelaxationOptions : RelaxationOptions {
   double time_step = 0.0;     ///< Δt (s), > 0
   double damping = 0.0;       ///< η (1/s), ≥ 0; C = ηM
   double blowup_norm = 1e15;  ///< ‖u‖₂ above this is a blow-up (kUnstable), §4.4.1
+  /// Restarts after an unstable step (0: none, the thesis' behaviour — a blow-up, inversion or
+  /// non-finite evaluation ends the run). With max_restarts > 0 an unstable step is also one
+  /// whose total energy E = Π(ū) + ½u̇ᵀMu̇ regained more than half of what damping has
+  /// dissipated (E > E_min + ½(E₀ − E_min); impossible for a stable damped run, which only
+  /// loses energy, so this needs damping > 0); the integration then restarts from the state of
+  /// lowest E with Δt ← restart_reduction·Δt. SolverReport::restarts and ::time_step say so.
+  int max_restarts = 0;
+  double restart_reduction = 0.7;  ///< Δt factor per restart, in (0, 1)
 };
 
 /// Runs SS22 from rest at u (updated in place). One step (2.56)–(2.60) with θ₁ = ½, θ₂ = 0:
@@ -28,7 +36,10 @@ struct DynamicRelaxationOptions : RelaxationOptions {
 /// One gradient evaluation per step, at ū; the stopping rule is checked on ‖P∇Π(ū)‖, so on
 /// convergence u is set to that ū (the point whose residual was certified). On blow-up
 /// (‖u‖ > blowup_norm, kUnstable), inversion (kInverted) or non-finite values (kNonFinite) u is
-/// set to the last evaluated admissible point. Requires lumped masses (UsageError otherwise).
+/// set to the last evaluated admissible point. With options.max_restarts > 0 those events (and
+/// energy growth) restart the integration at a smaller Δt instead, until the restarts are used
+/// up (then the status is the last event's, with a message naming the restarts).
+/// Requires lumped masses (UsageError otherwise).
 SolverReport dynamic_relaxation(Problem& problem, VecX& u, const DynamicRelaxationOptions& options);
 
 /// CFL time-step estimate (2.61) of explicit SS22 with θ₁ = ½: Δt = (2/√3)·h/c with

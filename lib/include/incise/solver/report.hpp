@@ -103,6 +103,8 @@ struct [[nodiscard]] SolverReport
   double residual_norm = std::numeric_limits<double>::quiet_NaN();  ///< final ‖r‖₂ (N)
   double threshold = 0.0;  ///< final stopping threshold on ‖r‖₂ (N)
   double energy = std::numeric_limits<double>::quiet_NaN();  ///< final Π (J) when known
+  long restarts = 0;       ///< dynamic relaxation: restarts after unstable steps, else 0
+  double time_step = 0.0;  ///< dynamic relaxation: the Δt of the final (re)start (s), else 0
   std::vector<double> residual_history;  ///< ‖r‖₂ after each iteration (index 0: start)
   std::vector<double> energy_history;    ///< Π after each iteration (index 0: start)
 };
