@@ -29,6 +29,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   if (!external_force_is_finite(fex, rep)) {
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
+    rep.cpu_seconds = meter.cpu_seconds();
     return rep;
   }
   INCISE_CHECK_PARAM(options.max_restarts >= 0, "dynamic_relaxation: max_restarts must be >= 0");
@@ -41,7 +42,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   const bool check_energy = restartable && eta > 0.0;
 
   VecX v = VecX::Zero(n), ubar = u, g, acc(n), last_good = u;
-  VecX u_best = u, v_best = v;  // state of lowest total energy: where a restart resumes
+  VecX u_best = u;  // displacement of lowest total energy: where a restart resumes (at rest)
   double energy = 0.0, last_energy = 0.0, rnorm = 0.0, threshold = 0.0;
   double e_start = 0.0, e_min = 0.0;
   bool have_e = false;
@@ -57,8 +58,11 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
     ++rep.restarts;
     dt *= options.restart_reduction;
     inv_mass = (m * (1.0 + 0.5 * dt * eta)).cwiseInverse();
+    // Resume at rest from the lowest-energy state: from rest the total energy of a stable damped
+    // run only decreases, as at the start (with the old velocity, Π at ū = u + ½Δt·u̇ and the
+    // kinetic energy at u̇ can move E up by O(Δt) and fake energy growth).
     u = u_best;
-    v = v_best;
+    v.setZero();
     have_e = false;  // E at the new Δt is measured afresh from the resumed state
     meter.add(4 * nn);
     return true;
@@ -89,8 +93,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
       if (e <= e_min) {
         e_min = e;
         u_best = u;
-        v_best = v;
-        meter.add(2 * nn);
+        meter.add(nn);
       }
     }
     last_good = ubar;
@@ -137,7 +140,43 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   rep.energy = last_energy;
   rep.flops = meter.flops();
   rep.seconds = meter.seconds();
+  rep.cpu_seconds = meter.cpu_seconds();
   return rep;
+}
+
+DynamicParameterEstimate estimate_dynamic_parameters(Problem& problem, const VecX& u,
+                                              const DynamicParameterOptions& options) {
+  INCISE_CHECK_PARAM(options.time_step_safety > 0.0 && options.time_step_safety <= 1.0,
+                     "estimate_dynamic_parameters: time_step_safety must lie in (0, 1]");
+  DynamicParameterEstimate out;
+  CostMeter meter(problem);
+  const VecX& m = problem.lumped_mass();
+  INCISE_CHECK(m.size() == problem.size(), "estimate_dynamic_parameters needs lumped masses");
+  VecX g;
+  const EvalStatus st = problem.gradient(u, g);
+  if (st != EvalStatus::kOk || !g.allFinite()) {
+    out.status = failure_reason(st);
+    out.message = "gradient at the start state not admissible";
+    out.flops = meter.flops();
+    return out;
+  }
+  VecX a = -g;
+  problem.project(a);
+  a = a.cwiseQuotient(m);  // first acceleration of SS22 from rest
+  const SpectrumEstimate sp = lanczos_spectrum(problem, u, a, options.lanczos);
+  out.status = sp.status;
+  out.message = sp.message;
+  out.products = sp.steps;
+  out.flops = meter.flops();
+  if (!sp.ok() || !(sp.smallest > 0.0) || !(sp.largest > 0.0)) {
+    if (out.ok()) out.status = StopReason::kIndefinite;
+    return out;
+  }
+  out.lambda_min = sp.smallest;
+  out.lambda_max = sp.largest;
+  out.time_step = options.time_step_safety * critical_time_step(sp.largest);
+  out.damping = critical_damping(sp.smallest);
+  return out;
 }
 
 double cfl_time_step(double h, double lame_lambda, double lame_mu, double density) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -242,8 +243,27 @@ SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& s
       break;
     }
     if (est.steps >= options.min_steps && calm >= options.window) {
-      est.status = StopReason::kConverged;
-      break;
+      // A plateau of θ₁ can look calm; accept only when θ₁ is also close to an eigenvalue:
+      // the Ritz residual ‖M⁻¹PKPy − θ₁y‖_M = β_k|s_k| (s: T's eigenvector of θ₁, s_k its
+      // last entry) bounds the distance of θ₁ to the nearest eigenvalue (Parlett, "The
+      // Symmetric Eigenvalue Problem", Thm. 13.1.1 with §13.2).
+      const auto kk = static_cast<Eigen::Index>(diag.size());
+      VecX d = Eigen::Map<const VecX>(diag.data(), kk);
+      VecX e = Eigen::Map<const VecX>(sub.data(), kk - 1);
+      const double scale = std::max(d.cwiseAbs().maxCoeff(), e.cwiseAbs().maxCoeff());
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
+      es.computeFromTridiagonal(d / scale, e / scale, Eigen::ComputeEigenvectors);
+      double residual = std::numeric_limits<double>::infinity();
+      if (es.info() == Eigen::Success) {
+        Eigen::Index i_min = 0;
+        es.eigenvalues().minCoeff(&i_min);
+        residual = beta * std::abs(es.eigenvectors()(kk - 1, i_min));
+      }
+      est.smallest_residual = residual / lo;
+      if (est.smallest_residual <= options.residual_tolerance) {
+        est.status = StopReason::kConverged;
+        break;
+      }
     }
     sub.push_back(beta);
     q_prev.swap(q);
