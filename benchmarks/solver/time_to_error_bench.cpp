@@ -25,9 +25,9 @@
 #include <time.h>
 
 #include <cmath>
-#include <stdexcept>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 namespace {

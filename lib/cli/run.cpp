@@ -81,7 +81,7 @@ void print_residual_summary(std::ostream& out, const scene::SceneSpec& spec,
 
 int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   std::string scene_path, summary_json, progress = "auto", write_solution, reference, csv;
-  std::int64_t memory_mb = 0;  // 0: the scene's limits (or the default budget)
+  std::int64_t memory_mb = 0;       // 0: the scene's limits (or the default budget)
   std::int64_t max_iterations = 0;  // 0: the scene's
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
@@ -154,8 +154,9 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   if (!reference.empty()) {
     if (built.needle != nullptr || !spec.tools.empty() ||
         spec.solver.method == scene::SolverSpec::Method::kAugmented)
-      throw UsageError("--reference: only a relaxation scene (cg, nonlinear-cg, newton, "
-                       "dynamic-ss22 without tools) records an energy-norm error");
+      throw UsageError(
+          "--reference: only a relaxation scene (cg, nonlinear-cg, newton, "
+          "dynamic-ss22 without tools) records an energy-norm error");
     reference_u = scene::read_solution(reference);
     if (reference_u.size() != built.problem->size())
       throw UsageError("--reference " + reference + ": " + std::to_string(reference_u.size()) +
@@ -246,8 +247,8 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
           << " it, update " << row.seconds * 1e3 << " ms, " << row.status << "\n";
     }
   };
-  const scene::SceneRunResult res = scene::run_scene(
-      built, observer, cut_observer, needle_observer, reference.empty() ? nullptr : &reference_u);
+  const scene::SceneRunResult res = scene::run_scene(built, observer, cut_observer, needle_observer,
+                                                     reference.empty() ? nullptr : &reference_u);
   if (progress == "bar") out << "\n";
 
   const auto& rep = res.report;

@@ -82,8 +82,7 @@ TEST_P(EstimateCost, AtMostTenPercentOfTheSolve_Sec4_1) {
               1e-6 * double(rep.flops), 100.0 * double(d.flops) / double(rep.flops));
 }
 
-INSTANTIATE_TEST_SUITE_P(Materials, EstimateCost,
-                         ::testing::Values("linear", "veronda-westmann"),
+INSTANTIATE_TEST_SUITE_P(Materials, EstimateCost, ::testing::Values("linear", "veronda-westmann"),
                          [](const ::testing::TestParamInfo<std::string>& i) {
                            return i.param == "linear" ? std::string("linear") : "veronda";
                          });

@@ -74,8 +74,8 @@ BlasThreadSettings parse_blas_thread_settings(const char* threads_env, const cha
   INCISE_CHECK_PARAM(available >= 1, "parse_blas_thread_settings: available must be >= 1");
   BlasThreadSettings s;
   s.max_threads = available;
-  s.origin = "max_threads " + std::to_string(available) + " (BLAS at start), parallel_flops " +
-             "default";
+  s.origin =
+      "max_threads " + std::to_string(available) + " (BLAS at start), parallel_flops " + "default";
   if (threads_env != nullptr) {
     char* end = nullptr;
     errno = 0;
@@ -84,8 +84,8 @@ BlasThreadSettings parse_blas_thread_settings(const char* threads_env, const cha
       throw ParameterError(std::string("INCISE_BLAS_THREADS = \"") + threads_env +
                            "\": expected an integer from 1 to 4096");
     s.max_threads = std::min(available, static_cast<int>(v));
-    s.origin = "max_threads min(" + std::to_string(available) + ", INCISE_BLAS_THREADS = " +
-               threads_env + ")";
+    s.origin = "max_threads min(" + std::to_string(available) +
+               ", INCISE_BLAS_THREADS = " + threads_env + ")";
   }
   if (flops_env != nullptr) {
     char* end = nullptr;
@@ -101,10 +101,10 @@ BlasThreadSettings parse_blas_thread_settings(const char* threads_env, const cha
 }
 
 const BlasThreadSettings& blas_thread_settings() {
-  static const BlasThreadSettings s =
-      parse_blas_thread_settings(std::getenv("INCISE_BLAS_THREADS"),  // NOLINT(concurrency-mt-unsafe)
-                                 std::getenv("INCISE_BLAS_PARALLEL_FLOPS"),  // NOLINT
-                                 control().get != nullptr ? std::max(1, control().get()) : 1);
+  static const BlasThreadSettings s = parse_blas_thread_settings(
+      std::getenv("INCISE_BLAS_THREADS"),         // NOLINT(concurrency-mt-unsafe)
+      std::getenv("INCISE_BLAS_PARALLEL_FLOPS"),  // NOLINT
+      control().get != nullptr ? std::max(1, control().get()) : 1);
   return s;
 }
 

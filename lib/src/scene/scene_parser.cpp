@@ -257,8 +257,7 @@ SolverSpec parse_solver(JsonObject o, bool slab) {
     s.beta = o.choice("beta", solver::kBetaRuleNames, solver::BetaRule::kPolakRibiere);
     s.line_search =
         o.choice("line_search", solver::kLineSearchNames, solver::LineSearchKind::kSecant);
-    s.line_search_tolerance =
-        o.number("line_search_tolerance", Range{0.0, 1.0, true, true}, 0.1);
+    s.line_search_tolerance = o.number("line_search_tolerance", Range{0.0, 1.0, true, true}, 0.1);
   } else {
     const std::string why = slab ? "a needle scene's nonlinear CG uses its fixed settings"
                                  : "only \"nonlinear-cg\" has a beta rule and a line search";

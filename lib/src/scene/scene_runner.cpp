@@ -467,9 +467,8 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
     o.lanczos = lanczos;
     o.time_step_safety = kTimeStepSafety;
     est = solver::estimate_dynamic_parameters(p, u, o);
-    scene.record("lambda_1 and lambda_max of M^-1 K by Lanczos (" +
-                     std::to_string(est.products) + " products K.q, " +
-                     solver::to_string(est.status) + ")",
+    scene.record("lambda_1 and lambda_max of M^-1 K by Lanczos (" + std::to_string(est.products) +
+                     " products K.q, " + solver::to_string(est.status) + ")",
                  t.seconds(), 5 * static_cast<std::size_t>(p.size()) * sizeof(double),
                  static_cast<std::int64_t>(est.flops));
     if (est.status != solver::StopReason::kConverged) {
@@ -487,9 +486,9 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
   }
   if (s.time_step <= 0) {
     dp.time_step = est.time_step;
-    dp.time_step_origin = "0.9 x critical 2/sqrt(lambda_max), lambda_max = " +
-                          std::to_string(est.lambda_max) + " (Lanczos, " +
-                          std::to_string(est.products) + " products)";
+    dp.time_step_origin =
+        "0.9 x critical 2/sqrt(lambda_max), lambda_max = " + std::to_string(est.lambda_max) +
+        " (Lanczos, " + std::to_string(est.products) + " products)";
   }
   dp.damping = s.damping;
   dp.damping_origin = "given";
@@ -526,8 +525,8 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
     return dp;
   }
   dp.damping = est.damping;
-  dp.damping_origin = "critical 2 sqrt(lambda_1), lambda_1 = " + std::to_string(est.lambda_min) +
-                      " (Lanczos)";
+  dp.damping_origin =
+      "critical 2 sqrt(lambda_1), lambda_1 = " + std::to_string(est.lambda_min) + " (Lanczos)";
   return dp;
 }
 

@@ -18,8 +18,8 @@ const char* const kHeader = "# incise solution: ";
 
 void write_solution(const std::string& path, const VecX& u) {
   INCISE_CHECK_PARAM(u.allFinite(), "write_solution: the solution has non-finite entries");
-  std::string text = std::string(kHeader) + std::to_string(u.size()) +
-                     " values (displacement per DOF, m)\n";
+  std::string text =
+      std::string(kHeader) + std::to_string(u.size()) + " values (displacement per DOF, m)\n";
   text.reserve(text.size() + static_cast<std::size_t>(u.size()) * 25);
   char buf[40];
   for (Eigen::Index i = 0; i < u.size(); ++i) {
@@ -59,8 +59,8 @@ VecX read_solution(const std::string& path) {
   }
   if (static_cast<long>(v.size()) != n_expected)
     throw ParseError(path, line_no,
-                     "the header announces " + std::to_string(n_expected) + " values, the file has " +
-                         std::to_string(v.size()));
+                     "the header announces " + std::to_string(n_expected) +
+                         " values, the file has " + std::to_string(v.size()));
   return Eigen::Map<const VecX>(v.data(), static_cast<Eigen::Index>(v.size()));
 }
 

@@ -85,8 +85,8 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
         e_start = e_min = e;
         have_e = true;
       }
-      if (check_energy &&
-          e > e_min + 0.5 * (e_start - e_min) + 1e-9 * std::max(std::abs(e_start), std::abs(e_min))) {
+      if (check_energy && e > e_min + 0.5 * (e_start - e_min) +
+                                  1e-9 * std::max(std::abs(e_start), std::abs(e_min))) {
         if (restart(StopReason::kUnstable, "energy growth")) continue;
         break;
       }
@@ -145,7 +145,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
 }
 
 DynamicParameterEstimate estimate_dynamic_parameters(Problem& problem, const VecX& u,
-                                              const DynamicParameterOptions& options) {
+                                                     const DynamicParameterOptions& options) {
   INCISE_CHECK_PARAM(options.time_step_safety > 0.0 && options.time_step_safety <= 1.0,
                      "estimate_dynamic_parameters: time_step_safety must lie in (0, 1]");
   DynamicParameterEstimate out;

@@ -206,7 +206,7 @@ SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& s
       est.status = failure_reason(st);
       break;
     }
-    problem.project(w);  // P K q
+    problem.project(w);             // P K q
     const double alpha = q.dot(w);  // (q, M⁻¹PKq)_M
     if (!std::isfinite(alpha)) {
       est.status = StopReason::kNonFinite;
@@ -231,8 +231,8 @@ SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& s
     if (j > 0) {
       est.smallest_change = std::abs(lo - lo_prev) / lo;
       est.largest_change = std::abs(hi - hi_prev) / hi;
-      const bool still = est.smallest_change <= options.tolerance &&
-                         est.largest_change <= options.tolerance;
+      const bool still =
+          est.smallest_change <= options.tolerance && est.largest_change <= options.tolerance;
       calm = still ? calm + 1 : 0;
     }
     lo_prev = lo;

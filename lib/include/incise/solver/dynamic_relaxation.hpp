@@ -69,7 +69,7 @@ struct [[nodiscard]] DynamicParameterEstimate
 /// gradient's. The result depends only on the problem and u, so a caller relaxing the same
 /// mesh again (the same material, fixed set and masses) may reuse it.
 DynamicParameterEstimate estimate_dynamic_parameters(Problem& problem, const VecX& u,
-                                              const DynamicParameterOptions& options = {});
+                                                     const DynamicParameterOptions& options = {});
 
 /// CFL time-step estimate (2.61) of explicit SS22 with θ₁ = ½: Δt = (2/√3)·h/c with
 /// c = √((λ + 2µ)/ρ). h: shortest edge (m), lame_lambda, lame_mu (Pa), density (kg/m³).

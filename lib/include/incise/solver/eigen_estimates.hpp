@@ -63,10 +63,10 @@ LanczosExtremes cg_lanczos_extremes(const CgCoefficients& coefficients);
 
 /// Options of lanczos_spectrum().
 struct LanczosOptions {
-  long min_steps = 12;     ///< never stop before this many steps
-  long max_steps = 400;    ///< products of K at most (the estimate's cost cap)
+  long min_steps = 12;      ///< never stop before this many steps
+  long max_steps = 400;     ///< products of K at most (the estimate's cost cap)
   double tolerance = 0.01;  ///< stop when both extreme Ritz values moved ≤ tolerance (relative)
-  long window = 8;         ///< ... over each of the last `window` steps
+  long window = 8;          ///< ... over each of the last `window` steps
   /// ... and the Ritz residual of θ₁ (a bound on its distance to an eigenvalue) is at most this
   /// fraction of θ₁ — a plateau of θ₁ between eigenvalues is not accepted
   double residual_tolerance = 0.5;
@@ -78,9 +78,9 @@ struct LanczosOptions {
 struct [[nodiscard]] SpectrumEstimate
     : Outcome<StopReason, StopReason::kConverged, StopReason::kMaxIterations> {
   double smallest = 0.0;  ///< smallest Ritz value θ₁ ≥ λ₁ (1/s²): η = critical_damping(θ₁)
-  double largest = 0.0;   ///< largest Ritz value θ_k ≤ λ_n (1/s²): Δt = critical_time_step(θ_k)
-  long steps = 0;         ///< Lanczos steps = products K·q (each costs one hessian_product)
-  std::uint64_t flops = 0;  ///< counted flops (products + vector operations)
+  double largest = 0.0;  ///< largest Ritz value θ_k ≤ λ_n (1/s²): Δt = critical_time_step(θ_k)
+  long steps = 0;        ///< Lanczos steps = products K·q (each costs one hessian_product)
+  std::uint64_t flops = 0;       ///< counted flops (products + vector operations)
   double smallest_change = 0.0;  ///< relative change of θ₁ over the last step
   double largest_change = 0.0;   ///< relative change of θ_k over the last step
   /// Ritz residual of θ₁ relative to θ₁ at the last convergence check (∞ before any)
