@@ -146,8 +146,22 @@ EigenEstimate smallest_eigenvalue(Problem& problem, const VecX& u, const EigenOp
 
 namespace {
 
-/// Extreme eigenvalues of the symmetric tridiagonal matrix (diag, sub), scaled to order one
-/// first (see cg_lanczos_extremes).
+/// Eigen-decomposition of the symmetric tridiagonal matrix (diag, sub) of size ≥ 2, returned
+/// for the matrix divided by `scale` (its largest entry): Eigen's tridiagonal QR deflates when
+/// (s/ε)² ≤ |d_i| + |d_{i+1}|, which presumes entries of order one (its compute() scales first;
+/// computeFromTridiagonal() does not). Eigenvalues of the original are scale × those returned.
+Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> scaled_tridiagonal_eigen(const VecX& diag,
+                                                                        const VecX& sub,
+                                                                        int options,
+                                                                        double& scale) {
+  scale = std::max(diag.cwiseAbs().maxCoeff(), sub.cwiseAbs().maxCoeff());
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
+  es.computeFromTridiagonal(diag / scale, sub / scale, options);
+  return es;
+}
+
+/// Extreme eigenvalues of the symmetric tridiagonal matrix (diag, sub); false when the QR
+/// iteration did not converge.
 bool tridiagonal_extremes(const std::vector<double>& diag, const std::vector<double>& sub,
                           double& lo, double& hi) {
   const auto k = static_cast<Eigen::Index>(diag.size());
@@ -155,11 +169,10 @@ bool tridiagonal_extremes(const std::vector<double>& diag, const std::vector<dou
     lo = hi = diag[0];
     return true;
   }
-  VecX d = Eigen::Map<const VecX>(diag.data(), k);
-  VecX e = Eigen::Map<const VecX>(sub.data(), k - 1);
-  const double scale = std::max(d.cwiseAbs().maxCoeff(), e.cwiseAbs().maxCoeff());
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
-  es.computeFromTridiagonal(d / scale, e / scale, Eigen::EigenvaluesOnly);
+  double scale = 1.0;
+  const auto es = scaled_tridiagonal_eigen(Eigen::Map<const VecX>(diag.data(), k),
+                                           Eigen::Map<const VecX>(sub.data(), k - 1),
+                                           Eigen::EigenvaluesOnly, scale);
   if (es.info() != Eigen::Success) return false;
   lo = scale * es.eigenvalues().minCoeff();
   hi = scale * es.eigenvalues().maxCoeff();
@@ -248,11 +261,10 @@ SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& s
       // last entry) bounds the distance of θ₁ to the nearest eigenvalue (Parlett, "The
       // Symmetric Eigenvalue Problem", Thm. 13.1.1 with §13.2).
       const auto kk = static_cast<Eigen::Index>(diag.size());
-      VecX d = Eigen::Map<const VecX>(diag.data(), kk);
-      VecX e = Eigen::Map<const VecX>(sub.data(), kk - 1);
-      const double scale = std::max(d.cwiseAbs().maxCoeff(), e.cwiseAbs().maxCoeff());
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
-      es.computeFromTridiagonal(d / scale, e / scale, Eigen::ComputeEigenvectors);
+      double scale = 1.0;
+      const auto es = scaled_tridiagonal_eigen(Eigen::Map<const VecX>(diag.data(), kk),
+                                               Eigen::Map<const VecX>(sub.data(), kk - 1),
+                                               Eigen::ComputeEigenvectors, scale);
       double residual = std::numeric_limits<double>::infinity();
       if (es.info() == Eigen::Success) {
         Eigen::Index i_min = 0;
@@ -306,12 +318,8 @@ LanczosExtremes cg_lanczos_extremes(const CgCoefficients& c) {
     out.smallest = out.largest = diag[0];
     return out;
   }
-  // Eigen's tridiagonal QR deflates when (s/ε)² ≤ |d_i| + |d_{i+1}|, which presumes entries of
-  // order one (its compute() scales first; computeFromTridiagonal() does not): scale by the
-  // largest entry, solve, scale back.
-  const double scale = std::max(diag.cwiseAbs().maxCoeff(), sub.cwiseAbs().maxCoeff());
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
-  es.computeFromTridiagonal(diag / scale, sub / scale, Eigen::EigenvaluesOnly);
+  double scale = 1.0;
+  const auto es = scaled_tridiagonal_eigen(diag, sub, Eigen::EigenvaluesOnly, scale);
   out.converged = es.info() == Eigen::Success;
   out.smallest = scale * es.eigenvalues().minCoeff();
   out.largest = scale * es.eigenvalues().maxCoeff();
