@@ -17,8 +17,8 @@ namespace incise::scene {
 void write_solution(const std::string& path, const VecX& u);
 
 /// Reads a file written by write_solution(). Throws ParseError(path, line, what) for a missing
-/// file (line 0: the message is then "FILE: ..."), a wrong first line, a line that is not one finite number, or a count that
-/// differs from the header's.
+/// file (line 0: the message is then "FILE: ..."), a wrong first line, a line that is not one
+/// finite number, or a count that differs from the header's.
 VecX read_solution(const std::string& path);
 
 }  // namespace incise::scene
