@@ -1,6 +1,7 @@
 // incise — command-line entry point. Dispatches to subcommands (see commands.hpp).
 
 #include <incise/core/error.hpp>
+#include <incise/linalg/blas_threads.hpp>
 
 #include <exception>
 #include <iostream>
@@ -52,6 +53,9 @@ int main(int argc, char** argv) {
   for (const auto& c : kCommands) {
     if (name == c.name) {
       try {
+        // Stop the BLAS workers OpenBLAS started (and left spinning) at load; incise raises
+        // the count per call site (blas_threads.hpp, docs/solvers.md "BLAS threads").
+        incise::linalg::park_blas_threads();
         return c.run(args, std::cout, std::cerr);
       } catch (const incise::Error& e) {
         std::cerr << "incise " << name << ": " << e.what() << "\n";

@@ -11,6 +11,7 @@
 #include <incise/scene/scene_outputs.hpp>
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
+#include <incise/scene/solution_file.hpp>
 
 #include <unistd.h>
 
@@ -71,13 +72,18 @@ void print_residual_summary(std::ostream& out, const scene::SceneSpec& spec,
   if (rep.seconds > 0 && rep.flops > 0)
     out << " (" << static_cast<double>(rep.flops) / rep.seconds / 1e6 << " MFLOP/s)";
   out << "\n";
+  out << "solver CPU:      " << rep.cpu_seconds << " s (process, all threads)\n";
+  if (res.has_reference)
+    out << "energy error:    ||u - u_ref||_K / ||u_ref||_K = " << num(res.relative_energy_error)
+        << " (K at u_ref)\n";
 }
 
 }  // namespace
 
 int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
-  std::string scene_path, summary_json, progress = "auto";
-  std::int64_t memory_mb = 0;  // 0: the scene's limits (or the default budget)
+  std::string scene_path, summary_json, progress = "auto", write_solution, reference, csv;
+  std::int64_t memory_mb = 0;       // 0: the scene's limits (or the default budget)
+  std::int64_t max_iterations = 0;  // 0: the scene's
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     if (a == "--memory-mb") {
@@ -88,6 +94,20 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
       if (v.empty() || *end != '\0' || errno == ERANGE || memory_mb < 1 ||
           memory_mb > std::numeric_limits<int>::max())
         throw UsageError("--memory-mb expects an integer in [1, 2147483647], got '" + v + "'");
+    } else if (a == "--max-iterations") {
+      const std::string v = option_value(args, i, "--max-iterations");
+      char* end = nullptr;
+      errno = 0;
+      max_iterations = std::strtoll(v.c_str(), &end, 10);
+      if (v.empty() || *end != '\0' || errno == ERANGE || max_iterations < 1 ||
+          max_iterations > 100000000)
+        throw UsageError("--max-iterations expects an integer in [1, 100000000], got '" + v + "'");
+    } else if (a == "--write-solution") {
+      write_solution = option_value(args, i, "--write-solution");
+    } else if (a == "--reference") {
+      reference = option_value(args, i, "--reference");
+    } else if (a == "--csv") {
+      csv = option_value(args, i, "--csv");
     } else if (a == "--summary-json") {
       summary_json = option_value(args, i, "--summary-json");
     } else if (a == "--progress") {
@@ -96,10 +116,16 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
         throw UsageError("--progress expects auto, bar, lines or none, got '" + progress + "'");
     } else if (a == "--help" || a == "-h") {
       out << "usage: incise run SCENE.json [--summary-json PATH] "
-             "[--progress auto|bar|lines|none] [--memory-mb N]\n"
+             "[--progress auto|bar|lines|none] [--memory-mb N] [--max-iterations N] [--csv FILE] "
+             "[--write-solution FILE] [--reference FILE]\n"
              "Runs a scene (format: docs/scenes.md) and prints a summary.\n"
              "  --memory-mb N   memory budget of the build in MiB (overrides the scene's\n"
-             "                  limits.memory_mb; default half the physical memory)\n";
+             "                  limits.memory_mb; default half the physical memory)\n"
+             "  --max-iterations N   iteration cap (overrides solver.max_iterations)\n"
+             "  --csv FILE      write the per-iteration trace here (overrides outputs.csv)\n"
+             "  --write-solution FILE   write the final displacement (for --reference)\n"
+             "  --reference FILE   a solution written by --write-solution: the trace gets\n"
+             "                  the relative energy-norm error per iteration\n";
       return 0;
     } else if (!a.empty() && a[0] == '-') {
       throw UsageError("unknown option '" + a + "' (see incise run --help)");
@@ -112,7 +138,8 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   if (scene_path.empty())
     throw UsageError(
         "usage: incise run SCENE.json [--summary-json PATH] [--progress auto|bar|lines|none] "
-        "[--memory-mb N]");
+        "[--memory-mb N] [--max-iterations N] [--csv FILE] [--write-solution FILE] "
+        "[--reference FILE]");
   if (progress == "auto")
     progress = (&out == &std::cout && isatty(STDOUT_FILENO)) ? "bar" : "lines";
 
@@ -120,7 +147,23 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   Timer total;
   scene::SceneSpec spec = scene::load_scene(scene_path);
   if (memory_mb > 0) spec.limits.memory_mb = memory_mb;
+  if (max_iterations > 0) spec.solver.max_iterations = static_cast<int>(max_iterations);
+  if (!csv.empty()) spec.outputs.csv = csv;
   scene::BuiltScene built = scene::build_scene(spec);
+  // A reference is read (and checked against the problem) before anything runs.
+  VecX reference_u;
+  if (!reference.empty()) {
+    if (built.needle != nullptr || !spec.tools.empty() ||
+        spec.solver.method == scene::SolverSpec::Method::kAugmented)
+      throw UsageError(
+          "--reference: only a relaxation scene (cg, nonlinear-cg, newton, "
+          "dynamic-ss22 without tools) records an energy-norm error");
+    reference_u = scene::read_solution(reference);
+    if (reference_u.size() != built.problem->size())
+      throw UsageError("--reference " + reference + ": " + std::to_string(reference_u.size()) +
+                       " values, but the scene has " + std::to_string(built.problem->size()) +
+                       " DOFs (written for another mesh?)");
+  }
 
   out << "scene: " << scene_path << (spec.name.empty() ? "" : "  (" + spec.name + ")") << "\n";
   const bool needle_run = built.is_needle();
@@ -215,7 +258,8 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     needle_progress(row, total_updates);
   };
   const scene::SceneRunResult res =
-      scene::run_scene(built, observer, cut_observer, needle_observer, needle3d_observer);
+      scene::run_scene(built, observer, cut_observer, needle_observer, needle3d_observer,
+                       reference.empty() ? nullptr : &reference_u);
   if (progress == "bar") out << "\n";
 
   const auto& rep = res.report;
@@ -304,8 +348,17 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   out << "== not built\n";
   for (const auto& s : built.not_built) out << "  " << s << "\n";
 
-  const std::vector<std::string> written =
+  std::vector<std::string> written =
       scene::write_outputs(built, res, {summary_json, total.seconds(), frames.frames()});
+  if (!write_solution.empty()) {
+    if (res.u.allFinite()) {
+      scene::write_solution(write_solution, res.u);
+      written.push_back(write_solution);
+    } else {
+      err << "incise run: --write-solution " << write_solution
+          << " not written: the final displacement is not finite\n";
+    }
+  }
   if (!written.empty()) {
     out << "== wrote\n";
     for (const auto& w : written) out << "  " << w << "\n";

@@ -96,8 +96,8 @@ TEST(SceneOutputs, RunSceneAndWriteOutputsWriteTheFilesTheSceneNames) {
   const std::vector<std::string> rows = lines_of(read(csv));
   ASSERT_EQ(rows.size(), res.trace.size() + 1);
   EXPECT_EQ(rows[0],
-            "iteration,residual_norm,relative_residual,energy,flops,seconds,tip_x,tip_y,"
-            "tip_z");
+            "iteration,residual_norm,relative_residual,energy,flops,seconds,cpu_seconds,tip_x,"
+            "tip_y,tip_z");
   for (std::size_t k = 0; k < res.trace.size(); ++k)
     EXPECT_EQ(rows[k + 1].rfind(std::to_string(res.trace[k].iteration) + ",", 0), 0u)
         << rows[k + 1];

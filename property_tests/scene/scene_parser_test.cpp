@@ -190,6 +190,43 @@ TEST(SceneParser, VerondaWestmannMaterialHoldsItsParameters) {
   EXPECT_EQ(s.solver.preconditioner, incise::solver::Preconditioner::kJacobi);
 }
 
+// Issue 19: the nonlinear-CG variant from the scene (β rule, line search, its tolerance).
+TEST(SceneParser, NonlinearCgVariantKeys) {
+  Json j = valid_scene();
+  j["solver"]["method"] = "nonlinear-cg";
+  auto s = parse_scene(j.dump(), "scene.json", "");
+  EXPECT_EQ(s.solver.beta, incise::solver::BetaRule::kPolakRibiere);  // the thesis' §4.5 choice
+  EXPECT_EQ(s.solver.line_search, incise::solver::LineSearchKind::kSecant);
+  EXPECT_EQ(s.solver.line_search_tolerance, 0.1);
+  j["solver"]["beta"] = "fletcher-reeves";
+  j["solver"]["line_search"] = "newton";
+  j["solver"]["line_search_tolerance"] = 0.01;
+  s = parse_scene(j.dump(), "scene.json", "");
+  EXPECT_EQ(s.solver.beta, incise::solver::BetaRule::kFletcherReeves);
+  EXPECT_EQ(s.solver.line_search, incise::solver::LineSearchKind::kNewton);
+  EXPECT_EQ(s.solver.line_search_tolerance, 0.01);
+}
+
+TEST(SceneParserBad, NonlinearCgVariantKeys) {
+  Json j = valid_scene();
+  j["solver"]["method"] = "nonlinear-cg";
+  j["solver"]["beta"] = "hestenes-stiefel";
+  std::string e = error_of(j);
+  EXPECT_NE(e.find("/solver/beta"), std::string::npos) << e;
+  EXPECT_NE(e.find("fletcher-reeves"), std::string::npos) << e;  // names the choices
+  j["solver"].erase("beta");
+  for (double bad : {0.0, 1.0, 1.5}) {
+    j["solver"]["line_search_tolerance"] = bad;
+    e = error_of(j);
+    EXPECT_NE(e.find("/solver/line_search_tolerance"), std::string::npos) << bad << ": " << e;
+  }
+  Json cg = valid_scene();  // method "cg"
+  cg["solver"]["line_search"] = "newton";
+  e = error_of(cg);
+  EXPECT_NE(e.find("only \"nonlinear-cg\" has a beta rule and a line search"), std::string::npos)
+      << e;
+}
+
 TEST(SceneParserBad, MissingRequiredKey) {
   Json j = valid_scene();
   j["material"].erase("E");

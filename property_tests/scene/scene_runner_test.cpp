@@ -2,8 +2,11 @@
 // M⁻¹K (thesis §4.1) — an estimate that did not converge never becomes a parameter, and a run
 // without usable parameters is not started but reported.
 
+#include <incise/core/error.hpp>
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
+#include <incise/scene/solution_file.hpp>
+#include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/solver/eigen_estimates.hpp>
 
 #include <gtest/gtest.h>
@@ -38,35 +41,43 @@ bool contains(const std::string& s, const std::string& part) {
   return s.find(part) != std::string::npos;
 }
 
-// With the default budgets both estimates converge, and Δt, η are the §4.1 values of them.
+// With the default budget the Lanczos estimate converges, and Δt, η are the §4.1 values of its
+// extreme Ritz values; those agree with the power and inverse iterations (λ_max to 1e-3, λ₁
+// from above to 3 %: Lanczos stops when θ₁ moved ≤ 1 % over each of 8 steps).
 TEST(DynamicParameters, ConvergedEstimatesBecomeTheParameters) {
   scene::BuiltScene b = build(dynamic_beam());
   const VecX u = VecX::Zero(b.problem->size());
   const scene::DynamicParameters dp = scene::dynamic_parameters(b, u);
   ASSERT_TRUE(dp.ok()) << dp.brief();
+  const solver::DynamicParameterEstimate est = solver::estimate_dynamic_parameters(*b.problem, u);
+  ASSERT_TRUE(est.ok()) << est.brief();
+  EXPECT_EQ(dp.time_step, 0.9 * solver::critical_time_step(est.lambda_max));  // same computation
+  EXPECT_EQ(dp.damping, solver::critical_damping(est.lambda_min));
   const solver::EigenEstimate big = solver::largest_eigenvalue(*b.problem, u);
   const solver::EigenEstimate small = solver::smallest_eigenvalue(*b.problem, u);
   ASSERT_TRUE(big.ok() && small.ok());
-  EXPECT_EQ(dp.time_step, 0.9 * solver::critical_time_step(big.value));  // same computation
-  EXPECT_EQ(dp.damping, solver::critical_damping(small.value));
+  EXPECT_NEAR(est.lambda_max, big.value, 1e-3 * big.value);
+  EXPECT_GE(est.lambda_min, small.value * (1 - 1e-6));  // a Ritz value: an upper bound of λ₁
+  EXPECT_LE(est.lambda_min, 1.03 * small.value);
   EXPECT_TRUE(contains(dp.time_step_origin, "lambda_max")) << dp.time_step_origin;
   const scene::SceneRunResult res = scene::run_scene(b);
   EXPECT_TRUE(res.report.ok()) << res.report.brief();
   EXPECT_TRUE(contains(res.method_detail, "dynamic relaxation SS22, dt = ")) << res.method_detail;
 }
 
-// An eigenvalue budget too small to converge: the estimate's status and a message naming it,
-// for Δt (power iteration) and, with Δt given, for η (inverse iteration).
+// A Lanczos budget too small to converge: the estimate's status and a message naming it, for
+// Δt and, with Δt given, for η.
 TEST(DynamicParameters, UnconvergedEigenvalueEstimateIsReportedNotUsed) {
-  solver::EigenOptions two;
-  two.max_iterations = 2;  // relative change after 2 steps is far above the 1e-6 tolerance
+  solver::LanczosOptions two;
+  two.min_steps = 1;
+  two.max_steps = 2;  // 2 steps cannot show 8 calm steps
   scene::BuiltScene b = build(dynamic_beam());
   const VecX u = VecX::Zero(b.problem->size());
   scene::DynamicParameters dp = scene::dynamic_parameters(b, u, two);
   EXPECT_EQ(dp.status, solver::StopReason::kMaxIterations);
   EXPECT_TRUE(contains(dp.message,
-                       "time step not estimated: the power iteration for lambda_max stopped "
-                       "with max_iterations after 2 iterations"))
+                       "time step not estimated: the Lanczos estimate of lambda_1 and lambda_max "
+                       "stopped with max_iterations after 2 steps"))
       << dp.message;
   EXPECT_TRUE(contains(dp.message, "give solver.time_step")) << dp.message;
 
@@ -78,8 +89,8 @@ TEST(DynamicParameters, UnconvergedEigenvalueEstimateIsReportedNotUsed) {
   EXPECT_EQ(dp.time_step, 1e-3);
   EXPECT_EQ(dp.time_step_origin, "given");
   EXPECT_TRUE(contains(dp.message,
-                       "damping not estimated: the inverse iteration for lambda_1 stopped with "
-                       "max_iterations after 2 iterations"))
+                       "damping not estimated: the Lanczos estimate of lambda_1 and lambda_max "
+                       "stopped with max_iterations after 2 steps"))
       << dp.message;
 }
 
@@ -107,6 +118,52 @@ TEST(DynamicParameters, FailedSpectralEstimateStopsTheRunBeforeItStarts) {
   EXPECT_TRUE(res.trace.empty());
   EXPECT_TRUE(contains(res.method_detail, "dynamic relaxation SS22 not run: damping not"))
       << res.method_detail;
+}
+
+// Issue 19: write a solution, read it back exactly, and measure a later run against it: the
+// trace carries ‖u − û‖_K/‖û‖_K per iteration and CPU seconds; a run that reproduces the
+// reference bit for bit ends at error 0, a looser one strictly between 0 and 1.
+TEST(SceneReference, RelativeEnergyErrorPerIterationAgainstAnEarlierRun) {
+  Json j = dynamic_beam();
+  j["solver"] = {{"method", "cg"}, {"tolerance", 1e-10}, {"max_iterations", 10000}};
+  scene::BuiltScene ref_scene = build(j);
+  const scene::SceneRunResult ref = scene::run_scene(ref_scene);
+  ASSERT_TRUE(ref.report.ok()) << ref.report.brief();
+  EXPECT_GT(ref.report.cpu_seconds, 0.0);
+  const std::string path = ::testing::TempDir() + "scene_reference_solution.txt";
+  scene::write_solution(path, ref.u);
+  const VecX back = scene::read_solution(path);
+  EXPECT_EQ(back, ref.u);  // 17 significant digits: exact
+
+  scene::BuiltScene same = build(j);
+  const scene::SceneRunResult again = scene::run_scene(same, {}, {}, {}, {}, &back);
+  ASSERT_TRUE(again.has_reference);
+  EXPECT_EQ(again.relative_energy_error, 0.0);
+  ASSERT_FALSE(again.trace.empty());
+  EXPECT_GT(again.trace.front().relative_energy_error, 0.0);
+  EXPECT_LE(again.trace.front().relative_energy_error, 1.0);  // CG minimizes the energy error
+  for (std::size_t k = 1; k < again.trace.size(); ++k) {
+    // CG decreases the energy-norm error monotonically (§2.4.1); 1e-12 allows round-off
+    EXPECT_LE(again.trace[k].relative_energy_error,
+              again.trace[k - 1].relative_energy_error * (1 + 1e-12) + 1e-15)
+        << k;
+    EXPECT_GE(again.trace[k].cpu_seconds, again.trace[k - 1].cpu_seconds);
+  }
+
+  j["solver"]["tolerance"] = 1e-3;
+  scene::BuiltScene loose = build(j);
+  const scene::SceneRunResult l = scene::run_scene(loose, {}, {}, {}, {}, &back);
+  EXPECT_GT(l.relative_energy_error, 0.0);
+  EXPECT_LT(l.relative_energy_error, 1.0);
+  EXPECT_EQ(l.relative_energy_error, l.trace.back().relative_energy_error);
+
+  const VecX wrong = VecX::Zero(3);
+  scene::BuiltScene w = build(j);
+  EXPECT_THROW((void)scene::run_scene(w, {}, {}, {}, {}, &wrong), UsageError);
+  EXPECT_THROW((void)scene::read_solution(path + ".missing"), ParseError);
+  VecX nan = ref.u;
+  nan[0] = std::nan("");
+  EXPECT_THROW(scene::write_solution(path, nan), ParameterError);
 }
 
 }  // namespace

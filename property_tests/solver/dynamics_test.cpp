@@ -255,5 +255,84 @@ TEST(EnergyError, TraceOfLinearCgIsMonotoneAndExcludesObserverCost) {
   EXPECT_NE(trace.first_below(1e-6), nullptr);
 }
 
+// Lanczos in the M inner product (lanczos_spectrum): run past the dimension of the Krylov space
+// (60 steps, 28 free DOFs; without reorthogonalization β does not reach 0 exactly, lost
+// orthogonality only repeats converged Ritz values), its extreme Ritz values are the extreme
+// generalized eigenvalues to round-off (1e-8 relative), and they are bounds throughout.
+TEST(EigenEstimates, LanczosMatchesDenseSolveAndBoundsFromInside_Sec4_1) {
+  INCISE_SEEDED_RNG(rng, 65);
+  QuadraticProblem p = separated_problem(rng, 30);
+  const VecX lam = dense_generalized_eigenvalues(p);
+  const double lo = lam[0], hi = lam[lam.size() - 1];
+  LanczosOptions o;
+  o.tolerance = 0.0;  // never "calm": run to the exhausted Krylov space or max_steps
+  o.max_steps = 60;
+  const SpectrumEstimate full = lanczos_spectrum(p, VecX::Zero(30), VecX(), o);
+  ASSERT_TRUE(full.status == StopReason::kMaxIterations || full.status == StopReason::kConverged)
+      << to_string(full.status);
+  EXPECT_NEAR(full.smallest, lo, 1e-8 * lo);
+  EXPECT_NEAR(full.largest, hi, 1e-8 * hi);
+  for (long k : {2, 5, 10}) {
+    o.max_steps = k;
+    o.min_steps = k;
+    const SpectrumEstimate part = lanczos_spectrum(p, VecX::Zero(30), VecX(), o);
+    EXPECT_EQ(part.status, StopReason::kMaxIterations);
+    EXPECT_EQ(part.steps, k);
+    EXPECT_GE(part.smallest, lo * (1 - 1e-12)) << k;  // Ritz values lie inside [λ₁, λ_n]
+    EXPECT_LE(part.largest, hi * (1 + 1e-12)) << k;
+  }
+  EXPECT_THROW((void)lanczos_spectrum(p, VecX::Zero(30), VecX::Zero(3), o), UsageError);
+  o.min_steps = 0;
+  EXPECT_THROW((void)lanczos_spectrum(p, VecX::Zero(30), VecX(), o), ParameterError);
+}
+
+// A time step 1.3× the critical one: without restarts the damped run blows up (‖u‖ > 1e15,
+// §4.4.1); with restarts the energy growth is caught, Δt is lowered once (1.3·0.7 = 0.91 of the
+// critical step is stable) and the run converges to the direct solution.
+TEST(DynamicRelaxation, UnstableStepRestartsWithSmallerTimeStep_Sec4_4_1) {
+  INCISE_SEEDED_RNG(rng, 66);
+  DynamicsSetup s = make_setup(rng);
+  const double dt_crit = 2.0 / std::sqrt(s.lam[s.lam.size() - 1]);
+  const double eta = critical_damping(s.lam[0]);
+  DynamicRelaxationOptions o = dr_options(1.3 * dt_crit, eta);
+  VecX u = VecX::Zero(24);
+  const SolverReport plain = dynamic_relaxation(s.p, u, o);
+  EXPECT_EQ(plain.status, StopReason::kUnstable);
+  EXPECT_EQ(plain.restarts, 0);
+  o.max_restarts = 3;
+  u.setZero();
+  const SolverReport rep = dynamic_relaxation(s.p, u, o);
+  ASSERT_TRUE(rep.ok()) << rep.brief();
+  EXPECT_EQ(rep.restarts, 1);
+  EXPECT_DOUBLE_EQ(rep.time_step, 0.7 * 1.3 * dt_crit);
+  EXPECT_LE((u - s.p.direct_solution()).norm(), 1e-6 * s.p.direct_solution().norm());
+  // restarts used up: reported with a message, never a silent divergence
+  o.max_restarts = 1;
+  o.restart_reduction = 0.95;  // 1.3·0.95 is still unstable
+  u.setZero();
+  const SolverReport out = dynamic_relaxation(s.p, u, o);
+  EXPECT_EQ(out.status, StopReason::kUnstable);
+  EXPECT_EQ(out.restarts, 1);
+  EXPECT_NE(out.message.find("after 1 restart(s)"), std::string::npos) << out.message;
+  EXPECT_TRUE(u.allFinite());
+  o.restart_reduction = 1.0;
+  EXPECT_THROW((void)dynamic_relaxation(s.p, u, o), ParameterError);
+}
+
+// A stable damped run never restarts: the energy check does not change its trajectory.
+TEST(DynamicRelaxation, StableRunIsUnchangedByTheRestartCheck) {
+  INCISE_SEEDED_RNG(rng, 67);
+  DynamicsSetup s = make_setup(rng);
+  DynamicRelaxationOptions o = dr_options(s.dt, critical_damping(s.lam[0]));
+  VecX a = VecX::Zero(24), b = VecX::Zero(24);
+  const SolverReport ra = dynamic_relaxation(s.p, a, o);
+  o.max_restarts = 5;
+  const SolverReport rb = dynamic_relaxation(s.p, b, o);
+  ASSERT_TRUE(ra.ok() && rb.ok());
+  EXPECT_EQ(rb.restarts, 0);
+  EXPECT_EQ(ra.iterations, rb.iterations);
+  EXPECT_EQ(a, b);  // bitwise: the check only reads the state
+}
+
 }  // namespace
 }  // namespace incise::solver

@@ -1,9 +1,11 @@
 #include <incise/core/error.hpp>
+#include <incise/linalg/blas_threads.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
 
 #include <cholmod.h>
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <sstream>
 #include <utility>
@@ -98,6 +100,8 @@ FactorStatus status_from_common(const cholmod_common& c, std::string& message) {
 CholmodFactor::CholmodFactor(CholmodOptions options)
     : impl_(std::make_unique<Impl>()), options_(options) {
   INCISE_CHECK_PARAM(options_.pivot_bound >= 0, "CholmodOptions::pivot_bound must be >= 0");
+  INCISE_CHECK_PARAM(!std::isnan(options_.blas_parallel_flops),
+                     "CholmodOptions::blas_parallel_flops must not be NaN");
   cholmod_common& c = impl_->common;
   c.dbound = options_.pivot_bound;
   switch (options_.kind) {
@@ -188,6 +192,14 @@ FactorStatus CholmodFactor::factorize(const SparseMatrix& a) {
     return status_ = FactorStatus::kOverMemoryBudget;
   }
   cholmod_sparse s = view_lower(a);
+  // One BLAS thread for small factorizations, all cores for large ones (blas_threads.hpp);
+  // the scope ends with this function, after which the BLAS workers are parked.
+  const BlasThreadSettings& blas = blas_thread_settings();
+  const double fl = impl_->common.fl;  // CHOLMOD's estimate from the analysis
+  const ScopedBlasThreads blas_scope(blas_threads_for(
+      fl > 0.0 ? fl : 0.0, blas.max_threads,
+      options_.blas_parallel_flops >= 0.0 ? options_.blas_parallel_flops : blas.parallel_flops));
+  last_blas_threads_ = blas_scope.threads();
   cholmod_factorize(&s, impl_->factor, &impl_->common);
   status_ = status_from_common(impl_->common, message_);
   minor_ = static_cast<int>(impl_->factor->minor);
@@ -254,6 +266,7 @@ FactorStatus CholmodFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) 
   bd.z = nullptr;
   bd.xtype = CHOLMOD_REAL;
   bd.dtype = CHOLMOD_DOUBLE;
+  const ScopedBlasThreads blas_scope(1);  // a triangular solve is memory-bound
   cholmod_dense* xd = cholmod_solve(CHOLMOD_A, impl_->factor, &bd, &impl_->common);
   if (xd == nullptr) {
     status_ = status_from_common(impl_->common, message_);

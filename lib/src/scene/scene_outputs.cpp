@@ -116,12 +116,14 @@ std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
       probe_values(csv, c.probes);
     }
   } else {
-    csv << "iteration,residual_norm,relative_residual,energy,flops,seconds";
+    csv << "iteration,residual_norm,relative_residual,energy,flops,seconds,cpu_seconds";
+    if (res.has_reference) csv << ",relative_energy_error";
     probe_columns(csv, scene);
     for (const auto& row : res.trace) {
       csv << row.iteration << "," << Field{row.residual_norm} << ","
           << Field{row.residual_norm / res.external_force_norm} << "," << Field{row.energy} << ","
-          << row.flops << "," << row.seconds;
+          << row.flops << "," << row.seconds << "," << row.cpu_seconds;
+      if (res.has_reference) csv << "," << Field{row.relative_energy_error};
       probe_values(csv, row.probes);
     }
   }
@@ -338,8 +340,14 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
   j["allow_inversion"] = spec.material.allow_inversion;
   j["flops"] = rep.flops;
   j["solver_seconds"] = rep.seconds;
+  j["solver_cpu_seconds"] = rep.cpu_seconds;
   j["total_seconds"] = total_seconds;
   for (const auto& [key, value] : result.environment.fields()) j["environment"][key] = value;
+  if (spec.solver.method == SolverSpec::Method::kDynamicSS22) {
+    j["restarts"] = rep.restarts;
+    j["final_time_step"] = rep.time_step;
+  }
+  if (result.has_reference) j["relative_energy_error"] = num(result.relative_energy_error);
   j["mesh"] = {{"nodes", scene.mesh.num_points()},
                {scene.mesh.dimension == 2 ? "triangles" : "tetrahedra", scene.mesh.num_cells()},
                {"fixed_nodes", scene.fixed_nodes.size()}};

@@ -254,6 +254,18 @@ SolverSpec parse_solver(JsonObject o, bool slab) {
   } else {
     o.forbid("preconditioner", "only \"cg\" and \"newton\" take a preconditioner");
   }
+  if (s.method == SolverSpec::Method::kNonlinearCG && !slab) {
+    s.beta = o.choice("beta", solver::kBetaRuleNames, solver::BetaRule::kPolakRibiere);
+    s.line_search =
+        o.choice("line_search", solver::kLineSearchNames, solver::LineSearchKind::kSecant);
+    s.line_search_tolerance = o.number("line_search_tolerance", Range{0.0, 1.0, true, true}, 0.1);
+  } else {
+    const std::string why = slab ? "a needle scene's nonlinear CG uses its fixed settings"
+                                 : "only \"nonlinear-cg\" has a beta rule and a line search";
+    o.forbid("beta", why);
+    o.forbid("line_search", why);
+    o.forbid("line_search_tolerance", why);
+  }
   if (dynamic) {
     s.time_step = o.number("time_step", detail::non_negative(), 0.0);
     s.damping = o.number("damping", detail::non_negative(), -1.0);

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <type_traits>
 
@@ -25,6 +26,9 @@ namespace {
 /// Safety factor on the critical time step 2/√λ_max: the power-iteration Rayleigh quotient
 /// underestimates λ_max, so 2/√value overestimates the critical step (eigen_estimates.hpp).
 constexpr double kTimeStepSafety = 0.9;
+/// Restarts of a dynamic relaxation run after unstable steps (each lowers Δt by 0.7, so 8 allow
+/// Δt down to 0.058× the estimate), solver::DynamicRelaxationOptions::max_restarts.
+constexpr int kMaxRestarts = 8;
 /// Undamped SS22 steps sampled for the spectral damping estimate (FFT length).
 constexpr long kSpectralSteps = 8192;
 
@@ -435,16 +439,6 @@ void run_needle(BuiltScene& scene, Insertion& sim, SceneRunResult& res, const Ob
 
 /// "the power iteration for lambda_max stopped with max_iterations after 2000 iterations
 /// (relative change 3e-05, tolerance 1e-06)" and the estimate's own message.
-std::string estimate_failure(const std::string& what, const solver::EigenEstimate& e,
-                             const solver::EigenOptions& o) {
-  std::ostringstream os;
-  os << what << " stopped with " << solver::to_string(e.status) << " after " << e.iterations
-     << " iterations (relative change " << e.relative_change << ", tolerance " << o.tolerance
-     << ")";
-  if (!e.message.empty()) os << ": " << e.message;
-  return os.str();
-}
-
 /// The checks every run ends with (issue 18): a "converged" report must have a finite residual,
 /// energy and displacement, and no inverted element unless the scene allows inversion.
 void check_final_state(const BuiltScene& scene, SceneRunResult& res) {
@@ -483,7 +477,7 @@ void check_final_state(const BuiltScene& scene, SceneRunResult& res) {
 }  // namespace
 
 DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
-                                     const solver::EigenOptions& eigen) {
+                                     const solver::LanczosOptions& lanczos) {
   INCISE_CHECK(scene.problem != nullptr, "dynamic_parameters needs a built problem");
   const SolverSpec& s = scene.spec.solver;
   fem::ElasticProblem& p = *scene.problem;
@@ -491,24 +485,37 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
   dp.status = solver::StopReason::kConverged;
   dp.time_step = s.time_step;
   dp.time_step_origin = "given";
-  if (s.time_step <= 0) {
+  // One Lanczos run gives both λ_max (for Δt) and λ₁ (for η), §4.1.
+  const bool need_lanczos = s.time_step <= 0 || (s.damping < 0 && !s.spectral_tuning);
+  solver::DynamicParameterEstimate est;
+  if (need_lanczos) {
     Timer t;
-    const solver::EigenEstimate e = solver::largest_eigenvalue(p, u, eigen);
-    scene.record("largest eigenvalue of M^-1 K by power iteration (" +
-                     std::to_string(e.iterations) + " iterations, " + solver::to_string(e.status) +
-                     ")",
-                 t.seconds(), 3 * static_cast<std::size_t>(p.size()) * sizeof(double),
-                 static_cast<std::int64_t>(e.flops));
-    if (!e.ok()) {
-      dp.status = e.status;
-      dp.message = "time step not estimated: " +
-                   estimate_failure("the power iteration for lambda_max", e, eigen) +
-                   "; give solver.time_step in the scene";
+    solver::DynamicParameterOptions o;
+    o.lanczos = lanczos;
+    o.time_step_safety = kTimeStepSafety;
+    est = solver::estimate_dynamic_parameters(p, u, o);
+    scene.record("lambda_1 and lambda_max of M^-1 K by Lanczos (" + std::to_string(est.products) +
+                     " products K.q, " + solver::to_string(est.status) + ")",
+                 t.seconds(), 5 * static_cast<std::size_t>(p.size()) * sizeof(double),
+                 static_cast<std::int64_t>(est.flops));
+    if (est.status != solver::StopReason::kConverged) {
+      dp.status = est.status;
+      std::ostringstream os;
+      os << (s.time_step <= 0 ? "time step" : "damping")
+         << " not estimated: the Lanczos estimate of lambda_1 and lambda_max stopped with "
+         << solver::to_string(est.status) << " after " << est.products << " steps (at most "
+         << lanczos.max_steps << ", tolerance " << lanczos.tolerance << ")";
+      if (!est.message.empty()) os << ": " << est.message;
+      os << "; give solver.time_step and solver.damping in the scene";
+      dp.message = os.str();
       return dp;
     }
-    dp.time_step = kTimeStepSafety * solver::critical_time_step(e.value);
+  }
+  if (s.time_step <= 0) {
+    dp.time_step = est.time_step;
     dp.time_step_origin =
-        "0.9 x critical 2/sqrt(lambda_max), lambda_max = " + std::to_string(e.value);
+        "0.9 x critical 2/sqrt(lambda_max), lambda_max = " + std::to_string(est.lambda_max) +
+        " (Lanczos, " + std::to_string(est.products) + " products)";
   }
   dp.damping = s.damping;
   dp.damping_origin = "given";
@@ -544,30 +551,16 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
     dp.damping_origin = "spectral: 4 pi f, f = " + std::to_string(sd.frequency) + " Hz";
     return dp;
   }
-  Timer t;
-  const solver::EigenEstimate e = solver::smallest_eigenvalue(p, u, eigen);
-  scene.record("smallest eigenvalue of M^-1 K by inverse iteration (" +
-                   std::to_string(e.iterations) + " iterations, " +
-                   std::to_string(e.inner_iterations) + " inner CG steps, " +
-                   solver::to_string(e.status) + ")",
-               t.seconds(), 5 * static_cast<std::size_t>(p.size()) * sizeof(double),
-               static_cast<std::int64_t>(e.flops));
-  if (!e.ok()) {
-    dp.status = e.status;
-    dp.message = "damping not estimated: " +
-                 estimate_failure("the inverse iteration for lambda_1", e, eigen) +
-                 "; give solver.damping in the scene";
-    return dp;
-  }
-  dp.damping = solver::critical_damping(e.value);
-  dp.damping_origin = "critical 2 sqrt(lambda_1), lambda_1 = " + std::to_string(e.value);
+  dp.damping = est.damping;
+  dp.damping_origin =
+      "critical 2 sqrt(lambda_1), lambda_1 = " + std::to_string(est.lambda_min) + " (Lanczos)";
   return dp;
 }
 
 SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
                          const CutStepObserver& cut_observer,
                          const NeedleUpdateObserver& needle_observer,
-                         const NeedleUpdateObserver3D& needle3d_observer) {
+                         const NeedleUpdateObserver3D& needle3d_observer, const VecX* reference) {
   SceneRunResult res;
   res.environment = capture_environment();
   if (scene.is_needle()) {
@@ -604,6 +597,22 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
   fem::ElasticProblem& p = *scene.problem;
   res.u = VecX::Zero(p.size());
   res.external_force_norm = p.external_force_norm();
+  // The energy norm against a reference (issue 19): (e, e)_{K(û)} by solver::EnergyErrorTrace.
+  std::unique_ptr<solver::EnergyErrorTrace> error_trace;
+  double reference_norm2 = 0.0;
+  if (reference != nullptr) {
+    INCISE_CHECK(reference->size() == p.size(),
+                 "run_scene: the reference has " + std::to_string(reference->size()) +
+                     " values, the problem " + std::to_string(p.size()) + " DOFs");
+    error_trace = std::make_unique<solver::EnergyErrorTrace>(p, *reference);
+    reference_norm2 = error_trace->energy_error(VecX::Zero(p.size()));
+    INCISE_CHECK(reference_norm2 > 0.0 && std::isfinite(reference_norm2),
+                 "run_scene: the reference has no positive, finite energy norm (u = 0?)");
+    res.has_reference = true;
+  }
+  auto relative_error = [&](const VecX& u) {
+    return std::sqrt(error_trace->energy_error(u) / reference_norm2);
+  };
 
   // Stopping rule, budget and trace observer, the same for every relaxation method.
   solver::RelaxationOptions common;
@@ -618,6 +627,8 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
     row.energy = info.energy;
     row.flops = info.flops;
     row.seconds = info.seconds;
+    row.cpu_seconds = info.cpu_seconds;
+    if (error_trace) row.relative_energy_error = relative_error(*info.u);
     for (const auto& pr : scene.probes) row.probes.push_back(probe_value(pr, *info.u));
     res.trace.push_back(std::move(row));
     if (observer) observer(info);
@@ -636,6 +647,9 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
     case SolverSpec::Method::kNonlinearCG: {
       solver::NonlinearCgOptions o;
       static_cast<solver::RelaxationOptions&>(o) = common;
+      o.beta = s.beta;
+      o.line_search = s.line_search;
+      o.epsilon_newton = s.line_search_tolerance;
       detail << "nonlinear CG, " << solver::to_string(o.beta) << ", "
              << solver::to_string(o.line_search) << " line search";
       res.report = solver::nonlinear_cg(p, res.u, o);
@@ -664,18 +678,25 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
       static_cast<solver::RelaxationOptions&>(o) = common;
       o.time_step = dp.time_step;
       o.damping = dp.damping;
+      o.max_restarts = kMaxRestarts;
       detail << "dynamic relaxation SS22, dt = " << dp.time_step << " s (" << dp.time_step_origin
              << "), eta = " << dp.damping << " 1/s (" << dp.damping_origin << ")";
       res.report = solver::dynamic_relaxation(p, res.u, o);
+      if (res.report.restarts > 0)
+        detail << "; " << res.report.restarts << " restart(s) after unstable steps, dt lowered to "
+               << res.report.time_step << " s";
       break;
     }
     case SolverSpec::Method::kAugmented: {
       detail << "CHOLMOD supernodal factorization of K (fixed DOFs as identity rows), one solve";
+      const double cpu0 = process_cpu_seconds();
       res.report = solve_augmented(scene, res.u);
+      res.report.cpu_seconds = process_cpu_seconds() - cpu0;
       break;
     }
   }
   res.method_detail = detail.str();
+  if (error_trace && res.u.allFinite()) res.relative_energy_error = relative_error(res.u);
   check_final_state(scene, res);
   evaluate_probes();
   return res;

@@ -1,7 +1,10 @@
 #include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/spectral/dominant_frequency.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <sstream>
+#include <string>
 
 namespace incise::solver {
 
@@ -21,27 +24,77 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   const FixedDofs fixed_dofs(problem);
   const Eigen::Index n = u.size();
   const auto nn = static_cast<std::uint64_t>(n);
-  const double dt = options.time_step, eta = options.damping;
+  const double eta = options.damping;
   const double fex = problem.external_force_norm();
   if (!external_force_is_finite(fex, rep)) {
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
+    rep.cpu_seconds = meter.cpu_seconds();
     return rep;
   }
+  INCISE_CHECK_PARAM(options.max_restarts >= 0, "dynamic_relaxation: max_restarts must be >= 0");
+  INCISE_CHECK_PARAM(options.restart_reduction > 0.0 && options.restart_reduction < 1.0,
+                     "dynamic_relaxation: restart_reduction must lie in (0, 1)");
+  double dt = options.time_step;
   // 1/((1 + ½Δtη) m_i): the diagonal of (M + θ₁Δt C)⁻¹ of (2.58) with θ₁ = ½, θ₂ = 0.
-  const VecX inv_mass = (m * (1.0 + 0.5 * dt * eta)).cwiseInverse();
+  VecX inv_mass = (m * (1.0 + 0.5 * dt * eta)).cwiseInverse();
+  const bool restartable = options.max_restarts > 0;
+  const bool check_energy = restartable && eta > 0.0;
 
   VecX v = VecX::Zero(n), ubar = u, g, acc(n), last_good = u;
+  VecX u_best = u;  // displacement of lowest total energy: where a restart resumes (at rest)
   double energy = 0.0, last_energy = 0.0, rnorm = 0.0, threshold = 0.0;
+  double e_start = 0.0, e_min = 0.0;
+  bool have_e = false;
   long k = 0;
   StopReason reason = StopReason::kConverged;
+  std::string event;  // what made the last restart necessary
   bool have_residual = false;
+  // An unstable step: restart from the lowest-energy state with a smaller Δt when allowed.
+  auto restart = [&](StopReason why, const std::string& what) {
+    reason = why;
+    event = what;
+    if (rep.restarts >= options.max_restarts) return false;
+    ++rep.restarts;
+    dt *= options.restart_reduction;
+    inv_mass = (m * (1.0 + 0.5 * dt * eta)).cwiseInverse();
+    // Resume at rest from the lowest-energy state: from rest the total energy of a stable damped
+    // run only decreases, as at the start (with the old velocity, Π at ū = u + ½Δt·u̇ and the
+    // kinetic energy at u̇ can move E up by O(Δt) and fake energy growth).
+    u = u_best;
+    v.setZero();
+    have_e = false;  // E at the new Δt is measured afresh from the resumed state
+    meter.add(4 * nn);
+    return true;
+  };
   while (true) {
     ubar = u + (0.5 * dt) * v;  // (2.56), θ₁ = ½
     const EvalStatus st = problem.gradient(ubar, g, &energy);
     if (st != EvalStatus::kOk || !g.allFinite() || !std::isfinite(energy)) {
-      reason = st == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
+      const StopReason why =
+          st == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
+      if (restart(why, why == StopReason::kInverted ? "inverted element" : "non-finite value"))
+        continue;
       break;
+    }
+    if (restartable) {
+      // Total energy at ū (kinetic from u̇ of this step), 3n flops.
+      const double e = energy + 0.5 * v.dot(m.cwiseProduct(v));
+      meter.add(3 * nn);
+      if (!have_e) {
+        e_start = e_min = e;
+        have_e = true;
+      }
+      if (check_energy && e > e_min + 0.5 * (e_start - e_min) +
+                                  1e-9 * std::max(std::abs(e_start), std::abs(e_min))) {
+        if (restart(StopReason::kUnstable, "energy growth")) continue;
+        break;
+      }
+      if (e <= e_min) {
+        e_min = e;
+        u_best = u;
+        meter.add(nn);
+      }
     }
     last_good = ubar;
     last_energy = energy;
@@ -67,20 +120,63 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
     ++k;
     const double unorm = u.norm();
     if (!std::isfinite(unorm) || unorm > options.blowup_norm) {
-      reason = StopReason::kUnstable;
+      if (restart(StopReason::kUnstable, "blow-up")) continue;
       break;
     }
   }
   // Hand back the last evaluated admissible point: its residual is the one reported.
   u = last_good;
   rep.status = reason;
+  rep.time_step = dt;
+  if (!rep.ok() && restartable && !event.empty()) {
+    std::ostringstream os;
+    os << event << " after " << rep.restarts << " restart(s) (the allowed " << options.max_restarts
+       << "), dt lowered from " << options.time_step << " s to " << dt << " s";
+    rep.message = os.str();
+  }
   rep.iterations = k;
   rep.residual_norm = have_residual ? rnorm : std::numeric_limits<double>::quiet_NaN();
   rep.threshold = threshold;
   rep.energy = last_energy;
   rep.flops = meter.flops();
   rep.seconds = meter.seconds();
+  rep.cpu_seconds = meter.cpu_seconds();
   return rep;
+}
+
+DynamicParameterEstimate estimate_dynamic_parameters(Problem& problem, const VecX& u,
+                                                     const DynamicParameterOptions& options) {
+  INCISE_CHECK_PARAM(options.time_step_safety > 0.0 && options.time_step_safety <= 1.0,
+                     "estimate_dynamic_parameters: time_step_safety must lie in (0, 1]");
+  DynamicParameterEstimate out;
+  CostMeter meter(problem);
+  const VecX& m = problem.lumped_mass();
+  INCISE_CHECK(m.size() == problem.size(), "estimate_dynamic_parameters needs lumped masses");
+  VecX g;
+  const EvalStatus st = problem.gradient(u, g);
+  if (st != EvalStatus::kOk || !g.allFinite()) {
+    out.status = failure_reason(st);
+    out.message = "gradient at the start state not admissible";
+    out.flops = meter.flops();
+    return out;
+  }
+  VecX a = -g;
+  problem.project(a);
+  a = a.cwiseQuotient(m);  // first acceleration of SS22 from rest
+  const SpectrumEstimate sp = lanczos_spectrum(problem, u, a, options.lanczos);
+  out.status = sp.status;
+  out.message = sp.message;
+  out.products = sp.steps;
+  out.flops = meter.flops();
+  if (!sp.ok() || !(sp.smallest > 0.0) || !(sp.largest > 0.0)) {
+    if (out.ok()) out.status = StopReason::kIndefinite;
+    return out;
+  }
+  out.lambda_min = sp.smallest;
+  out.lambda_max = sp.largest;
+  out.time_step = options.time_step_safety * critical_time_step(sp.largest);
+  out.damping = critical_damping(sp.smallest);
+  return out;
 }
 
 double cfl_time_step(double h, double lame_lambda, double lame_mu, double density) {

@@ -5,7 +5,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
+#include <string>
+#include <vector>
 
 namespace incise::solver {
 namespace {
@@ -141,6 +144,154 @@ EigenEstimate smallest_eigenvalue(Problem& problem, const VecX& u, const EigenOp
   return est;
 }
 
+namespace {
+
+/// Eigen-decomposition of the symmetric tridiagonal matrix (diag, sub) of size ≥ 2, returned
+/// for the matrix divided by `scale` (its largest entry): Eigen's tridiagonal QR deflates when
+/// (s/ε)² ≤ |d_i| + |d_{i+1}|, which presumes entries of order one (its compute() scales first;
+/// computeFromTridiagonal() does not). Eigenvalues of the original are scale × those returned.
+Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> scaled_tridiagonal_eigen(const VecX& diag,
+                                                                        const VecX& sub,
+                                                                        int options,
+                                                                        double& scale) {
+  scale = std::max(diag.cwiseAbs().maxCoeff(), sub.cwiseAbs().maxCoeff());
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
+  es.computeFromTridiagonal(diag / scale, sub / scale, options);
+  return es;
+}
+
+/// Extreme eigenvalues of the symmetric tridiagonal matrix (diag, sub); false when the QR
+/// iteration did not converge.
+bool tridiagonal_extremes(const std::vector<double>& diag, const std::vector<double>& sub,
+                          double& lo, double& hi) {
+  const auto k = static_cast<Eigen::Index>(diag.size());
+  if (k == 1) {
+    lo = hi = diag[0];
+    return true;
+  }
+  double scale = 1.0;
+  const auto es = scaled_tridiagonal_eigen(Eigen::Map<const VecX>(diag.data(), k),
+                                           Eigen::Map<const VecX>(sub.data(), k - 1),
+                                           Eigen::EigenvaluesOnly, scale);
+  if (es.info() != Eigen::Success) return false;
+  lo = scale * es.eigenvalues().minCoeff();
+  hi = scale * es.eigenvalues().maxCoeff();
+  return true;
+}
+
+}  // namespace
+
+SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& start,
+                                  const LanczosOptions& options) {
+  INCISE_CHECK_PARAM(options.min_steps >= 1 && options.max_steps >= options.min_steps,
+                     "lanczos_spectrum: need 1 <= min_steps <= max_steps");
+  INCISE_CHECK_PARAM(options.tolerance >= 0.0 && options.window >= 1,
+                     "lanczos_spectrum: tolerance must be >= 0 and window >= 1");
+  INCISE_CHECK_PARAM(options.random_fraction >= 0.0,
+                     "lanczos_spectrum: random_fraction must be >= 0");
+  INCISE_CHECK(start.size() == 0 || start.size() == problem.size(),
+               "lanczos_spectrum: start has the wrong size");
+  const VecX& m = checked_mass(problem);
+  CostMeter meter(problem);
+  const auto nn = static_cast<std::uint64_t>(u.size());
+  auto mnorm = [&](const VecX& v) { return std::sqrt(v.dot(m.cwiseProduct(v))); };
+  SpectrumEstimate est;
+  est.status = StopReason::kMaxIterations;
+  // q₁: the start direction plus a little of a random one, M-normalized.
+  VecX q = start.size() == 0 ? VecX::Zero(problem.size()) : start;
+  problem.project(q);
+  const double sn = mnorm(q);
+  VecX z = start_vector(problem, options.seed);
+  const double zn = mnorm(z);
+  if (sn > 0.0 && std::isfinite(sn))
+    q = q / sn + (options.random_fraction / zn) * z;
+  else
+    q = z / zn;
+  q /= mnorm(q);
+  VecX q_prev = VecX::Zero(q.size()), w;
+  double beta_prev = 0.0;
+  std::vector<double> diag, sub;
+  double lo_prev = 0.0, hi_prev = 0.0;
+  long calm = 0;  // consecutive steps with both changes ≤ tolerance
+  for (long j = 0; j < options.max_steps; ++j) {
+    const EvalStatus st = problem.hessian_product(u, q, w);
+    if (st != EvalStatus::kOk || !w.allFinite()) {
+      est.status = failure_reason(st);
+      break;
+    }
+    problem.project(w);             // P K q
+    const double alpha = q.dot(w);  // (q, M⁻¹PKq)_M
+    if (!std::isfinite(alpha)) {
+      est.status = StopReason::kNonFinite;
+      break;
+    }
+    if (alpha <= 0.0) {
+      est.status = StopReason::kIndefinite;
+      break;
+    }
+    w = w.cwiseQuotient(m) - alpha * q - beta_prev * q_prev;  // three-term recurrence
+    const double beta = mnorm(w);
+    meter.add(14 * nn);
+    diag.push_back(alpha);
+    double lo = 0.0, hi = 0.0;
+    if (!tridiagonal_extremes(diag, sub, lo, hi)) {
+      est.status = StopReason::kNonFinite;
+      break;
+    }
+    est.steps = j + 1;
+    est.smallest = lo;
+    est.largest = hi;
+    if (j > 0) {
+      est.smallest_change = std::abs(lo - lo_prev) / lo;
+      est.largest_change = std::abs(hi - hi_prev) / hi;
+      const bool still =
+          est.smallest_change <= options.tolerance && est.largest_change <= options.tolerance;
+      calm = still ? calm + 1 : 0;
+    }
+    lo_prev = lo;
+    hi_prev = hi;
+    if (!(beta > 1e-14 * hi) || !std::isfinite(beta)) {
+      // invariant subspace reached: the Ritz values are eigenvalues
+      est.status = std::isfinite(beta) ? StopReason::kConverged : StopReason::kNonFinite;
+      break;
+    }
+    if (est.steps >= options.min_steps && calm >= options.window) {
+      // A plateau of θ₁ can look calm; accept only when θ₁ is also close to an eigenvalue:
+      // the Ritz residual ‖M⁻¹PKPy − θ₁y‖_M = β_k|s_k| (s: T's eigenvector of θ₁, s_k its
+      // last entry) bounds the distance of θ₁ to the nearest eigenvalue (Parlett, "The
+      // Symmetric Eigenvalue Problem", Thm. 13.1.1 with §13.2).
+      const auto kk = static_cast<Eigen::Index>(diag.size());
+      double scale = 1.0;
+      const auto es = scaled_tridiagonal_eigen(Eigen::Map<const VecX>(diag.data(), kk),
+                                               Eigen::Map<const VecX>(sub.data(), kk - 1),
+                                               Eigen::ComputeEigenvectors, scale);
+      double residual = std::numeric_limits<double>::infinity();
+      if (es.info() == Eigen::Success) {
+        Eigen::Index i_min = 0;
+        es.eigenvalues().minCoeff(&i_min);
+        residual = beta * std::abs(es.eigenvectors()(kk - 1, i_min));
+      }
+      est.smallest_residual = residual / lo;
+      if (est.smallest_residual <= options.residual_tolerance) {
+        est.status = StopReason::kConverged;
+        break;
+      }
+    }
+    sub.push_back(beta);
+    q_prev.swap(q);
+    q = w / beta;
+    beta_prev = beta;
+  }
+  if (est.status == StopReason::kIndefinite || est.status == StopReason::kNonFinite ||
+      est.status == StopReason::kInverted) {
+    if (est.message.empty())
+      est.message = std::string("Lanczos step ") + std::to_string(est.steps + 1) + ": " +
+                    to_string(est.status);
+  }
+  est.flops = meter.flops();
+  return est;
+}
+
 double critical_time_step(double lambda_max) {
   INCISE_CHECK_PARAM(lambda_max > 0.0, "critical_time_step: eigenvalue must be positive");
   return 2.0 / std::sqrt(lambda_max);
@@ -167,12 +318,8 @@ LanczosExtremes cg_lanczos_extremes(const CgCoefficients& c) {
     out.smallest = out.largest = diag[0];
     return out;
   }
-  // Eigen's tridiagonal QR deflates when (s/ε)² ≤ |d_i| + |d_{i+1}|, which presumes entries of
-  // order one (its compute() scales first; computeFromTridiagonal() does not): scale by the
-  // largest entry, solve, scale back.
-  const double scale = std::max(diag.cwiseAbs().maxCoeff(), sub.cwiseAbs().maxCoeff());
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
-  es.computeFromTridiagonal(diag / scale, sub / scale, Eigen::EigenvaluesOnly);
+  double scale = 1.0;
+  const auto es = scaled_tridiagonal_eigen(diag, sub, Eigen::EigenvaluesOnly, scale);
   out.converged = es.info() == Eigen::Success;
   out.smallest = scale * es.eigenvalues().minCoeff();
   out.largest = scale * es.eigenvalues().maxCoeff();

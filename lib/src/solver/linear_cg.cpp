@@ -76,12 +76,14 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
     rep.status = failure_reason(st);
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
+    rep.cpu_seconds = meter.cpu_seconds();
     return rep;
   }
   const double fex = problem.external_force_norm();
   if (!external_force_is_finite(fex, rep)) {
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
+    rep.cpu_seconds = meter.cpu_seconds();
     return rep;
   }
   VecX r = -g;
@@ -101,6 +103,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
       rep.energy = energy;
       rep.flops = meter.flops();
       rep.seconds = meter.seconds();
+      rep.cpu_seconds = meter.cpu_seconds();
       return rep;
     }
     inv_diag = std::move(jd.inverse);
@@ -223,6 +226,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
   rep.energy = energy;
   rep.flops = meter.flops();
   rep.seconds = meter.seconds();
+  rep.cpu_seconds = meter.cpu_seconds();
   return rep;
 }
 

@@ -141,6 +141,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   if (!external_force_is_finite(fex, rep)) {
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
+    rep.cpu_seconds = meter.cpu_seconds();
     return rep;
   }
 
@@ -151,6 +152,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
     rep.status = failure_reason(st);
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
+    rep.cpu_seconds = meter.cpu_seconds();
     return rep;
   }
   VecX r = -g;
@@ -222,6 +224,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   rep.energy = energy;
   rep.flops = meter.flops();
   rep.seconds = meter.seconds();
+  rep.cpu_seconds = meter.cpu_seconds();
   return rep;
 }
 

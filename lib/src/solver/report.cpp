@@ -44,14 +44,21 @@ double CostMeter::seconds() const {
   return timer_.seconds() - excluded_seconds_;
 }
 
+double CostMeter::cpu_seconds() const {
+  return process_cpu_seconds() - cpu_start_ - excluded_cpu_seconds_;
+}
+
 void CostMeter::observe(const IterationObserver& observer, IterationInfo info) {
   if (!observer) return;
   info.flops = flops();
   info.seconds = seconds();
+  info.cpu_seconds = cpu_seconds();
   const std::uint64_t f0 = problem_.flops();
+  const double c0 = process_cpu_seconds();
   Timer t;
   observer(info);
   excluded_seconds_ += t.seconds();
+  excluded_cpu_seconds_ += process_cpu_seconds() - c0;
   excluded_flops_ += problem_.flops() - f0;
 }
 

@@ -21,6 +21,7 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
   if (!external_force_is_finite(fex, rep)) {
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
+    rep.cpu_seconds = meter.cpu_seconds();
     return rep;
   }
 
@@ -31,6 +32,7 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
     rep.status = failure_reason(st);
     rep.flops = meter.flops();
     rep.seconds = meter.seconds();
+    rep.cpu_seconds = meter.cpu_seconds();
     return rep;
   }
   VecX r = -g;
@@ -140,6 +142,7 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
   rep.energy = energy;
   rep.flops = meter.flops();
   rep.seconds = meter.seconds();
+  rep.cpu_seconds = meter.cpu_seconds();
   return rep;
 }
 

@@ -53,6 +53,12 @@ struct CholmodOptions {
   /// and refuses with kOverMemoryBudget instead of allocating. Callers pass their budget
   /// (e.g. incise::default_memory_budget_bytes(), scene limits.memory_mb).
   std::uint64_t memory_budget_bytes = 0;
+  /// BLAS threads of factorize() (blas_threads.hpp): all of blas_thread_settings().max_threads
+  /// when CHOLMOD's flop estimate of the factorization (factor_flops()) is at least this, one
+  /// thread below it. Negative (default): blas_thread_settings().parallel_flops
+  /// (kDefaultBlasParallelFlops unless INCISE_BLAS_PARALLEL_FLOPS is set). solve() always uses
+  /// one thread (a triangular solve is memory-bound).
+  double blas_parallel_flops = -1.0;
 };
 
 /// Outcome of analyze/factorize/solve, in the spirit of Eigen's `info()`.
@@ -158,6 +164,8 @@ class CholmodFactor {
   std::uint64_t peak_memory_bytes() const;
   /// Floating point operations of the last factorization as estimated by CHOLMOD (fl).
   double factor_flops() const;
+  /// BLAS threads the last factorize() ran with (0 before any; 1 below the threshold).
+  int last_blas_threads() const { return last_blas_threads_; }
   /// Number of symbolic analyses actually performed (cache misses), for tests.
   int analyses_performed() const { return analyses_; }
 
@@ -179,6 +187,7 @@ class CholmodFactor {
   std::int64_t analyzed_nnz_ = -1;
   std::uint64_t pattern_version_ = 0;
   bool factorized_ = false;
+  int last_blas_threads_ = 0;
 };
 
 }  // namespace incise::linalg

@@ -57,6 +57,10 @@ struct TraceRow {
   double energy = 0.0;         ///< Π (J)
   std::uint64_t flops = 0;
   double seconds = 0.0;
+  double cpu_seconds = 0.0;  ///< process CPU seconds of the solver so far (all threads)
+  /// ‖u − û‖_{K(û)}/‖û‖_{K(û)} against the run's reference û (run_scene's `reference`); NaN
+  /// without one (issue 19: time to a relative energy-norm error from the command line)
+  double relative_energy_error = std::numeric_limits<double>::quiet_NaN();
   std::vector<Vec3> probes;  ///< probe values at this iteration (m)
 };
 
@@ -130,6 +134,9 @@ struct SceneRunResult {
   double external_force_norm = 0;  ///< ‖f_ext‖₂ over free DOFs (N)
   std::vector<ProbeResult> probes;
   std::vector<TraceRow> trace;  ///< one row per iteration, from the first
+  bool has_reference = false;   ///< run with a reference: trace rows carry the energy error
+  /// final ‖u − û‖_{K(û)}/‖û‖_{K(û)} when run with a reference, else NaN
+  double relative_energy_error = std::numeric_limits<double>::quiet_NaN();
   /// Interactive cutting run only: one row per solve (initial solve first). The report then
   /// holds iterations = number of solves, inner_iterations = total GMRES iterations and the
   /// residual ‖P(K u − f)‖ recomputed matrix-free on the final cut mesh (scene.problem).
@@ -173,16 +180,16 @@ struct [[nodiscard]] DynamicParameters : Outcome<solver::StopReason, solver::Sto
 };
 
 /// Δt and η of scene.spec.solver at u: given values (time_step > 0, damping ≥ 0) as they
-/// are; otherwise estimated from K(u) and the lumped M (§4.1): Δt = 0.9·2/√λ_max (power
-/// iteration, solver::largest_eigenvalue with `eigen`), η = 2√λ₁ (inverse iteration,
-/// solver::smallest_eigenvalue with `eigen`) or, with spectral_tuning, η = 4πf from the FFT of
-/// 8192 undamped steps at Δt. An estimate that did not converge is never used: an eigenvalue
-/// estimate with any status but kConverged (iterations exhausted, indefinite or non-finite K),
-/// an undamped run that did not complete (its status: unstable, inverted, non-finite) or
-/// found no oscillation (kStagnated). Each estimate is recorded in scene.steps. Throws
-/// UsageError for a scene whose problem was not built or has no lumped mass (not dynamic).
+/// are; otherwise estimated from K(u) and the lumped M (§4.1) by one Lanczos run
+/// (solver::estimate_dynamic_parameters with `lanczos`): Δt = 0.9·2/√θ_max, η = 2√θ₁ or, with
+/// spectral_tuning, η = 4πf from the FFT of 8192 undamped steps at Δt. An estimate that did
+/// not converge is never used: a Lanczos run with any status but kConverged (steps exhausted,
+/// indefinite or non-finite K), an undamped run that did not complete (its status: unstable,
+/// inverted, non-finite) or found no oscillation (kStagnated). Each estimate is recorded in
+/// scene.steps. Throws UsageError for a scene whose problem was not built or has no lumped
+/// mass (not dynamic).
 DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
-                                     const solver::EigenOptions& eigen = {});
+                                     const solver::LanczosOptions& lanczos = {});
 
 /// Runs the scene's solver from u = 0. Numerical failure is reported in result.report.status
 /// and message, never thrown; a "dynamic-ss22" run whose Δt or η cannot be estimated
@@ -203,9 +210,16 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
 /// (deformed area or volume ≤ 0: kInverted unless material.allow_inversion) and non-finite
 /// displacements (kNonFinite). A 3D needle update that hits the refinement budget
 /// (needle::StepStatus::kRefinementBudget) ends the run with kMaxIterations and its message.
+///
+/// `reference` (optional, e.g. read_solution() of an earlier run's --write-solution): a
+/// relaxation run (cg, nonlinear-cg, newton, dynamic-ss22) then records the relative
+/// energy-norm error against it in every trace row (computed in the observer: one K(û)-product
+/// per iteration, excluded from the solver's flops and times) and in
+/// SceneRunResult::relative_energy_error. Throws UsageError when its size is not the problem's.
 SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer = {},
                          const CutStepObserver& cut_observer = {},
                          const NeedleUpdateObserver& needle_observer = {},
-                         const NeedleUpdateObserver3D& needle3d_observer = {});
+                         const NeedleUpdateObserver3D& needle3d_observer = {},
+                         const VecX* reference = nullptr);
 
 }  // namespace incise::scene

@@ -18,6 +18,7 @@
 #include <incise/needle/friction.hpp>
 #include <incise/scene/line_index.hpp>
 #include <incise/solver/linear_cg.hpp>
+#include <incise/solver/nonlinear_cg.hpp>
 
 #include <cstdint>
 #include <optional>
@@ -165,6 +166,14 @@ struct SolverSpec {
   double damping = -1.0;  ///< dynamic: damping η (1/s), ≥ 0; −1 → automatic: critical damping
                           ///< 2√λ₁ (§4.1) or, with spectral_tuning, from the FFT
   bool spectral_tuning = false;  ///< dynamic: estimate damping from an FFT of the trace
+  /// Nonlinear CG only: the β rule (2.48)/(2.49) (scene key `beta`, solver::kBetaRuleNames).
+  solver::BetaRule beta = solver::BetaRule::kPolakRibiere;
+  /// Nonlinear CG only: the §4.4.2 line search (scene key `line_search`,
+  /// solver::kLineSearchNames).
+  solver::LineSearchKind line_search = solver::LineSearchKind::kSecant;
+  /// Nonlinear CG only: ε_newton of the line search, > 0 and < 1 (scene key
+  /// `line_search_tolerance`; NonlinearCgOptions::epsilon_newton, §4.5.1's 0.1).
+  double line_search_tolerance = 0.1;
   /// Interactive cutting run ("augmented" with tools) only. Scene key `cut_configuration`.
   CutConfiguration cut_configuration = CutConfiguration::kDeformed;
   /// Interactive cutting run only: interactive::AugmentedCutOptions::refactor_at_m, the augmented

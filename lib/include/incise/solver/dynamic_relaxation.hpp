@@ -20,6 +20,15 @@ struct DynamicRelaxationOptions : RelaxationOptions {
   double time_step = 0.0;     ///< Δt (s), > 0
   double damping = 0.0;       ///< η (1/s), ≥ 0; C = ηM
   double blowup_norm = 1e15;  ///< ‖u‖₂ above this is a blow-up (kUnstable), §4.4.1
+  /// Restarts after an unstable step (0: none, the thesis' behaviour — a blow-up, inversion or
+  /// non-finite evaluation ends the run). With max_restarts > 0 an unstable step is also one
+  /// whose total energy E = Π(ū) + ½u̇ᵀMu̇ regained more than half of what damping has
+  /// dissipated (E > E_min + ½(E₀ − E_min); impossible for a stable damped run, which only
+  /// loses energy, so this needs damping > 0); the integration then restarts at rest from the
+  /// displacement of lowest E with Δt ← restart_reduction·Δt. SolverReport::restarts and
+  /// ::time_step say so.
+  int max_restarts = 0;
+  double restart_reduction = 0.7;  ///< Δt factor per restart, in (0, 1)
 };
 
 /// Runs SS22 from rest at u (updated in place). One step (2.56)–(2.60) with θ₁ = ½, θ₂ = 0:
@@ -28,8 +37,39 @@ struct DynamicRelaxationOptions : RelaxationOptions {
 /// One gradient evaluation per step, at ū; the stopping rule is checked on ‖P∇Π(ū)‖, so on
 /// convergence u is set to that ū (the point whose residual was certified). On blow-up
 /// (‖u‖ > blowup_norm, kUnstable), inversion (kInverted) or non-finite values (kNonFinite) u is
-/// set to the last evaluated admissible point. Requires lumped masses (UsageError otherwise).
+/// set to the last evaluated admissible point. With options.max_restarts > 0 those events (and
+/// energy growth) restart the integration at a smaller Δt instead, until the restarts are used
+/// up (then the status is the last event's, with a message naming the restarts).
+/// Requires lumped masses (UsageError otherwise).
 SolverReport dynamic_relaxation(Problem& problem, VecX& u, const DynamicRelaxationOptions& options);
+
+/// Options of estimate_dynamic_parameters().
+struct DynamicParameterOptions {
+  LanczosOptions lanczos;         ///< the one Lanczos run (its max_steps caps the cost)
+  double time_step_safety = 0.9;  ///< Δt = safety·2/√θ_max: θ_max ≤ λ_n underestimates λ_n
+};
+
+/// Automatic Δt and η of dynamic relaxation (§4.1) and what they cost.
+struct [[nodiscard]] DynamicParameterEstimate
+    : Outcome<StopReason, StopReason::kConverged, StopReason::kMaxIterations> {
+  double time_step = 0.0;   ///< Δt = safety·critical_time_step(θ_max) (s)
+  double damping = 0.0;     ///< η = critical_damping(θ₁) = 2√θ₁ (1/s)
+  double lambda_min = 0.0;  ///< θ₁ ≥ λ₁ (1/s²)
+  double lambda_max = 0.0;  ///< θ_max ≤ λ_n (1/s²)
+  long products = 0;        ///< K·q products spent (= Lanczos steps)
+  std::uint64_t flops = 0;  ///< counted flops
+};
+
+/// Δt and η at u from one lanczos_spectrum() run started at the first acceleration
+/// M⁻¹P(−∇Π(u)) (the load shape, rich in the lowest mode): a few dozen K-products where the
+/// power and inverse iterations took thousands (docs/solvers.md). The two are estimates (θ₁ ≥
+/// λ₁ over-damps slightly; θ_max ≤ λ_n, and λ_n may grow as a stiffening material deforms):
+/// run dynamic_relaxation() with max_restarts > 0 so that a too large Δt restarts instead of
+/// diverging. Status: the Lanczos run's (kMaxIterations keeps usable bounds), or the failed
+/// gradient's. The result depends only on the problem and u, so a caller relaxing the same
+/// mesh again (the same material, fixed set and masses) may reuse it.
+DynamicParameterEstimate estimate_dynamic_parameters(Problem& problem, const VecX& u,
+                                                     const DynamicParameterOptions& options = {});
 
 /// CFL time-step estimate (2.61) of explicit SS22 with θ₁ = ½: Δt = (2/√3)·h/c with
 /// c = √((λ + 2µ)/ρ). h: shortest edge (m), lame_lambda, lame_mu (Pa), density (kg/m³).

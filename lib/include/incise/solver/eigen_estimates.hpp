@@ -61,6 +61,49 @@ struct [[nodiscard]] LanczosExtremes {
 /// when there are no steps or the coefficient lists differ in length.
 LanczosExtremes cg_lanczos_extremes(const CgCoefficients& coefficients);
 
+/// Options of lanczos_spectrum().
+struct LanczosOptions {
+  long min_steps = 12;      ///< never stop before this many steps
+  long max_steps = 400;     ///< products of K at most (the estimate's cost cap)
+  double tolerance = 0.01;  ///< stop when both extreme Ritz values moved ≤ tolerance (relative)
+  long window = 8;          ///< ... over each of the last `window` steps
+  /// ... and the Ritz residual of θ₁ (a bound on its distance to an eigenvalue) is at most this
+  /// fraction of θ₁ — a plateau of θ₁ between eigenvalues is not accepted
+  double residual_tolerance = 0.5;
+  double random_fraction = 0.1;  ///< M-norm share of a seeded random vector added to the start
+  unsigned seed = 12345;         ///< seed of that random vector
+};
+
+/// Extreme eigenvalue estimates of M⁻¹K(u) on the free DOFs from a Lanczos run.
+struct [[nodiscard]] SpectrumEstimate
+    : Outcome<StopReason, StopReason::kConverged, StopReason::kMaxIterations> {
+  double smallest = 0.0;  ///< smallest Ritz value θ₁ ≥ λ₁ (1/s²): η = critical_damping(θ₁)
+  double largest = 0.0;  ///< largest Ritz value θ_k ≤ λ_n (1/s²): Δt = critical_time_step(θ_k)
+  long steps = 0;        ///< Lanczos steps = products K·q (each costs one hessian_product)
+  std::uint64_t flops = 0;       ///< counted flops (products + vector operations)
+  double smallest_change = 0.0;  ///< relative change of θ₁ over the last step
+  double largest_change = 0.0;   ///< relative change of θ_k over the last step
+  /// Ritz residual of θ₁ relative to θ₁ at the last convergence check (∞ before any)
+  double smallest_residual = std::numeric_limits<double>::infinity();
+};
+
+/// Both extreme eigenvalues of the generalized problem K(u) w = λ M w on the free DOFs (M
+/// lumped) at once, by symmetric Lanczos in the M inner product (no reorthogonalization: lost
+/// orthogonality only duplicates converged Ritz values, not the extremes) on M⁻¹PK(u)P,
+/// starting from `start` (projected; typically the first acceleration M⁻¹P(f − ∇Π(u)), whose
+/// low modes dominate) plus random_fraction of a seeded random vector (for the top of the
+/// spectrum). One hessian_product per step; the Ritz values of the tridiagonal T_k are the
+/// estimates, θ₁ decreasing to λ₁ and θ_k increasing to λ_n. Replaces the power and the
+/// inverse iteration of largest_eigenvalue()/smallest_eigenvalue() at a fraction of their cost
+/// (docs/solvers.md). kConverged when both moved ≤ tolerance over the last `window` steps and
+/// θ₁'s Ritz residual is ≤ residual_tolerance·θ₁,
+/// kMaxIterations at max_steps (the values are still bounds, kept), kIndefinite when a
+/// Rayleigh quotient (q, Kq) ≤ 0, kNonFinite/kInverted on failed evaluations; an exhausted
+/// Krylov space (β = 0: the start lies in an invariant subspace) is kConverged. An empty or
+/// zero `start` uses the random vector alone. Requires lumped masses (UsageError otherwise).
+SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& start,
+                                  const LanczosOptions& options = {});
+
 /// Critical time step of explicit SS22 / central differences for eigenvalue λ_n: 2/√λ_n (§4.1).
 double critical_time_step(double lambda_max);
 

@@ -75,6 +75,7 @@ struct IterationInfo {
   double energy = 0.0;         ///< Π of that iterate (J), as the solver knows it
   std::uint64_t flops = 0;     ///< flops spent by the solver so far (observer excluded)
   double seconds = 0.0;        ///< seconds spent by the solver so far (observer excluded)
+  double cpu_seconds = 0.0;    ///< process CPU seconds so far (all threads; observer excluded)
 };
 
 /// Called after every iteration. The time and flops spent inside it are excluded from the
@@ -100,9 +101,12 @@ struct [[nodiscard]] SolverReport
                               ///< evaluations (nonlinear CG); 0 otherwise
   std::uint64_t flops = 0;    ///< counted flops: Problem::flops() delta + solver vector ops
   double seconds = 0.0;       ///< wall-clock seconds (observer time excluded)
+  double cpu_seconds = 0.0;   ///< process CPU seconds, all threads (observer time excluded)
   double residual_norm = std::numeric_limits<double>::quiet_NaN();  ///< final ‖r‖₂ (N)
   double threshold = 0.0;  ///< final stopping threshold on ‖r‖₂ (N)
   double energy = std::numeric_limits<double>::quiet_NaN();  ///< final Π (J) when known
+  long restarts = 0;       ///< dynamic relaxation: restarts after unstable steps, else 0
+  double time_step = 0.0;  ///< dynamic relaxation: the Δt of the final (re)start (s), else 0
   std::vector<double> residual_history;  ///< ‖r‖₂ after each iteration (index 0: start)
   std::vector<double> energy_history;    ///< Π after each iteration (index 0: start)
 };
@@ -119,6 +123,8 @@ class CostMeter {
   std::uint64_t flops() const;
   /// Seconds since construction, observer excluded.
   double seconds() const;
+  /// Process CPU seconds (all threads) since construction, observer excluded.
+  double cpu_seconds() const;
   /// Calls `observer` (if set) with `info` (cost fields filled in here) and excludes its cost.
   void observe(const IterationObserver& observer, IterationInfo info);
   /// Budget check: the StopReason for an exhausted budget, or kConverged when none is.
@@ -130,7 +136,9 @@ class CostMeter {
   std::uint64_t own_flops_ = 0;
   std::uint64_t excluded_flops_ = 0;
   double excluded_seconds_ = 0.0;
+  double excluded_cpu_seconds_ = 0.0;
   Timer timer_;
+  double cpu_start_ = process_cpu_seconds();
 };
 
 /// Stop reason for a failed evaluation: kInverted when the problem reported inverted elements,

@@ -1,0 +1,129 @@
+/// \file dynamic_parameters_test.cpp
+/// Automatic Δt and η (§4.1) from one Lanczos run (solver::estimate_dynamic_parameters) on
+/// elastic bodies: its cost against the solve it serves, and SS22 restarts after unstable steps
+/// (DynamicRelaxationOptions::max_restarts, §4.4.1) on a stiffening Veronda–Westmann cube whose
+/// automatic Δt inverts elements.
+#include <incise/fem/elastic_problem.hpp>
+#include <incise/material/material.hpp>
+#include <incise/mesh/generators.hpp>
+#include <incise/solver/dynamic_relaxation.hpp>
+#include <incise/solver/eigen_estimates.hpp>
+#include <incise/solver/truncated_newton.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace incise::solver {
+namespace {
+
+material::Parameters table_4_1(const std::string& material) {
+  material::Parameters p;  // Table 4.1
+  p.youngs_modulus = 1e4;
+  p.poisson_ratio = 0.3;
+  p.density = 1000.0;
+  p.gamma = material == "veronda-westmann" ? 8.0 : 0.0;
+  return p;
+}
+
+// The thesis' small cylinder (§4.2), gravity 9.8 m/s².
+std::unique_ptr<fem::ElasticProblem> cylinder(const std::string& material) {
+  const mesh::MeshData m = mesh::make_thesis_cylinder_small();
+  auto prob =
+      std::make_unique<fem::ElasticProblem>(m, material::Material(material, table_4_1(material)));
+  prob->fix_nodes(fem::nodes_on_plane(m, 0, 0.0));
+  prob->add_gravity(Vec3(0.0, 0.0, -9.8));
+  return prob;
+}
+
+// A 0.1 m cube of 6³×6 tetrahedra, face x = 0 fixed, gravity g sideways (−z).
+std::unique_ptr<fem::ElasticProblem> cube(const std::string& material, double g) {
+  const mesh::MeshData m = mesh::make_box(6, 6, 6, 0.1, 0.1, 0.1);
+  auto prob =
+      std::make_unique<fem::ElasticProblem>(m, material::Material(material, table_4_1(material)));
+  prob->fix_nodes(fem::nodes_on_plane(m, 0, 0.0));
+  prob->add_gravity(Vec3(0.0, 0.0, -g));
+  return prob;
+}
+
+DynamicRelaxationOptions ss22(const DynamicParameterEstimate& d, double epsilon, int restarts) {
+  DynamicRelaxationOptions o;
+  o.time_step = d.time_step;
+  o.damping = d.damping;
+  o.stop.rule = ResidualRule::kExternalForce;
+  o.stop.epsilon = epsilon;
+  o.max_restarts = restarts;
+  return o;
+}
+
+class EstimateCost : public ::testing::TestWithParam<std::string> {};
+
+// Issue 19's budget: the estimate costs ≤ 10 % of the solve it serves, counted in K-products
+// against time steps (one gradient evaluation each), to ‖r‖ ≤ 1e-6‖f‖. The counted-flop share
+// is printed, not asserted: a Veronda–Westmann K-product costs ≈ 1.4× a gradient in flops, so
+// its share is higher (docs/solvers.md: 10.1 %). The inverse iteration it replaces took 52,859
+// and 61,113 inner CG steps.
+TEST_P(EstimateCost, AtMostTenPercentOfTheSolve_Sec4_1) {
+  auto p = cylinder(GetParam());
+  VecX u = VecX::Zero(p->size());
+  const DynamicParameterEstimate d = estimate_dynamic_parameters(*p, u);
+  ASSERT_TRUE(d.ok()) << d.brief();
+  EXPECT_EQ(d.status, StopReason::kConverged);
+  const SolverReport rep = dynamic_relaxation(*p, u, ss22(d, 1e-6, 8));
+  ASSERT_TRUE(rep.ok()) << rep.brief();
+  EXPECT_EQ(rep.restarts, 0);
+  EXPECT_LE(double(d.products), 0.1 * double(rep.iterations))
+      << d.products << " products, " << rep.iterations << " steps";
+  EXPECT_GE(d.products, LanczosOptions{}.min_steps);  // it did run: the cost is not hidden
+  std::printf("[%s] estimate: %ld products, %.3g MFLOP; solve: %ld steps, %.3g MFLOP (%.1f %%)\n",
+              GetParam().c_str(), d.products, 1e-6 * double(d.flops), rep.iterations,
+              1e-6 * double(rep.flops), 100.0 * double(d.flops) / double(rep.flops));
+}
+
+INSTANTIATE_TEST_SUITE_P(Materials, EstimateCost, ::testing::Values("linear", "veronda-westmann"),
+                         [](const ::testing::TestParamInfo<std::string>& i) {
+                           return i.param == "linear" ? std::string("linear") : "veronda";
+                         });
+
+// Gravity 20 m/s² sideways on the stiffening Veronda–Westmann cube: λ_n grows as the cube bends,
+// so the automatic Δt = 0.9·2/√λ_n(u = 0) turns unstable and elements invert. Without restarts
+// that ends the run (inverted); with them Δt is lowered and the run converges to the state
+// truncated Newton finds (‖Δu‖ ≤ 1e-4‖u‖: both stop at ‖r‖ ≤ 1e-8‖f‖ and the tangent's
+// condition number on this mesh is ~1e3, so their errors are ≲ 1e-5).
+TEST(DynamicRelaxationRestarts, StiffeningVerondaWestmannThatInvertedConverges_Sec4_4_1) {
+  auto p = cube("veronda-westmann", 20.0);
+  VecX u = VecX::Zero(p->size());
+  const DynamicParameterEstimate d = estimate_dynamic_parameters(*p, u);
+  ASSERT_TRUE(d.ok()) << d.brief();
+  const SolverReport plain = dynamic_relaxation(*p, u, ss22(d, 1e-8, 0));
+  EXPECT_EQ(plain.status, StopReason::kInverted) << plain.brief();
+  u.setZero();
+  const SolverReport rep = dynamic_relaxation(*p, u, ss22(d, 1e-8, 8));
+  ASSERT_TRUE(rep.ok()) << rep.brief();
+  EXPECT_GE(rep.restarts, 1);
+  EXPECT_LT(rep.time_step, d.time_step);
+  VecX ref = VecX::Zero(p->size());
+  TruncatedNewtonOptions tn;
+  tn.stop.rule = ResidualRule::kExternalForce;
+  tn.stop.epsilon = 1e-8;
+  ASSERT_TRUE(truncated_newton(*p, ref, tn).ok());
+  EXPECT_LE((u - ref).norm(), 1e-4 * ref.norm());
+}
+
+// Restarts used up: the run reports the last event with a message naming the restarts.
+TEST(DynamicRelaxationRestarts, ExhaustedRestartsAreReportedNotSilent_Sec4_4_1) {
+  auto p = cube("veronda-westmann", 80.0);
+  VecX u = VecX::Zero(p->size());
+  const DynamicParameterEstimate d = estimate_dynamic_parameters(*p, u);
+  ASSERT_TRUE(d.ok()) << d.brief();
+  const SolverReport rep = dynamic_relaxation(*p, u, ss22(d, 1e-8, 1));
+  EXPECT_FALSE(rep.ok());
+  EXPECT_EQ(rep.restarts, 1);
+  EXPECT_NE(rep.message.find("after 1 restart(s)"), std::string::npos) << rep.message;
+  EXPECT_TRUE(u.allFinite());
+}
+
+}  // namespace
+}  // namespace incise::solver
