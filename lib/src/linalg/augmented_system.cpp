@@ -63,6 +63,7 @@ struct AugmentedSystem::Base {
   Eigen::VectorXd spai_lower, spai_diag, spai_upper;  // S(j+1,j), S(j,j), S(j,j+1)
   FactorStatus status = FactorStatus::kNotAnalyzed;
   std::string message;
+  double seconds = 0;  // wall time of make_base (factorization, LDLᵀ copy, S)
 };
 
 namespace {
@@ -139,6 +140,7 @@ void tridiagonal_spai(const SparseMatrix& r, Eigen::VectorXd& lower, Eigen::Vect
 // touches nothing but its arguments.
 std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
     SparseMatrix matrix, std::unique_ptr<CholmodFactor> factor, const AugmentedOptions& options) {
+  const Timer timer;
   auto base = std::make_unique<AugmentedSystem::Base>();
   base->matrix = std::move(matrix);
   base->matrix.makeCompressed();
@@ -161,6 +163,7 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
   if (options.preconditioner == SchurPreconditioner::kTridiagonalSpai) {
     tridiagonal_spai(base->matrix, base->spai_lower, base->spai_diag, base->spai_upper);
   }
+  base->seconds = timer.seconds();
   return base;
 }
 
@@ -204,6 +207,10 @@ FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
 const std::string& AugmentedSystem::factorization_message() const {
   static const std::string kNone;
   return base_ ? base_->message : kNone;
+}
+
+double AugmentedSystem::factorization_seconds() const {
+  return base_ && base_->status == FactorStatus::kOk ? base_->seconds : 0.0;
 }
 
 FactorStatus AugmentedSystem::factorization_status() const {

@@ -188,6 +188,10 @@ class AugmentedSystem {
   /// Status of the last initialize() (kNotAnalyzed before the first; kOverMemoryBudget when
   /// AugmentedOptions::cholmod.memory_budget_bytes refused the factorization).
   FactorStatus factorization_status() const;
+  /// Wall seconds the factor in use took to make (CHOLMOD factorization, its LDLᵀ copy and the
+  /// §3.5 preconditioner data), in initialize() or in the background job that was swapped in;
+  /// 0 without a factor. The cost model of an automatic §3.6 refactorization policy.
+  double factorization_seconds() const;
 
   /// Current number of DOFs n = n₀ + added DOFs.
   int num_dofs() const { return n_; }
