@@ -127,6 +127,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
     state.counters["swaps"] = swaps;
     state.counters["gmres_per_frame"] = static_cast<double>(iterations) / frames;
     state.counters["failed_steps"] = failed;
+    state.counters["grid_builds"] = static_cast<double>(session.cutter().grid_builds());
   }
 }
 
