@@ -781,10 +781,28 @@ Eigen::VectorXd AugmentedSystem::solve_schur_system(Augmentation& aug, const Eig
     // Rows and columns are in different units (displacement per force, per unit displacement)
     // and span many decades on long meshes: equilibrated, so that the LU's condition estimate
     // measures singularity, not scaling.
-    direct.factor(capacitance_matrix(aug, report.schur_solves), /*equilibrate=*/true);
-    direct.note(report);
-    if (direct.usable) {
-      prec = [&direct](const Eigen::VectorXd& v, Eigen::VectorXd& out) { direct.apply(v, out); };
+    if (options_.update_capacitance) {
+      // Updated, not refactored (CapacitanceFactor); fresh for a new factor of R.
+      const bool fresh = capacitance_generation_ != base_generation_;
+      const CapacitanceUpdate u =
+          capacitance_.update(capacitance_matrix(aug, report.schur_solves), aug.l, fresh);
+      capacitance_generation_ = base_generation_;
+      report.capacitance_refreshed = u.refreshed;
+      report.capacitance_rank = u.changed;
+      report.preconditioner_rcond = u.rcond;
+      report.preconditioner_dropped =
+          !(std::isfinite(u.rcond) && u.rcond > kMinPreconditionerRcond);
+      if (!report.preconditioner_dropped) {
+        prec = [this](const Eigen::VectorXd& v, Eigen::VectorXd& out) {
+          capacitance_.solve(v, out);
+        };
+      }
+    } else {
+      direct.factor(capacitance_matrix(aug, report.schur_solves), /*equilibrate=*/true);
+      direct.note(report);
+      if (direct.usable) {
+        prec = [&direct](const Eigen::VectorXd& v, Eigen::VectorXd& out) { direct.apply(v, out); };
+      }
     }
   } else if (hsj.usable) {
     prec = [&hsj](const Eigen::VectorXd& v, Eigen::VectorXd& out) { hsj.apply(v, out); };

@@ -21,6 +21,7 @@
 
 #include <incise/core/name_table.hpp>
 #include <incise/core/outcome.hpp>
+#include <incise/linalg/capacitance_factor.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
 #include <incise/linalg/gmres.hpp>
 
@@ -97,6 +98,12 @@ struct AugmentedOptions {
   /// AugmentedReport::amplification_warning. > 0. 1e8: κ ≥ A, so the solution may have lost
   /// half of double precision's 16 digits (ε·A > 2e-8).
   double warn_amplification = 1e8;
+  /// SchurSolver::kDirectCached: keep the dense factorization of the capacitance matrix
+  /// between solves and update it for the columns that joined, left or changed
+  /// (CapacitanceFactor: Sherman–Morrison–Woodbury on a fresh LU, O(m²k) per solve, fresh
+  /// again when the update would cost more), instead of an O(m³) LU at every solve. The
+  /// factor of R changing (refactorization) starts it afresh.
+  bool update_capacitance = true;
   /// Threads of step 3's full backward substitution (ClosureLdlSolver): 1 = serial, ≥ 1. The
   /// pass streams all of L and is memory-bound, so extra threads help as far as a core adds
   /// memory bandwidth (docs/augmented.md). The result is bit-identical for any value. Leave at
@@ -153,6 +160,11 @@ struct [[nodiscard]] AugmentedReport
   bool preconditioner_dropped = false;
   /// rcond estimate of the preconditioner's LU (NaN: none built — kNone, or m = 0)
   double preconditioner_rcond = std::numeric_limits<double>::quiet_NaN();
+  /// kDirectCached with update_capacitance: the capacitance factorization was made fresh in
+  /// this solve (first solve, new factor of R, or the cost rule); else it was updated.
+  bool capacitance_refreshed = false;
+  /// kDirectCached with update_capacitance: rank of the update to the last fresh one (0: fresh)
+  int capacitance_rank = 0;
   bool refactorization_swapped = false;  ///< a background factor replaced the old one here
   FactorStatus refactorization_status = FactorStatus::kOk;  ///< of a finished background job
 };
@@ -297,6 +309,9 @@ class AugmentedSystem {
   std::uint64_t g_generation_ = 0;     // base_generation_ g_ was computed with (0: none)
   std::vector<int> g_l_;               // its DOFs (sorted)
   Eigen::MatrixXd g_;
+  // update_capacitance: the kept factorization of H R⁻¹ J and the base generation it is of.
+  CapacitanceFactor capacitance_;
+  std::uint64_t capacitance_generation_ = 0;
   // Workspace.
   std::vector<int> pos_in_l_;
 };
