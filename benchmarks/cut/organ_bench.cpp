@@ -80,7 +80,9 @@ void BM_LiverScalpelPath(benchmark::State& state) {
       return;
     }
     std::vector<double> cut, update, frame, cut_cpu, update_cpu, frame_cpu;
-    int failed = 0, swaps = 0, m_max = 0, iterations = 0;
+    int failed = 0, swaps = 0, m_max = 0, iterations = 0, refreshed = 0, updated = 0;
+    double setup = 0, step1 = 0, step2 = 0, step3 = 0, schur_solves = 0, newcols = 0, product = 0,
+           capfactor = 0;
     for (int f = 0; f < frames; ++f) {
       const auto tris = path.frame(f, advance);
       double c = 0, u = 0, cc = 0, uc = 0;
@@ -94,6 +96,15 @@ void BM_LiverScalpelPath(benchmark::State& state) {
         swaps += r.refactorization_swapped ? 1 : 0;
         m_max = std::max(m_max, r.m_after_solve);
         iterations += r.solve.gmres.iterations;
+        if (r.solved && r.solve.m > 0) (r.solve.capacitance_refreshed ? refreshed : updated) += 1;
+        setup += r.solve.seconds_setup;
+        step1 += r.solve.seconds_step1;
+        step2 += r.solve.seconds_step2;
+        step3 += r.solve.seconds_step3;
+        schur_solves += r.solve.schur_solves;
+        newcols += r.solve.seconds_new_columns;
+        product += r.solve.seconds_capacitance_product;
+        capfactor += r.solve.seconds_capacitance_factor;
       }
       cut.push_back(c);
       update.push_back(u);
@@ -126,6 +137,16 @@ void BM_LiverScalpelPath(benchmark::State& state) {
     state.counters["swaps"] = swaps;
     state.counters["gmres_per_frame"] = static_cast<double>(iterations) / frames;
     state.counters["failed_steps"] = failed;
+    state.counters["cap_updated"] = updated;
+    state.counters["cap_fresh"] = refreshed;
+    state.counters["mean_setup_ms"] = 1e3 * setup / frames;
+    state.counters["mean_step1_ms"] = 1e3 * step1 / frames;
+    state.counters["mean_step2_ms"] = 1e3 * step2 / frames;
+    state.counters["mean_step3_ms"] = 1e3 * step3 / frames;
+    state.counters["new_columns_per_frame"] = schur_solves / frames;
+    state.counters["mean_newcol_ms"] = 1e3 * newcols / frames;
+    state.counters["mean_product_ms"] = 1e3 * product / frames;
+    state.counters["mean_capfactor_ms"] = 1e3 * capfactor / frames;
     state.counters["grid_builds"] = static_cast<double>(session.cutter().grid_builds());
   }
 }

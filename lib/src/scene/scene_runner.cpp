@@ -201,6 +201,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
       row.refactorization_started = r.refactorization_started;
       row.refactorization_swapped = r.refactorization_swapped;
       refactorizations += r.refactorization_swapped ? 1 : 0;
+      row.seconds_swap = r.solve.seconds_swap;
     }
     row.seconds_cut = r.seconds_cut;
     row.seconds_update = r.seconds_update + r.seconds_solve;

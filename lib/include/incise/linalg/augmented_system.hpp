@@ -151,6 +151,13 @@ struct [[nodiscard]] AugmentedReport
   double seconds_step2 = 0;
   double seconds_step3 = 0;
   double seconds_total = 0;
+  double seconds_swap = 0;
+  // Of seconds_step2 with kDirectCached: the restricted solves R⁻¹e for new columns of G, the
+  // product Φ + GΨ, and the capacitance factorization (fresh or updated).
+  double seconds_new_columns = 0;
+  double seconds_capacitance_product = 0;
+  double seconds_capacitance_factor =
+      0;                     ///< §3.6: swapping a finished background factor in (incl. in total)
   double amplification = 0;  ///< see AugmentedOptions::max_amplification
   /// amplification > AugmentedOptions::warn_amplification: digits may be lost, even when ok()
   bool amplification_warning = false;
@@ -281,7 +288,7 @@ class AugmentedSystem {
   void find_closures(Augmentation& aug, AugmentedReport& report);
   Eigen::MatrixXd hsj_matrix(const Augmentation& aug) const;
   Eigen::VectorXd schur_rhs(const Augmentation& aug);
-  Eigen::MatrixXd capacitance_matrix(const Augmentation& aug, int& solves);
+  Eigen::MatrixXd capacitance_matrix(const Augmentation& aug, int& solves, AugmentedReport& report);
   Eigen::VectorXd solve_schur_system(Augmentation& aug, const Eigen::VectorXd& rhs,
                                      const SchurLu& hsj, AugmentedReport& report);
   void back_substitute(Augmentation& aug, const Eigen::VectorXd& a2, Eigen::VectorXd& displacement);
