@@ -22,6 +22,7 @@
 #include <incise/linalg/cholmod_factor.hpp>
 #include <incise/linalg/ldl_closure_solver.hpp>
 #include <incise/material/material.hpp>
+#include <incise/mesh/quality.hpp>
 #include <incise/mesh/refine_uniform.hpp>
 #include <incise_bench/context.hpp>
 
@@ -47,23 +48,8 @@ const incise::mesh::MeshData& liver(bool refined) {
   return refined ? fine : coarse;
 }
 
-/// Median, 95th percentile (nearest rank) and maximum of `v` (empty: zeros).
-struct Stats {
-  double median = 0, p95 = 0, max = 0;
-};
-Stats stats(std::vector<double> v) {
-  Stats s;
-  if (v.empty()) return s;
-  std::sort(v.begin(), v.end());
-  const auto rank = [&](double q) {
-    const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
-    return v[std::min(v.size() - 1, k == 0 ? 0 : k - 1)];
-  };
-  s.median = rank(0.5);
-  s.p95 = rank(0.95);
-  s.max = v.back();
-  return s;
-}
+/// Median, 95th percentile (nearest rank) and maximum: mesh::summarize.
+using incise::mesh::summarize;
 
 void BM_LiverScalpelPath(benchmark::State& state) {
   const bool refined = state.range(0) != 0;
@@ -115,8 +101,8 @@ void BM_LiverScalpelPath(benchmark::State& state) {
       update_cpu.push_back(uc);
       frame_cpu.push_back(cc + uc);
     }
-    const Stats sc = stats(cut), su = stats(update), sf = stats(frame);
-    const Stats scc = stats(cut_cpu), suc = stats(update_cpu), sfc = stats(frame_cpu);
+    const auto sc = summarize(cut), su = summarize(update), sf = summarize(frame);
+    const auto scc = summarize(cut_cpu), suc = summarize(update_cpu), sfc = summarize(frame_cpu);
     state.counters["cpu_cut_med_ms"] = 1e3 * scc.median;
     state.counters["cpu_cut_max_ms"] = 1e3 * scc.max;
     state.counters["cpu_upd_med_ms"] = 1e3 * suc.median;
@@ -198,10 +184,12 @@ void BM_NewColumnsOfG(benchmark::State& state) {
   std::partial_sort(near.begin(), near.begin() + 300, near.end());
   std::vector<int> l;
   for (int i = 0; i < 300; ++i)
-    for (int c = 0; c < 3; ++c) l.push_back(session.dof(near[static_cast<std::size_t>(i)].second) + c);
+    for (int c = 0; c < 3; ++c)
+      l.push_back(session.dof(near[static_cast<std::size_t>(i)].second) + c);
   std::sort(l.begin(), l.end());
   std::vector<int> joining;
-  for (std::size_t i = 0; i < l.size() && joining.size() < 40; i += l.size() / 40) joining.push_back(l[i]);
+  for (std::size_t i = 0; i < l.size() && joining.size() < 40; i += l.size() / 40)
+    joining.push_back(l[i]);
   const std::vector<int> closure_y = solver.closure(l);
   double checksum = 0;
   for (auto _ : state) {
@@ -224,7 +212,11 @@ void BM_NewColumnsOfG(benchmark::State& state) {
   state.counters["closure_y"] = static_cast<double>(closure_y.size());
   state.counters["nnz_l"] = static_cast<double>(factor.extract_ldl()->nnz_l());
 }
-BENCHMARK(BM_NewColumnsOfG)->Args({0, 0})->Args({1, 0})->Args({0, 1})->Args({1, 1})
+BENCHMARK(BM_NewColumnsOfG)
+    ->Args({0, 0})
+    ->Args({1, 0})
+    ->Args({0, 1})
+    ->Args({1, 1})
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace
