@@ -42,6 +42,7 @@ struct AugmentedCutOptions {
     linalg::AugmentedOptions o;
     o.cholmod.kind = linalg::CholmodKind::kSupernodal;
     o.schur_solver = linalg::SchurSolver::kDirectCached;
+    o.update_capacitance = true;  // issue 17: updated, not refactored (docs/augmented.md)
     return o;
   }
   cut::CutOptions cut;  ///< the cutter's options (thesis defaults)
