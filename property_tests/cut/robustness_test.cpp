@@ -521,5 +521,64 @@ TEST(CutRobustness, CapAndSpindleRecipesRemoveSingleFlatElements) {
   }
 }
 
+// Issue 17: the boundary search grid is kept across bulk moves of the deformed positions
+// (CutMesh::set_deformed after each solve) and its queries widened by the drift, instead of
+// being rebuilt. Mesh A keeps its grid; mesh B is moved away and back before every step, so its
+// drift exceeds half a cell and its grid is rebuilt every step. Both see the same positions and
+// sweeps: the cuts must be identical (reports and resulting meshes), with fewer builds for A.
+TEST(CutRobustness, KeptSearchGridCutsLikeARebuiltOneUnderDeformation) {
+  INCISE_SEEDED_RNG(rng, 3017);
+  const mesh::MeshData box = mesh::make_box(6, 6, 6, 1, 1, 1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Index dissected = 0;
+  for (int sequence = 0; sequence < 4; ++sequence) {
+    CutMesh a(box), b(box);
+    for (CutMesh* m : {&a, &b})
+      for (Index v = 0; v < m->num_nodes(); ++v)
+        if (m->reference(v).z() < 1e-12) m->set_fixed(v, true);
+    Cutter ca(a), cb(b);
+    Vec3 p(0.2 + 0.1 * u(rng), 0.2 + 0.1 * u(rng), 1.1);
+    const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, 0).normalized();
+    for (int k = 0; k < 12; ++k) {
+      // A smooth deformation of amplitude ≤ 0.02 (an eighth of the cell size 1/6 ≈ 0.17) that
+      // changes every step: bulk moves the grid must follow.
+      const double amp = 0.02 * u(rng), phase = 6.28 * u(rng);
+      Eigen::Matrix3Xd x(3, a.num_nodes());
+      for (Index v = 0; v < a.num_nodes(); ++v) {
+        const Vec3 X = a.reference(v);
+        x.col(v) = X + amp * Vec3(std::sin(3 * X.z() + phase), std::cos(2 * X.x() + phase), 0);
+      }
+      a.set_deformed(x);
+      b.set_deformed(x.array() + 1.0);  // a drift of √3: B's grid is rebuilt
+      b.set_deformed(x);
+      const Vec3 q = p + 0.08 * dir;
+      const Vec3 top(0, 0, 0), tip(0, 0, -0.6);
+      const CutStepReport ra = ca.step(p + top, p + tip, q + tip);
+      const CutStepReport rb = cb.step(p + top, p + tip, q + tip);
+      const CutStepReport sa = ca.step(p + top, q + tip, q + top);
+      const CutStepReport sb = cb.step(p + top, q + tip, q + top);
+      for (const auto& [x1, x2] : {std::pair{&ra, &rb}, std::pair{&sa, &sb}}) {
+        ASSERT_EQ(x1->faces_selected, x2->faces_selected) << "sequence " << sequence << " k " << k;
+        ASSERT_EQ(x1->faces_dissected, x2->faces_dissected);
+        ASSERT_EQ(x1->changed_elements, x2->changed_elements);
+        ASSERT_EQ(x1->new_nodes, x2->new_nodes);
+        dissected += x1->faces_dissected;
+      }
+      p = q;
+    }
+    ASSERT_EQ(a.num_nodes(), b.num_nodes());
+    ASSERT_EQ(a.element_capacity(), b.element_capacity());
+    for (Index e = 0; e < a.element_capacity(); ++e) {
+      ASSERT_EQ(a.alive(e), b.alive(e));
+      if (a.alive(e)) ASSERT_EQ(a.element(e), b.element(e));
+    }
+    for (Index v = 0; v < a.num_nodes(); ++v) ASSERT_EQ(a.reference(v), b.reference(v));
+    EXPECT_EQ(cb.grid_builds(), 12);  // after every bulk move (one per pair of triangles)
+    EXPECT_LT(ca.grid_builds(), cb.grid_builds());
+    expect_valid(a, "kept grid");
+  }
+  EXPECT_GT(dissected, 0);  // the sweeps cut (else the comparison proves nothing)
+}
+
 }  // namespace
 }  // namespace incise::cut

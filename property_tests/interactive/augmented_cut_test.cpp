@@ -6,6 +6,7 @@
 #include <incise/core/error.hpp>
 #include <incise/fem/elastic_problem.hpp>
 #include <incise/interactive/augmented_cut_session.hpp>
+#include <incise/interactive/refactorization_policy.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise_test/augmented_reference.hpp>
 #include <incise_test/seed.hpp>
@@ -13,7 +14,9 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <random>
 #include <thread>
@@ -159,6 +162,7 @@ void random_cuts(const Body& body, int sequences, std::mt19937_64& rng, const ch
     opt.cut.seed = rng();
     opt.cut.remove_degeneracies = u(rng) < 0.7;
     opt.update_deformed = u(rng) < 0.5;
+    opt.automatic_refactorization = false;  // updates of K⁰'s factor only (asserted below)
     AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
     ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
     const int n0 = session.system().factored_dofs();
@@ -441,6 +445,122 @@ TEST(AugmentedCut, TinyPivotWarningOnK0IsAFailedInitialReport) {
   EXPECT_EQ(init.solve.status, linalg::AugmentedStatus::kNoFactor);
   EXPECT_NE(init.message.find("tiny pivot: CHOLMOD_DSMALL"), std::string::npos) << init.message;
   EXPECT_EQ(session.displacement(), Eigen::Matrix3Xd::Zero(3, body.mesh.num_points()));
+}
+
+// The break-even rule of §3.6 (refactorization_policy.hpp) on hand-fed costs: floor = the
+// cheapest update of the period, excess = Σ (cost − floor); a start once excess ≥ T_f > 0.
+TEST(RefactorizationPolicy, Sec3_6BreakEvenRuleOnInjectedCosts) {
+  RefactorizationPolicy p;
+  EXPECT_FALSE(p.should_start(1.0));  // nothing observed
+  p.observe(2.0, false);              // floor 2, excess 0
+  p.observe(1.0, false);              // floor 1 (cheaper), excess 0 + 0
+  EXPECT_EQ(p.floor(), 1.0);
+  EXPECT_EQ(p.excess(), 0.0);
+  p.observe(2.0, false);  // excess 1
+  p.observe(4.0, false);  // excess 1 + 3 = 4
+  EXPECT_EQ(p.excess(), 4.0);
+  EXPECT_FALSE(p.should_start(4.5));
+  EXPECT_TRUE(p.should_start(4.0));
+  EXPECT_FALSE(p.should_start(0.0));  // an unknown (zero) factorization cost never starts one
+  EXPECT_FALSE(p.should_start(std::numeric_limits<double>::quiet_NaN()));
+  p.observe(3.0, true);  // a swapped-in factor: new period, floor 3
+  EXPECT_EQ(p.floor(), 3.0);
+  EXPECT_EQ(p.excess(), 0.0);
+  EXPECT_FALSE(p.should_start(1e-300));
+  EXPECT_THROW(p.observe(-1.0, false), ParameterError);
+  EXPECT_THROW(p.observe(std::numeric_limits<double>::infinity(), false), ParameterError);
+  p.reset();
+  EXPECT_EQ(p.excess(), 0.0);
+  EXPECT_TRUE(std::isinf(p.floor()));
+}
+
+/// The automatic §3.6 policy (on by default) with an injected cost model — update cost m
+/// (columns), factorization cost kFactor — starts the first background refactorization exactly
+/// at the first solve where Σ (m − min m) reaches kFactor (computed here from the reports),
+/// never while one is pending; after each swap m drops and the period restarts; every solution
+/// equals a fresh factorization's. Deterministic: counts, no clocks (a job is waited for).
+TEST(AugmentedCut, Sec3_6AutomaticPolicyStartsAtTheBreakEvenSolveAndStaysExact) {
+  INCISE_SEEDED_RNG(rng, 609);
+  const Body body = small_cube();
+  constexpr double kFactor = 150;  // "seconds" of one factorization: a few cutting steps' m
+  const int sequences = incise::test::scaled(3);
+  int started = 0, swapped = 0;
+  for (int s = 0; s < sequences; ++s) {
+    AugmentedCutOptions opt = test_options();
+    ASSERT_TRUE(opt.automatic_refactorization);  // the default
+    ASSERT_EQ(opt.refactor_at_m, 0);
+    opt.cut.seed = rng();
+    opt.update_cost = [](const linalg::AugmentedReport& r) { return static_cast<double>(r.m); };
+    opt.factorization_cost = [](const linalg::AugmentedSystem&) { return kFactor; };
+    AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
+    ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
+    // The model's own bookkeeping, independent of the policy's: from the initial solve on.
+    double floor = session.initial_report().solve.m, excess = 0;
+    RandomBlade blade(body, rng);
+    for (int k = 0; k < blade.moves(); ++k) {
+      for (const std::array<Vec3, 3>& tri : blade.next_move()) {
+        ASSERT_FALSE(session.system().refactorization_pending());  // waited for below
+        const AugmentedCutStepReport r = session.step(tri);
+        ASSERT_TRUE(admissible(r));
+        if (!r.ok()) break;
+        if (r.solved) {
+          floor = std::min(floor, static_cast<double>(r.solve.m));
+          excess += r.solve.m - floor;
+        }
+        const bool expect_start =
+            r.solved && excess >= kFactor && r.m_after_solve > r.solve.dirichlet;
+        ASSERT_EQ(r.refactorization_started, expect_start)
+            << "excess " << excess << " m " << r.solve.m << " floor " << floor;
+        EXPECT_EQ(session.refactorization_policy().excess(), excess);
+        const Reference ref = reference_solution(session, linear_material(), body.forces);
+        ASSERT_TRUE(ref.ok);
+        ASSERT_LE(relative_difference(session, ref), tolerance(ref)) << "sequence " << s;
+        if (!r.refactorization_started) continue;
+        ++started;
+        ASSERT_TRUE(session.wait_for_refactorization())
+            << static_cast<int>(session.system().last_refactorization_status());
+        ++swapped;
+        EXPECT_EQ(session.refactorization_policy().excess(), 0.0);  // a new period
+        floor = std::numeric_limits<double>::infinity();
+        excess = 0;
+        const AugmentedCutStepReport q = session.solve();
+        ASSERT_TRUE(q.ok()) << q.message;
+        EXPECT_EQ(q.m_after_solve, q.solve.dirichlet);  // nothing changed while it ran
+        floor = std::min(floor, static_cast<double>(q.solve.m));
+        excess += q.solve.m - floor;
+        const Reference after = reference_solution(session, linear_material(), body.forces);
+        ASSERT_TRUE(after.ok);
+        ASSERT_LE(relative_difference(session, after), tolerance(after));
+      }
+    }
+  }
+  EXPECT_GE(started, 1);  // the model must trigger, or the test proves nothing
+  EXPECT_EQ(swapped, started);
+}
+
+/// refactor_at_m > 0 overrides the automatic policy; automatic_refactorization = false with
+/// refactor_at_m = 0 never refactors — with a cost model that would start a job at every solve.
+TEST(AugmentedCut, Sec3_6RefactorAtMOverridesTheAutomaticPolicy) {
+  const Body body = small_cube();
+  for (const bool automatic : {true, false}) {
+    AugmentedCutOptions opt = test_options();
+    opt.automatic_refactorization = automatic;
+    opt.refactor_at_m = automatic ? 1000000 : 0;
+    opt.update_cost = [](const linalg::AugmentedReport& r) { return static_cast<double>(r.m); };
+    opt.factorization_cost = [](const linalg::AugmentedSystem&) { return 1e-300; };
+    AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
+    int solved = 0;
+    for (const std::array<Vec3, 3>& tri :
+         {std::array<Vec3, 3>{Vec3(0.3, -0.1, 1.2), Vec3(0.3, -0.1, 0.5), Vec3(0.3, 1.1, 0.5)},
+          {Vec3(0.3, -0.1, 1.2), Vec3(0.3, 1.1, 0.5), Vec3(0.3, 1.1, 1.2)}}) {
+      const AugmentedCutStepReport r = session.step(tri);
+      ASSERT_TRUE(r.ok()) << r.message;
+      solved += r.solved && r.solve.m > 0;
+      EXPECT_FALSE(r.refactorization_started);
+    }
+    EXPECT_GT(solved, 0);  // the model would have started a job at these solves
+    EXPECT_FALSE(session.system().refactorization_pending());
+  }
 }
 
 }  // namespace

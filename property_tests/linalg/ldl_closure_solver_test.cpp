@@ -153,6 +153,47 @@ TEST(ClosureLdlSolver, RestrictedSolvesEqualFullSolvesThm1to3) {
   }
 }
 
+// Issue 17: the blocked restricted solve with k unit right-hand sides (one forward and one
+// backward pass for all of them) equals k single restricted solves on the wanted entries, and
+// the full solves; with larger closures than needed too.
+TEST(ClosureLdlSolver, BlockedUnitSolvesEqualSingleRestrictedSolvesThm1to3) {
+  INCISE_SEEDED_RNG(rng, 17);
+  for (const Case& c : cases(rng)) {
+    SCOPED_TRACE(c.name);
+    const auto ldl = factor_of(c.a, c.options);
+    ASSERT_NE(ldl, nullptr);
+    ClosureLdlSolver s(ldl);
+    const int n = ldl->n;
+    for (int trial = 0; trial < scaled(10); ++trial) {
+      const std::vector<int> cols = random_support(n, 1 + trial % 9, rng);
+      const std::vector<int> want = random_support(n, 1 + trial % 11, rng);
+      std::vector<int> more_w = want;
+      more_w.push_back((5 * trial) % n);
+      for (const std::vector<int>* back : {&want, static_cast<const std::vector<int>*>(&more_w)}) {
+        Eigen::MatrixXd x;
+        s.solve_restricted_block(cols, s.closure(cols), s.closure(*back), want, x);
+        ASSERT_EQ(x.rows(), static_cast<Eigen::Index>(want.size()));
+        ASSERT_EQ(x.cols(), static_cast<Eigen::Index>(cols.size()));
+        for (std::size_t k = 0; k < cols.size(); ++k) {
+          std::vector<double> single;
+          s.solve_restricted({cols[k]}, {1.0}, s.closure({cols[k]}), s.closure(*back), want,
+                             single);
+          Eigen::VectorXd e = Eigen::VectorXd::Zero(n), full;
+          e(cols[k]) = 1.0;
+          s.solve_dense(e, full);
+          for (std::size_t w = 0; w < want.size(); ++w) {
+            // Same operations up to the order of the sums: round-off only.
+            EXPECT_NEAR(x(static_cast<Eigen::Index>(w), static_cast<Eigen::Index>(k)), single[w],
+                        kSolveTol * full.norm());
+            EXPECT_NEAR(x(static_cast<Eigen::Index>(w), static_cast<Eigen::Index>(k)),
+                        full(want[w]), kSolveTol * full.norm());
+          }
+        }
+      }
+    }
+  }
+}
+
 // The threaded full backward pass (ClosureLdlSolver with threads > 1) splits the postordered
 // elimination forest into a root side and disjoint subtrees; every entry is computed by the
 // same operations in the same order, so the result must be bit-identical to the serial pass.

@@ -148,9 +148,28 @@ TEST(SceneOutputs, InteractiveCutRunWritesOneRowAndOneFramePerSolve) {
   // Each solve carries whether GMRES ran unpreconditioned (a dropped singular preconditioner)
   // and the amplification of its solution: the columns after the timings, and the summary's
   // cut_steps (with the amplification warning).
-  EXPECT_NE(rows[0].find(",update_cpu_seconds,preconditioner_dropped,amplification"),
+  EXPECT_NE(rows[0].find(",update_cpu_seconds,preconditioner_dropped,amplification,swap_seconds"),
             std::string::npos)
       << rows[0];
+  // Issue 17: per-frame times (frame = cut + update, after the initial solve) summarized by
+  // median, p95 and max; the max equals the largest row, computed here from the rows.
+  {
+    const Json summary = Json::parse(scene::summary_json(built, res, 0.0, written));
+    double max_frame = 0, max_swap = 0;
+    for (std::size_t k = 1; k < solves; ++k) {
+      max_frame =
+          std::max(max_frame, res.cut_steps[k].seconds_cut + res.cut_steps[k].seconds_update);
+      max_swap = std::max(max_swap, res.cut_steps[k].seconds_swap);
+    }
+    const Json& f = summary["frame_seconds"];
+    EXPECT_EQ(f["frames"], static_cast<int>(solves) - 1);
+    EXPECT_EQ(f["max"], max_frame);
+    EXPECT_LE(f["median"].get<double>(), f["p95"].get<double>());
+    EXPECT_LE(f["p95"].get<double>(), f["max"].get<double>());
+    EXPECT_GT(f["median"].get<double>(), 0.0);
+    EXPECT_EQ(summary["swap_seconds"]["max"], max_swap);
+    EXPECT_EQ(summary["cut_steps"][1]["swap_seconds"], res.cut_steps[1].seconds_swap);
+  }
   const Json summary = Json::parse(scene::summary_json(built, res, 0.0, written));
   ASSERT_EQ(summary["cut_steps"].size(), solves);
   for (std::size_t k = 0; k < solves; ++k) {

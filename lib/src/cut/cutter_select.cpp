@@ -25,6 +25,10 @@ namespace {
 /// ~1e-16 relative error of t = d_p/(d_p − d_q).
 constexpr double kHalfTie = 1e-12;
 
+/// The search grid is rebuilt once nodes may have drifted this many cells since it was built
+/// (queries are widened by the drift until then).
+constexpr double kGridRebuildSlack = 0.5;
+
 }  // namespace
 
 void Cutter::grid_insert(Index e) {
@@ -50,7 +54,14 @@ void Cutter::grid_insert(Index e) {
 }
 
 void Cutter::collect_seeds(const Vec3 (&tri)[3], std::vector<Index>& seeds) {
-  if (grid_version_ != mesh_.positions_version()) {
+  // Every entry was inserted at positions from which no node has since moved by more than
+  // `slack` (CutMesh::deformed_drift), so widening the query by it finds every element the
+  // current positions would; the grid is rebuilt only once the slack reaches half a cell
+  // (a bulk move), not after every solve (issue 17: the rebuild is O(mesh)).
+  double slack = mesh_.deformed_drift() - grid_drift_;
+  const bool never_built = grid_version_ == ~std::uint64_t{0};
+  if (never_built ||
+      (grid_version_ != mesh_.positions_version() && !(slack <= kGridRebuildSlack * grid_->h))) {
     // (Re)build: cell size = mean longest edge of the boundary elements.
     grid_->cells.clear();
     grid_->lo[0] = grid_->lo[1] = grid_->lo[2] = 0;
@@ -74,12 +85,15 @@ void Cutter::collect_seeds(const Vec3 (&tri)[3], std::vector<Index>& seeds) {
     grid_->h = count > 0 && sum > 0 ? sum / count : 1.0;
     for (Index e = 0; e < mesh_.element_capacity(); ++e) grid_insert(e);
     grid_version_ = mesh_.positions_version();
+    grid_drift_ = mesh_.deformed_drift();
+    ++grid_builds_;
+    slack = 0;
   }
   const Vec3 n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalized();
-  const Vec3 lo = tri[0].cwiseMin(tri[1]).cwiseMin(tri[2]);
-  const Vec3 hi = tri[0].cwiseMax(tri[1]).cwiseMax(tri[2]);
+  const Vec3 lo = tri[0].cwiseMin(tri[1]).cwiseMin(tri[2]) - Vec3::Constant(slack);
+  const Vec3 hi = tri[0].cwiseMax(tri[1]).cwiseMax(tri[2]) + Vec3::Constant(slack);
   const double h = grid_->h;
-  const double reach = 0.5 * h * n.cwiseAbs().sum();
+  const double reach = 0.5 * h * n.cwiseAbs().sum() + slack;
   // Enumerate only cells inside both Δ's box and the occupied range of the grid.
   const std::int64_t q0[3] = {std::max(grid_->coord(lo.x()), grid_->lo[0]),
                               std::max(grid_->coord(lo.y()), grid_->lo[1]),

@@ -27,8 +27,9 @@ AugmentedCutSession::AugmentedCutSession(const mesh::MeshData& mesh,
                      "AugmentedCutSession needs the \"linear\" material (the augmented solver "
                      "solves the linear static problem K a = f), got \"" +
                          material_.name() + "\"");
-  INCISE_CHECK_PARAM(options_.refactor_at_m >= 0,
-                     "AugmentedCutOptions::refactor_at_m must be >= 0 (0 = never refactor)");
+  INCISE_CHECK_PARAM(
+      options_.refactor_at_m >= 0,
+      "AugmentedCutOptions::refactor_at_m must be >= 0 (0 = the automatic policy, or none)");
   mesh_ = std::make_unique<cut::CutMesh>(mesh);
   const Index n = mesh_->num_nodes();
   INCISE_CHECK_PARAM(node_forces.cols() == n, "node_forces needs one column per mesh node");
@@ -238,6 +239,12 @@ void AugmentedCutSession::set_node_force(Index v, const Vec3& force) {
   last_.solved = false;
 }
 
+bool AugmentedCutSession::wait_for_refactorization() {
+  const bool swapped = system_->wait_for_refactorization();
+  if (swapped) policy_.reset();
+  return swapped;
+}
+
 AugmentedCutStepReport AugmentedCutSession::solve() {
   AugmentedCutStepReport r;
   const double cpu0 = thread_cpu_seconds();
@@ -280,11 +287,25 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
     // next solve that finds the job finished swaps it in.
     // Not in the solve that dropped a failed job (its snapshot was not positive definite): the
     // next solve makes the next attempt, so a stuck K costs one factorization every other solve.
-    if (options_.refactor_at_m > 0 && r.solve.status != linalg::AugmentedStatus::kNoFactor &&
-        r.solve.refactorization_status == linalg::FactorStatus::kOk &&
-        r.m_after_solve - r.solve.dirichlet >= options_.refactor_at_m &&
-        !system_->refactorization_pending())
-      r.refactorization_started = system_->start_refactorization();
+    const bool may_start = r.solve.status != linalg::AugmentedStatus::kNoFactor &&
+                           r.solve.refactorization_status == linalg::FactorStatus::kOk &&
+                           !system_->refactorization_pending();
+    const int removable = r.m_after_solve - r.solve.dirichlet;
+    if (options_.refactor_at_m > 0) {
+      if (may_start && removable >= options_.refactor_at_m)
+        r.refactorization_started = system_->start_refactorization();
+    } else if (options_.automatic_refactorization &&
+               r.solve.status != linalg::AugmentedStatus::kNoFactor) {
+      // The break-even rule (refactorization_policy.hpp) on measured or injected costs.
+      const double update =
+          options_.update_cost ? options_.update_cost(r.solve) : r.solve.seconds_total;
+      policy_.observe(update, r.solve.refactorization_swapped);
+      const double factorization = options_.factorization_cost
+                                       ? options_.factorization_cost(*system_)
+                                       : system_->factorization_seconds();
+      if (may_start && removable > 0 && policy_.should_start(factorization))
+        r.refactorization_started = system_->start_refactorization();
+    }
     if (!r.solve.ok()) {
       r.status = CutSolveStatus::kSolverFailed;
       r.message = r.solve.brief();

@@ -63,6 +63,7 @@ struct AugmentedSystem::Base {
   Eigen::VectorXd spai_lower, spai_diag, spai_upper;  // S(j+1,j), S(j,j), S(j,j+1)
   FactorStatus status = FactorStatus::kNotAnalyzed;
   std::string message;
+  double seconds = 0;  // wall time of make_base (factorization, LDLᵀ copy, S)
 };
 
 namespace {
@@ -139,6 +140,7 @@ void tridiagonal_spai(const SparseMatrix& r, Eigen::VectorXd& lower, Eigen::Vect
 // touches nothing but its arguments.
 std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
     SparseMatrix matrix, std::unique_ptr<CholmodFactor> factor, const AugmentedOptions& options) {
+  const Timer timer;
   auto base = std::make_unique<AugmentedSystem::Base>();
   base->matrix = std::move(matrix);
   base->matrix.makeCompressed();
@@ -161,6 +163,7 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
   if (options.preconditioner == SchurPreconditioner::kTridiagonalSpai) {
     tridiagonal_spai(base->matrix, base->spai_lower, base->spai_diag, base->spai_upper);
   }
+  base->seconds = timer.seconds();
   return base;
 }
 
@@ -204,6 +207,10 @@ FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
 const std::string& AugmentedSystem::factorization_message() const {
   static const std::string kNone;
   return base_ ? base_->message : kNone;
+}
+
+double AugmentedSystem::factorization_seconds() const {
+  return base_ && base_->status == FactorStatus::kOk ? base_->seconds : 0.0;
 }
 
 FactorStatus AugmentedSystem::factorization_status() const {
@@ -652,7 +659,8 @@ Eigen::MatrixXd AugmentedSystem::hsj_matrix(const Augmentation& aug) const {
 // Entries of E in rows outside 𝓛 (possible only if K lost its exact symmetry) are left out:
 // the matrix is then an approximation, which as GMRES's preconditioner costs iterations, not
 // accuracy.
-Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const Augmentation& aug, int& solves) {
+Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const Augmentation& aug, int& solves,
+                                                    AugmentedReport& report) {
   const std::vector<int>& l_base = aug.l_base;
   const int m = aug.m();
   const int nb = n_base_;
@@ -675,20 +683,31 @@ Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const Augmentation& aug, int
       if (old[i] >= 0) g(i, k) = g_(old[i], old[k]);
   }
   solves = 0;
-  std::vector<double> y;
+  const Timer new_columns;
+  // The new columns R⁻¹e_{𝓛ₖ} in one blocked pass (ClosureLdlSolver::solve_restricted_block).
+  std::vector<int> fresh_k, fresh_dofs;
   for (int k = 0; k < mb; ++k) {
     if (old[k] >= 0) continue;
-    const std::vector<int> e{l_base[k]};
-    solver.solve_restricted(e, {1.0}, solver.closure(e), aug.closure_y, l_base, y);
-    ++solves;
-    for (int i = 0; i < mb; ++i) {
-      g(i, k) = y[i];
-      if (old[i] >= 0) g(k, i) = y[i];  // rows of new columns come from their own solves
+    fresh_k.push_back(k);
+    fresh_dofs.push_back(l_base[k]);
+  }
+  if (!fresh_k.empty()) {
+    Eigen::MatrixXd y;
+    solver.solve_restricted_block(fresh_dofs, solver.closure(fresh_dofs), aug.closure_y, l_base, y);
+    solves = static_cast<int>(fresh_k.size());
+    for (std::size_t c = 0; c < fresh_k.size(); ++c) {
+      const int k = fresh_k[c];
+      for (int i = 0; i < mb; ++i) {
+        g(i, k) = y(i, static_cast<Eigen::Index>(c));
+        if (old[i] >= 0) g(k, i) = y(i, static_cast<Eigen::Index>(c));  // symmetry of G
+      }
     }
   }
   g_generation_ = base_generation_;
   g_l_ = l_base;
   g_ = std::move(g);  // the cache is also this solve's G
+  report.seconds_new_columns = new_columns.seconds();
+  const Timer product;
 
   // Φ + G Ψ, column by column: for each entry (𝓛 position p, value v) of Ψ_{*k}, add v·G_{*p}.
   // 𝓛 is sorted, so its base DOFs (< n_base) are its first mb entries and G is block diagonal:
@@ -730,6 +749,7 @@ Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const Augmentation& aug, int
       for (const auto& [row, v] : kc) add_e(row, row == j ? v - 1.0 : v);
     }
   }
+  report.seconds_capacitance_product = product.seconds();
   return s;
 }
 
@@ -774,10 +794,33 @@ Eigen::VectorXd AugmentedSystem::solve_schur_system(Augmentation& aug, const Eig
     // Rows and columns are in different units (displacement per force, per unit displacement)
     // and span many decades on long meshes: equilibrated, so that the LU's condition estimate
     // measures singularity, not scaling.
-    direct.factor(capacitance_matrix(aug, report.schur_solves), /*equilibrate=*/true);
-    direct.note(report);
-    if (direct.usable) {
-      prec = [&direct](const Eigen::VectorXd& v, Eigen::VectorXd& out) { direct.apply(v, out); };
+    if (options_.update_capacitance) {
+      // Updated, not refactored (CapacitanceFactor); fresh for a new factor of R.
+      const bool fresh = capacitance_generation_ != base_generation_;
+      const Eigen::MatrixXd s = capacitance_matrix(aug, report.schur_solves, report);
+      const Timer factor;
+      const CapacitanceUpdate u = capacitance_.update(s, aug.l, fresh);
+      report.seconds_capacitance_factor = factor.seconds();
+      capacitance_generation_ = base_generation_;
+      report.capacitance_refreshed = u.refreshed;
+      report.capacitance_rank = u.changed;
+      report.preconditioner_rcond = u.rcond;
+      report.preconditioner_dropped =
+          !(std::isfinite(u.rcond) && u.rcond > kMinPreconditionerRcond);
+      if (!report.preconditioner_dropped) {
+        prec = [this](const Eigen::VectorXd& v, Eigen::VectorXd& out) {
+          capacitance_.solve(v, out);
+        };
+      }
+    } else {
+      const Eigen::MatrixXd s = capacitance_matrix(aug, report.schur_solves, report);
+      const Timer factor;
+      direct.factor(s, /*equilibrate=*/true);
+      report.seconds_capacitance_factor = factor.seconds();
+      direct.note(report);
+      if (direct.usable) {
+        prec = [&direct](const Eigen::VectorXd& v, Eigen::VectorXd& out) { direct.apply(v, out); };
+      }
     }
   } else if (hsj.usable) {
     prec = [&hsj](const Eigen::VectorXd& v, Eigen::VectorXd& out) { hsj.apply(v, out); };
@@ -884,7 +927,9 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
   Timer total;
   AugmentedReport report;
   if (job_.valid()) {  // §3.6: a finished background factor replaces R first
+    const Timer swap;
     report.refactorization_swapped = poll_refactorization();
+    report.seconds_swap = swap.seconds();
     if (!job_.valid() && !report.refactorization_swapped) {
       report.refactorization_status = last_refactor_status_;
     }

@@ -385,6 +385,64 @@ void ClosureLdlSolver::solve_restricted(const std::vector<int>& b_indices,
   for (int j : backward_closure) x[j] = 0;
 }
 
+void ClosureLdlSolver::solve_restricted_block(const std::vector<int>& columns,
+                                              const std::vector<int>& forward_closure,
+                                              const std::vector<int>& backward_closure,
+                                              const std::vector<int>& wanted,
+                                              Eigen::MatrixXd& x_wanted) {
+  const LdlFactorData& f = *factor_;
+  const auto k = static_cast<Eigen::Index>(columns.size());
+  x_wanted.resize(static_cast<Eigen::Index>(wanted.size()), k);
+  if (k == 0) return;
+  if (slot_.empty()) slot_.assign(static_cast<size_t>(f.n), -1);
+  // Block rows for the positions of both closures (each a row of k contiguous values).
+  int rows = 0;
+  for (const auto* list : {&forward_closure, &backward_closure})
+    for (int j : *list)
+      if (slot_[static_cast<size_t>(j)] < 0) slot_[static_cast<size_t>(j)] = rows++;
+  std::vector<double> y(static_cast<size_t>(rows) * static_cast<size_t>(k), 0.0);
+  auto row = [&](int j) {
+    return y.data() + static_cast<size_t>(slot_[static_cast<size_t>(j)]) * k;
+  };
+  for (Eigen::Index c = 0; c < k; ++c)
+    row(f.inverse_perm[columns[static_cast<size_t>(c)]])[c] = 1.0;
+  const int* cp = f.col_ptr.data();
+  const int* ri = f.row_idx.data();
+  const double* lv = f.values.data();
+  // Forward: L z = b over the closure (ascending; the rows of column j are its ancestors, so in
+  // the closure), then z ← D⁻¹ z.
+  for (int j : forward_closure) {
+    const double* zj = row(j);
+    for (int p = cp[j]; p < cp[j + 1]; ++p) {
+      double* zi = row(ri[p]);
+      const double l = lv[p];
+      for (Eigen::Index c = 0; c < k; ++c) zi[c] -= l * zj[c];
+    }
+  }
+  for (int j : forward_closure) {
+    double* zj = row(j);
+    const double inv = 1.0 / f.d[static_cast<size_t>(j)];
+    for (Eigen::Index c = 0; c < k; ++c) zj[c] *= inv;
+  }
+  // Backward: Lᵀ x = z over the backward closure (descending); positions outside the forward
+  // closure hold z = 0, the exact forward result there (Thm. 1).
+  for (size_t t = backward_closure.size(); t-- > 0;) {
+    const int j = backward_closure[t];
+    double* xj = row(j);
+    for (int p = cp[j]; p < cp[j + 1]; ++p) {
+      const double* xi = row(ri[p]);
+      const double l = lv[p];
+      for (Eigen::Index c = 0; c < k; ++c) xj[c] -= l * xi[c];
+    }
+  }
+  for (size_t w = 0; w < wanted.size(); ++w) {
+    const double* xw = row(f.inverse_perm[wanted[w]]);
+    for (Eigen::Index c = 0; c < k; ++c) x_wanted(static_cast<Eigen::Index>(w), c) = xw[c];
+  }
+  for (const auto* list : {&forward_closure, &backward_closure})
+    for (int j : *list) slot_[static_cast<size_t>(j)] = -1;
+}
+
 void ClosureLdlSolver::solve_sparse_rhs(const std::vector<int>& b_indices,
                                         const std::vector<double>& b_values,
                                         const std::vector<int>& forward_closure,

@@ -103,7 +103,7 @@ std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
   if (!res.cut_steps.empty()) {
     csv << "step,tool,status,degenerate_sweep,faces_dissected,nodes_snapped,new_nodes,nodes,"
            "tetrahedra,m,dirichlet,gmres_iterations,gmres_relative_residual,nnz_l,cut_seconds,"
-           "update_seconds,update_cpu_seconds,preconditioner_dropped,amplification";
+           "update_seconds,update_cpu_seconds,preconditioner_dropped,amplification,swap_seconds";
     probe_columns(csv, scene);
     for (const auto& c : res.cut_steps) {
       const std::string status = csv_text(c.status);
@@ -112,7 +112,7 @@ std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
           << "," << c.tetrahedra << "," << c.m << "," << c.dirichlet << "," << c.gmres_iterations
           << "," << Field{c.gmres_relative_residual} << "," << c.nnz_l << "," << c.seconds_cut
           << "," << c.seconds_update << "," << c.cpu_seconds_update << ","
-          << c.preconditioner_dropped << "," << Field{c.amplification};
+          << c.preconditioner_dropped << "," << Field{c.amplification} << "," << c.seconds_swap;
       probe_values(csv, c.probes);
     }
   } else {
@@ -313,6 +313,19 @@ std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunRe
   return written;
 }
 
+FrameTimes frame_times(const SceneRunResult& result) {
+  std::vector<double> frame, cut, update, swap;
+  for (const auto& c : result.cut_steps) {
+    if (c.step == 0) continue;  // the initial factorization and solve
+    frame.push_back(c.seconds_cut + c.seconds_update);
+    cut.push_back(c.seconds_cut);
+    update.push_back(c.seconds_update);
+    swap.push_back(c.seconds_swap);
+  }
+  return {mesh::summarize(frame), mesh::summarize(cut), mesh::summarize(update),
+          mesh::summarize(swap)};
+}
+
 std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
                          double total_seconds, const std::vector<std::string>& written) {
   const SceneSpec& spec = scene.spec;
@@ -389,7 +402,8 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
                {"refactorization_swapped", c.refactorization_swapped},
                {"cut_seconds", c.seconds_cut},
                {"update_seconds", c.seconds_update},
-               {"update_cpu_seconds", c.cpu_seconds_update}};
+               {"update_cpu_seconds", c.cpu_seconds_update},
+               {"swap_seconds", c.seconds_swap}};
     for (std::size_t k = 0; k < c.probes.size() && k < scene.probes.size(); ++k)
       cj["probes"][scene.probes[k].spec.name] = vec_json(c.probes[k]);
     j["cut_steps"].push_back(cj);
@@ -432,6 +446,15 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
     int dropped = 0;
     for (const auto& c : result.cut_steps) dropped += c.preconditioner_dropped ? 1 : 0;
     j["preconditioner_dropped_solves"] = dropped;
+    const FrameTimes t = frame_times(result);
+    j["frame_seconds"] = {{"frames", t.frame.count},
+                          {"median", t.frame.median},
+                          {"p95", t.frame.p95},
+                          {"max", t.frame.max}};
+    j["cut_seconds"] = {{"median", t.cut.median}, {"p95", t.cut.p95}, {"max", t.cut.max}};
+    j["update_seconds"] = {
+        {"median", t.update.median}, {"p95", t.update.p95}, {"max", t.update.max}};
+    j["swap_seconds"] = {{"median", t.swap.median}, {"p95", t.swap.p95}, {"max", t.swap.max}};
   }
   j["outputs"] = written;
   j["not_written"] = Json::array();

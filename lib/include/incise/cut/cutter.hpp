@@ -124,6 +124,10 @@ class Cutter {
 
   /// The options in use.
   const CutOptions& options() const { return options_; }
+  /// How many times the boundary search grid (deformed bounding boxes, §3.2.1 entry search)
+  /// was built: once at the first step and again only after the nodes may have drifted half a
+  /// grid cell since (CutMesh::deformed_drift; queries are widened by the drift meanwhile).
+  std::int64_t grid_builds() const { return grid_builds_; }
 
  private:
   struct Grid;
@@ -154,6 +158,8 @@ class Cutter {
   std::mt19937_64 rng_;
   std::unique_ptr<Grid> grid_;
   std::uint64_t grid_version_ = ~std::uint64_t{0};
+  double grid_drift_ = 0;  // CutMesh::deformed_drift() when the grid was built
+  std::int64_t grid_builds_ = 0;
   /// First intersection of each edge (keyed by original nodes) → original of marked node.
   std::unordered_map<EdgeKey, Index> marked_;
   std::unordered_set<Index> incomplete_;

@@ -21,11 +21,13 @@
 #include <incise/core/types.hpp>
 #include <incise/cut/cut_mesh.hpp>
 #include <incise/cut/cutter.hpp>
+#include <incise/interactive/refactorization_policy.hpp>
 #include <incise/linalg/augmented_system.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/mesh_data.hpp>
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -40,6 +42,7 @@ struct AugmentedCutOptions {
     linalg::AugmentedOptions o;
     o.cholmod.kind = linalg::CholmodKind::kSupernodal;
     o.schur_solver = linalg::SchurSolver::kDirectCached;
+    o.update_capacitance = true;  // issue 17: updated, not refactored (docs/augmented.md)
     return o;
   }
   cut::CutOptions cut;  ///< the cutter's options (thesis defaults)
@@ -66,7 +69,19 @@ struct AugmentedCutOptions {
   /// factorization of K in a process that runs concurrently with the simulation loop"; a
   /// threshold near the m at which the accumulated extra update time has reached one
   /// factorization time follows its argument. The job wants a second core. Must be ≥ 0.
+  /// A value > 0 overrides `automatic_refactorization`.
   int refactor_at_m = 0;
+  /// With refactor_at_m = 0: start the §3.6 background refactorization when the break-even
+  /// rule of RefactorizationPolicy (refactorization_policy.hpp) says so — the summed extra
+  /// update cost since the factor in use came in has reached the cost of one factorization.
+  /// On by default; false (and refactor_at_m = 0) never refactors.
+  bool automatic_refactorization = true;
+  /// Cost of one solver update for the automatic policy; empty: its measured wall time
+  /// (AugmentedReport::seconds_total). Tests inject a deterministic model.
+  std::function<double(const linalg::AugmentedReport&)> update_cost;
+  /// Cost of one factorization for the automatic policy; empty: the measured one of the factor
+  /// in use (AugmentedSystem::factorization_seconds()). Tests inject a deterministic model.
+  std::function<double(const linalg::AugmentedSystem&)> factorization_cost;
 };
 
 /// Outcome of the solver update of one step.
@@ -159,6 +174,11 @@ class AugmentedCutSession {
   /// solves swap it in and m drops. Returns false if a job is already running. Started
   /// automatically when AugmentedCutOptions::refactor_at_m > 0.
   bool start_refactorization() { return system_->start_refactorization(); }
+  /// Blocks until a pending background refactorization finishes and swaps it in (m drops);
+  /// returns whether a factor was swapped in (false: none pending, or the job failed).
+  bool wait_for_refactorization();
+  /// The automatic policy's state (AugmentedCutOptions::automatic_refactorization).
+  const RefactorizationPolicy& refactorization_policy() const { return policy_; }
 
   /// The cut mesh (reference and deformed positions, connectivity).
   const cut::CutMesh& mesh() const { return *mesh_; }
@@ -204,6 +224,7 @@ class AugmentedCutSession {
   double constraint_spring_ = 1;  // k̄ (N/m): K_dd += k̄ at each constrained DOF d (file comment)
   AugmentedCutStepReport initial_;
   LastSolve last_;
+  RefactorizationPolicy policy_;
 };
 
 }  // namespace incise::interactive

@@ -21,6 +21,7 @@
 
 #include <incise/core/name_table.hpp>
 #include <incise/core/outcome.hpp>
+#include <incise/linalg/capacitance_factor.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
 #include <incise/linalg/gmres.hpp>
 
@@ -97,6 +98,14 @@ struct AugmentedOptions {
   /// AugmentedReport::amplification_warning. > 0. 1e8: κ ≥ A, so the solution may have lost
   /// half of double precision's 16 digits (ε·A > 2e-8).
   double warn_amplification = 1e8;
+  /// SchurSolver::kDirectCached: keep the dense factorization of the capacitance matrix
+  /// between solves and update it for the columns that joined, left or changed
+  /// (CapacitanceFactor: Sherman–Morrison–Woodbury on a fresh LU, O(m²k) per solve, fresh
+  /// again when the update would cost more), instead of an O(m³) LU at every solve. The
+  /// factor of R changing (refactorization) starts it afresh. Off here (the paper's per-solve
+  /// LU; with the update, the yeung2016 verification's beam left GMRES at a true Schur residual
+  /// of 3.8e-12 against the 1e-12 it asserts); AugmentedCutOptions turns it on.
+  bool update_capacitance = false;
   /// Threads of step 3's full backward substitution (ClosureLdlSolver): 1 = serial, ≥ 1. The
   /// pass streams all of L and is memory-bound, so extra threads help as far as a core adds
   /// memory bandwidth (docs/augmented.md). The result is bit-identical for any value. Leave at
@@ -144,6 +153,13 @@ struct [[nodiscard]] AugmentedReport
   double seconds_step2 = 0;
   double seconds_step3 = 0;
   double seconds_total = 0;
+  double seconds_swap = 0;
+  // Of seconds_step2 with kDirectCached: the restricted solves R⁻¹e for new columns of G, the
+  // product Φ + GΨ, and the capacitance factorization (fresh or updated).
+  double seconds_new_columns = 0;
+  double seconds_capacitance_product = 0;
+  double seconds_capacitance_factor =
+      0;                     ///< §3.6: swapping a finished background factor in (incl. in total)
   double amplification = 0;  ///< see AugmentedOptions::max_amplification
   /// amplification > AugmentedOptions::warn_amplification: digits may be lost, even when ok()
   bool amplification_warning = false;
@@ -153,6 +169,11 @@ struct [[nodiscard]] AugmentedReport
   bool preconditioner_dropped = false;
   /// rcond estimate of the preconditioner's LU (NaN: none built — kNone, or m = 0)
   double preconditioner_rcond = std::numeric_limits<double>::quiet_NaN();
+  /// kDirectCached with update_capacitance: the capacitance factorization was made fresh in
+  /// this solve (first solve, new factor of R, or the cost rule); else it was updated.
+  bool capacitance_refreshed = false;
+  /// kDirectCached with update_capacitance: rank of the update to the last fresh one (0: fresh)
+  int capacitance_rank = 0;
   bool refactorization_swapped = false;  ///< a background factor replaced the old one here
   FactorStatus refactorization_status = FactorStatus::kOk;  ///< of a finished background job
 };
@@ -188,6 +209,10 @@ class AugmentedSystem {
   /// Status of the last initialize() (kNotAnalyzed before the first; kOverMemoryBudget when
   /// AugmentedOptions::cholmod.memory_budget_bytes refused the factorization).
   FactorStatus factorization_status() const;
+  /// Wall seconds the factor in use took to make (CHOLMOD factorization, its LDLᵀ copy and the
+  /// §3.5 preconditioner data), in initialize() or in the background job that was swapped in;
+  /// 0 without a factor. The cost model of an automatic §3.6 refactorization policy.
+  double factorization_seconds() const;
 
   /// Current number of DOFs n = n₀ + added DOFs.
   int num_dofs() const { return n_; }
@@ -265,7 +290,7 @@ class AugmentedSystem {
   void find_closures(Augmentation& aug, AugmentedReport& report);
   Eigen::MatrixXd hsj_matrix(const Augmentation& aug) const;
   Eigen::VectorXd schur_rhs(const Augmentation& aug);
-  Eigen::MatrixXd capacitance_matrix(const Augmentation& aug, int& solves);
+  Eigen::MatrixXd capacitance_matrix(const Augmentation& aug, int& solves, AugmentedReport& report);
   Eigen::VectorXd solve_schur_system(Augmentation& aug, const Eigen::VectorXd& rhs,
                                      const SchurLu& hsj, AugmentedReport& report);
   void back_substitute(Augmentation& aug, const Eigen::VectorXd& a2, Eigen::VectorXd& displacement);
@@ -293,6 +318,9 @@ class AugmentedSystem {
   std::uint64_t g_generation_ = 0;     // base_generation_ g_ was computed with (0: none)
   std::vector<int> g_l_;               // its DOFs (sorted)
   Eigen::MatrixXd g_;
+  // update_capacitance: the kept factorization of H R⁻¹ J and the base generation it is of.
+  CapacitanceFactor capacitance_;
+  std::uint64_t capacitance_generation_ = 0;
   // Workspace.
   std::vector<int> pos_in_l_;
 };

@@ -53,6 +53,18 @@ class ClosureLdlSolver {
                         const std::vector<int>& backward_closure, const std::vector<int>& wanted,
                         std::vector<double>& x_wanted);
 
+  /// Blocked restricted solve with the k unit right-hand sides e_c, c ∈ `columns` (original
+  /// indices): X = (A⁻¹)_{wanted, columns} (wanted.size() × k). One forward pass over
+  /// `forward_closure` (⊇ closure(columns)) and one backward pass over `backward_closure`
+  /// (⊇ closure(wanted)) carry all k right-hand sides, so each entry of L is read once per pass
+  /// and applied to k contiguous values (issue 17: the new columns of G = H R⁻¹ Hᵀ joining 𝓛 in
+  /// one pass instead of k). Equal to k calls of solve_restricted up to the order of the
+  /// floating-point sums. Cost O(k·Σ_{j∈closures} |L_{*j}|) flops, O(Σ |L_{*j}|) reads of L.
+  void solve_restricted_block(const std::vector<int>& columns,
+                              const std::vector<int>& forward_closure,
+                              const std::vector<int>& backward_closure,
+                              const std::vector<int>& wanted, Eigen::MatrixXd& x_wanted);
+
   /// Sparse-RHS solve with a full result: restricted forward substitution on
   /// `forward_closure` (⊇ closure(b_indices)), then a full backward substitution (§3.3,
   /// "Sparsity of Solution Step 3"). `x` is resized to n (original ordering).
@@ -93,6 +105,7 @@ class ClosureLdlSolver {
   void backward_full_to(double* x_out);
   std::shared_ptr<const LdlFactorData> factor_;
   std::vector<double> work_;  // permuted positions, zero between calls
+  std::vector<int> slot_;     // solve_restricted_block: position → block row, −1 between calls
   std::vector<int> mark_;
   int stamp_ = 0;
   std::vector<int> super_last_;  // position → last column of its fundamental supernode

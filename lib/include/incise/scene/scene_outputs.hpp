@@ -7,6 +7,7 @@
 /// paths are relative to the current directory. Nothing is printed.
 
 #include <incise/io/write_mesh.hpp>
+#include <incise/mesh/quality.hpp>
 #include <incise/scene/scene_builder.hpp>
 #include <incise/scene/scene_runner.hpp>
 #include <incise/solver/report.hpp>
@@ -87,6 +88,15 @@ struct OutputOptions {
 /// Throws Error (or std::filesystem::filesystem_error) when a file cannot be written.
 std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunResult& result,
                                        const OutputOptions& options = {});
+
+/// Per-frame time statistics of an interactive cutting run (issue 17): over the steps after
+/// the initial solve, frame = cut + update (column replacements and augmented solve, of which
+/// swap is the §3.6 factor swap); nearest-rank median, p95 and max (mesh::summarize).
+struct FrameTimes {
+  mesh::Stats frame, cut, update, swap;  ///< seconds
+};
+/// FrameTimes of result.cut_steps (all zero without cut steps).
+FrameTimes frame_times(const SceneRunResult& result);
 
 /// The run summary as JSON text (docs/scenes.md, `incise run --summary-json`): scene file, name,
 /// method, result and message, iterations, residual, energy, flops, times, mesh size, probes, built

@@ -95,6 +95,7 @@ struct CutStepRow {
   bool refactorization_swapped = false;  ///< this solve swapped in a finished job (m dropped)
   double seconds_cut = 0;                ///< wall time of the cut (Cutter::step)
   double seconds_update = 0;             ///< wall time of column replacements + augmented solve
+  double seconds_swap = 0;               ///< of seconds_update: swapping in a finished §3.6 factor
   double cpu_seconds_update = 0;         ///< thread CPU time of the same
   std::vector<Vec3> probes;              ///< probe values after the step (m)
 };
