@@ -26,7 +26,7 @@ struct DynamicRelaxationOptions : RelaxationOptions {
   /// dissipated (E > E_min + ½(E₀ − E_min); impossible for a stable damped run, which only
   /// loses energy, so this needs damping > 0); the integration then restarts at rest from the
   /// displacement of lowest E with Δt ← restart_reduction·Δt. SolverReport::restarts and
-  /// ::time_step say so.
+  /// SolverReport::time_step say so.
   int max_restarts = 0;
   double restart_reduction = 0.7;  ///< Δt factor per restart, in (0, 1)
 };
