@@ -363,10 +363,9 @@ mesh::MeshData live_mesh_data(const cut::CutMesh& cm) {
 
 namespace {
 
-BuiltScene build_needle3d_scene(const SceneSpec& spec) {
-  BuiltScene b;
-  b.spec = spec;
-  const ToolSpec& tool = *spec.needle();
+/// The scene's mesh into b.mesh, recorded as a build step (what, time, bytes); ParseError at
+/// /mesh when it is not tetrahedral.
+void build_tet_mesh(const SceneSpec& spec, BuiltScene& b) {
   Timer t;
   std::string what;
   b.mesh = make_mesh(spec, what);
@@ -377,8 +376,15 @@ BuiltScene build_needle3d_scene(const SceneSpec& spec) {
   what += " -> " + std::to_string(b.mesh.num_cells()) + " tets, " +
           std::to_string(b.mesh.num_points()) + " nodes";
   b.record(what, t.seconds(), matrix_bytes(b.mesh));
+}
+
+BuiltScene build_needle3d_scene(const SceneSpec& spec) {
+  BuiltScene b;
+  b.spec = spec;
+  const ToolSpec& tool = *spec.needle();
+  build_tet_mesh(spec, b);
   // Fixed regions as boxes: each must hold a node of the starting mesh.
-  t.restart();
+  Timer t;
   const double inf = std::numeric_limits<double>::infinity();
   const Eigen::Matrix3Xd& x = b.mesh.points;
   const double diagonal = (x.rowwise().maxCoeff() - x.rowwise().minCoeff()).norm();
@@ -477,20 +483,9 @@ BuiltScene build_scene(const SceneSpec& spec) {
   if (spec.needle()) return build_needle3d_scene(spec);
   BuiltScene b;
   b.spec = spec;
-  Timer t;
-
-  // Mesh.
-  std::string what;
-  b.mesh = make_mesh(spec, what);
-  if (b.mesh.dimension != 3)
-    throw ParseError(spec.file, spec.lines.line("/mesh"),
-                     "/mesh: expected a tetrahedral (3D) mesh, got dimension " +
-                         std::to_string(b.mesh.dimension));
-  what += " -> " + std::to_string(b.mesh.num_cells()) + " tets, " +
-          std::to_string(b.mesh.num_points()) + " nodes";
-  b.record(what, t.seconds(), matrix_bytes(b.mesh));
+  build_tet_mesh(spec, b);
   // Fixed nodes.
-  t.restart();
+  Timer t;
   for (const Region& r : spec.fixed) {
     const auto sel = select_nodes(b.mesh, r);
     if (sel.empty()) region_error(spec, r.path, "region selects no node of the mesh", b.mesh);
