@@ -126,9 +126,9 @@ if [ "${INCISE_SKIP_ASAN:-0}" != "1" ]; then
   cmake --build --preset asan -j"$jobs"
   end "4 asan build (clang++, tests + fuzzers)"
 
-  begin "5 asan tests (all but label slow, mutants, 4 reproductions)"
+  begin "5 asan tests (all but label slow, mutants, 5 reproductions)"
   run_ctest asan --preset asan
-  end "5 asan tests (all but label slow, mutants, 4 reproductions)"
+  end "5 asan tests (all but label slow, mutants, 5 reproductions)"
 
   begin "6 fuzz smoke (${fuzz_seconds} s per harness)"
   INCISE_FUZZ_PREBUILT=1 ci/fuzz.sh "$fuzz_seconds" 2>&1 | tee "$logdir/fuzz.log" || status=1
