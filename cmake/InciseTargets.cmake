@@ -52,11 +52,14 @@ function(incise_add_benchmark name)
                                         incise_options)
 endfunction()
 
-# incise_add_cli_test(NAME EXIT <status|nonzero> [STDERR <regex>] [USAGE] LABELS ... ARGS ...)
-#   Runs `incise ARGS` in the source tree and requires the exit status and, if given, that stderr
-#   matches the regex; stderr must be one line unless USAGE (usage text follows the error).
+# incise_add_cli_test(NAME EXIT <status|nonzero> [STDERR <regex>] [USAGE] [STDOUT <regex>]
+#                     [STDOUT_NOT <regex>] [WORKDIR <dir>] LABELS ... ARGS ...)
+#   Runs `incise ARGS` in the source tree (or in WORKDIR under the current build folder, created
+#   empty: for commands that write files) and requires the exit status and, if given, that
+#   stderr matches the regex, stdout matches STDOUT and does not match STDOUT_NOT; stderr must be
+#   one line unless USAGE (usage text or progress lines follow).
 function(incise_add_cli_test name)
-  cmake_parse_arguments(A "USAGE" "EXIT;STDERR" "ARGS;LABELS" ${ARGN})
+  cmake_parse_arguments(A "USAGE" "EXIT;STDERR;STDOUT;STDOUT_NOT;WORKDIR" "ARGS;LABELS" ${ARGN})
   if(NOT TARGET incise)
     return()
   endif()
@@ -64,12 +67,23 @@ function(incise_add_cli_test name)
   if(DEFINED A_STDERR)
     list(APPEND extra "-DSTDERR_REGEX=${A_STDERR}")
   endif()
+  if(DEFINED A_STDOUT)
+    list(APPEND extra "-DSTDOUT_REGEX=${A_STDOUT}")
+  endif()
+  if(DEFINED A_STDOUT_NOT)
+    list(APPEND extra "-DSTDOUT_NOT_REGEX=${A_STDOUT_NOT}")
+  endif()
   if(A_USAGE)
     list(APPEND extra -DMULTILINE=ON)
+  endif()
+  set(dir ${PROJECT_SOURCE_DIR})
+  if(DEFINED A_WORKDIR)
+    set(dir ${CMAKE_CURRENT_BINARY_DIR}/${A_WORKDIR})
+    file(MAKE_DIRECTORY ${dir})
   endif()
   add_test(NAME ${name}
            COMMAND ${CMAKE_COMMAND} "-DCMD=$<TARGET_FILE:incise>;${A_ARGS}" -DEXIT=${A_EXIT}
                    ${extra} -P ${PROJECT_SOURCE_DIR}/property_tests/io/cli_expect.cmake
-           WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+           WORKING_DIRECTORY ${dir})
   set_tests_properties(${name} PROPERTIES LABELS "${A_LABELS}")
 endfunction()

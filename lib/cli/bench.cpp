@@ -4,9 +4,9 @@
 // --bin-dir) whose benchmarks match RE, stores their JSON under
 // DIR/runs/<UTC date>_<commit>/<binary>.json and regenerates the static dashboard DIR/index.html
 // (certify/bench_dashboard.hpp). --compare hands two stored runs to Google Benchmark's own
-// compare.py (Debian libbenchmark-tools), binary by binary. Exit status: 0 ok; 1 a binary or
-// compare.py failed, no benchmark matched, a run or tool not found; 2 usage (an invalid --filter
-// included). docs/scenes.md, "incise bench".
+// compare.py (Debian libbenchmark-tools), binary by binary. Exit status (cli_util.hpp Exit): 0 ok;
+// 1 a binary or compare.py failed, a run, binary or tool not found; 2 usage (an invalid --filter
+// or one that selects no benchmark included). docs/scenes.md, "incise bench".
 
 #include <incise/certify/bench_dashboard.hpp>
 #include <incise/certify/svg_plot.hpp>
@@ -16,6 +16,7 @@
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -24,6 +25,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <thread>
 
@@ -136,7 +138,7 @@ fs::path resolve_run(const std::string& arg, const fs::path& runs) {
 
 /// `--compare A B`: Google Benchmark's compare.py on each binary's JSON present in both runs.
 int compare_runs(const std::string& a, const std::string& b, const fs::path& runs,
-                 std::ostream& out, std::ostream& err) {
+                 std::ostream& out, std::ostream& info, std::ostream& err) {
   const fs::path ra = resolve_run(a, runs), rb = resolve_run(b, runs);
   std::error_code ec;
   std::string tool = "/usr/share/benchmark/compare.py";  // Debian libbenchmark-tools
@@ -145,14 +147,14 @@ int compare_runs(const std::string& a, const std::string& b, const fs::path& run
     if (!fs::is_regular_file(env_tool, ec)) {
       err << "incise bench: INCISE_COMPARE_PY=" << env_tool
           << ": no such file (expected the path of Google Benchmark's compare.py)\n";
-      return 1;
+      return exit_code(Exit::kBadInput);
     }
     tool = env_tool;
   } else if (!fs::is_regular_file(tool, ec)) {
     err << "incise bench: Google Benchmark's compare.py not found at " << tool
         << ": install the Debian package libbenchmark-tools, or set INCISE_COMPARE_PY to the "
            "path of compare.py\n";
-    return 1;
+    return exit_code(Exit::kBadInput);
   }
   std::vector<std::string> tried;
   // compare.py imports scipy.stats (Mann-Whitney U test) and numpy (gbench/report.py).
@@ -175,7 +177,7 @@ int compare_runs(const std::string& a, const std::string& b, const fs::path& run
     err << "incise bench: compare.py needs Python 3 with scipy and numpy (its U test); none of "
         << list << " imports them: install the Debian packages python3-scipy python3-numpy, or "
         << "set INCISE_PYTHON to a python that has them\n";
-    return 1;
+    return exit_code(Exit::kBadInput);
   }
   std::vector<std::string> files_a, files_b;
   for (const auto& [dir, files] : {std::pair{ra, &files_a}, std::pair{rb, &files_b}}) {
@@ -190,8 +192,8 @@ int compare_runs(const std::string& a, const std::string& b, const fs::path& run
       out << "bench: " << f << " only in " << ra.string() << "; not compared\n";
       continue;
     }
-    out << "bench: compare.py " << f << ": " << ra.filename().string() << " (baseline) vs "
-        << rb.filename().string() << " (contender)" << std::endl;
+    info << "bench: compare.py " << f << ": " << ra.filename().string() << " (baseline) vs "
+         << rb.filename().string() << " (contender)" << std::endl;
     std::vector<std::string> argv = {python, tool};
     if (!isatty(STDOUT_FILENO)) argv.push_back("--no-color");
     for (const std::string& x : {std::string("benchmarks"), (ra / f).string(), (rb / f).string()})
@@ -209,9 +211,9 @@ int compare_runs(const std::string& a, const std::string& b, const fs::path& run
   if (compared == 0) {
     err << "incise bench: the runs " << ra.string() << " and " << rb.string()
         << " have no benchmark binary in common\n";
-    return 1;
+    return exit_code(Exit::kBadInput);
   }
-  return failures == 0 ? 0 : 1;
+  return exit_code(failures == 0 ? Exit::kOk : Exit::kBadInput);
 }
 
 std::string utc_stamp() {
@@ -223,71 +225,46 @@ std::string utc_stamp() {
   return buf;
 }
 
-}  // namespace
+struct BenchOptions {
+  std::string filter, out_dir = "out/bench", bin_dir, repetitions = "3", min_time;
+  std::vector<std::string> compare;  // two runs, or empty
+  bool dashboard_only = false;
+};
 
-int run_bench_command(const Args& args, std::ostream& out, std::ostream& err) {
-  std::string filter, out_dir = "out/bench", bin_dir;
-  int repetitions = 3;
-  std::string min_time, compare_a, compare_b;
-  bool dashboard_only = false, compare = false;
+int bench_command(BenchOptions& opt, Context& ctx) {
+  reject_extras(ctx.extras, "bench", [](const std::string& a) {
+    return "unknown argument '" + a + "' (see incise bench --help)";
+  });
+  std::ostream& out = ctx.out;
+  std::ostream& err = ctx.log.error();
+  std::ostream& info = ctx.log.info();
+  const std::string& filter = opt.filter;
+  const std::string& out_dir = opt.out_dir;
+  const std::string& bin_dir = opt.bin_dir;
+  const std::string& min_time = opt.min_time;
+  const bool dashboard_only = opt.dashboard_only, compare = !opt.compare.empty();
+  int repetitions = 0;
   try {
-    for (std::size_t i = 0; i < args.size(); ++i) {
-      const std::string& a = args[i];
-      if (a == "--filter") {
-        filter = option_value(args, i, "--filter");
-      } else if (a == "--out") {
-        out_dir = option_value(args, i, "--out");
-      } else if (a == "--bin-dir") {
-        bin_dir = option_value(args, i, "--bin-dir");
-      } else if (a == "--repetitions") {
-        const std::string v = option_value(args, i, "--repetitions");
-        try {
-          std::size_t used = 0;
-          repetitions = std::stoi(v, &used);
-          if (used != v.size()) repetitions = 0;
-        } catch (const std::exception&) {
-          repetitions = 0;
-        }
-        if (repetitions < 1 || repetitions > 100)
-          throw UsageError("--repetitions expects an integer in [1, 100], got '" + v + "'");
-      } else if (a == "--min-time") {
-        min_time = option_value(args, i, "--min-time");
-      } else if (a == "--dashboard-only") {
-        dashboard_only = true;
-      } else if (a == "--compare") {
-        compare_a = option_value(args, i, "--compare");
-        compare_b = option_value(args, i, "--compare (two runs)");
-        if (compare_a.rfind("--", 0) == 0 || compare_b.rfind("--", 0) == 0)
-          throw UsageError("--compare expects two runs, got '" + compare_a + "' '" + compare_b +
-                           "'");
-        compare = true;
-      } else if (a == "--help" || a == "-h") {
-        out << "usage: incise bench [--filter RE] [--out DIR] [--bin-dir DIR] [--repetitions N]\n"
-               "                    [--min-time SECONDS] [--dashboard-only]\n"
-               "       incise bench --compare RUN_A RUN_B [--out DIR]\n"
-               "Runs the *_bench binaries of the build tree (or --bin-dir) that have benchmarks\n"
-               "matching RE (Google Benchmark's --benchmark_filter: POSIX extended regex, '-'\n"
-               "negates), stores their JSON in DIR/runs/<date>_<commit>/ (default DIR:\n"
-               "out/bench) and regenerates DIR/index.html. --repetitions (default 3) measures\n"
-               "the noise. --compare runs Google Benchmark's compare.py (Debian\n"
-               "libbenchmark-tools; U test needs python3-scipy) on each binary's JSON of two\n"
-               "stored runs: a run folder, its name under DIR/runs, a unique prefix, 'last' or\n"
-               "'previous'.\n"
-               "exit status: 0 ok, 1 a benchmark or compare.py failed, no benchmark matched, or\n"
-               "a run or tool was not found, 2 usage (an invalid --filter included)\n";
-        return 0;
-      } else {
-        throw UsageError("unknown argument '" + a + "' (see incise bench --help)");
-      }
-    }
-    certify::validate_benchmark_filter(filter);
-    if (compare && (dashboard_only || !filter.empty()))
-      throw UsageError("--compare takes no --filter or --dashboard-only (see incise bench --help)");
-  } catch (const UsageError& e) {
-    err << "incise bench: " << e.what() << "\n";
-    return 2;
+    std::size_t used = 0;
+    repetitions = std::stoi(opt.repetitions, &used);
+    if (used != opt.repetitions.size()) repetitions = 0;
+  } catch (const std::exception&) {
+    repetitions = 0;
   }
-  if (compare) return compare_runs(compare_a, compare_b, fs::path(out_dir) / "runs", out, err);
+  if (repetitions < 1 || repetitions > 100)
+    throw CommandLineError("--repetitions expects an integer in [1, 100], got '" + opt.repetitions +
+                           "'");
+  try {
+    certify::validate_benchmark_filter(filter);
+  } catch (const UsageError& e) {
+    throw CommandLineError(e.what());
+  }
+  if (compare && (dashboard_only || !filter.empty()))
+    throw CommandLineError(
+        "--compare takes no --filter or --dashboard-only (see incise bench "
+        "--help)");
+  if (compare)
+    return compare_runs(opt.compare[0], opt.compare[1], fs::path(out_dir) / "runs", out, info, err);
   int failures = 0;
   if (!dashboard_only) {
     fs::path root;
@@ -300,9 +277,9 @@ int run_bench_command(const Args& args, std::ostream& out, std::ostream& err) {
     }
     const auto bins = find_bench_binaries(root);
     if (bins.empty())
-      throw UsageError("no *_bench executables under " + root.string() +
-                       " (build the benchmarks, e.g. cmake --build --preset release, or pass "
-                       "--bin-dir DIR)");
+      throw BadInputError("no *_bench executables under " + root.string() +
+                          " (build the benchmarks, e.g. cmake --build --preset release, or pass "
+                          "--bin-dir DIR)");
     // Ask each binary which of its benchmarks the filter selects; skip those with none.
     std::vector<std::pair<fs::path, std::size_t>> selected;
     std::size_t matched = 0;
@@ -319,13 +296,12 @@ int run_bench_command(const Args& args, std::ostream& out, std::ostream& err) {
       selected.emplace_back(b, names.size());
       matched += names.size();
     }
-    if (matched == 0) {
-      err << "incise bench: no benchmark matches "
-          << (filter.empty() ? std::string("(no --filter)") : "--filter '" + filter + "'")
-          << " in the " << bins.size() << " binaries under " << root.string()
-          << "; nothing run or stored\n";
-      return 1;
-    }
+    if (matched == 0)
+      throw CommandLineError(
+          "no benchmark matches " +
+          (filter.empty() ? std::string("(no --filter)") : "--filter '" + filter + "'") +
+          " in the " + std::to_string(bins.size()) + " binaries under " + root.string() +
+          "; nothing run or stored");
     const std::string commit = git_commit();
     // One folder per invocation: a second run within the same second waits for the next one.
     fs::path run_dir = fs::path(out_dir) / "runs" / (utc_stamp() + "_" + commit);
@@ -344,8 +320,8 @@ int run_bench_command(const Args& args, std::ostream& out, std::ostream& err) {
                                        "--benchmark_repetitions=" + std::to_string(repetitions)};
       if (!filter.empty()) argv.push_back("--benchmark_filter=" + filter);
       if (!min_time.empty()) argv.push_back("--benchmark_min_time=" + min_time);
-      out << "bench: running " << b.filename().string() << " (" << count << " benchmarks)"
-          << std::endl;
+      info << "bench: running " << b.filename().string() << " (" << count << " benchmarks)"
+           << std::endl;
       const int rc = run_process(argv);
       std::error_code ec;
       if (rc != 0) {
@@ -388,7 +364,40 @@ int run_bench_command(const Args& args, std::ostream& out, std::ostream& err) {
   out << "bench: " << runs.size() << " stored run(s); " << flagged << " of " << cmp.size()
       << " counters changed beyond noise since the previous run\n";
   out << "bench: dashboard " << (fs::path(out_dir) / "index.html").string() << "\n";
-  return failures == 0 ? 0 : 1;
+  return exit_code(failures == 0 ? Exit::kOk : Exit::kBadInput);
+}
+
+}  // namespace
+
+Command add_bench_command(CLI::App& root) {
+  auto opt = std::make_shared<BenchOptions>();
+  CLI::App* app = root.add_subcommand(
+      "bench", "run the benchmarks, update the dashboard; or --compare two stored runs");
+  app->add_option("--filter", opt->filter,
+                  "run the benchmarks matching RE (Google Benchmark's --benchmark_filter: POSIX "
+                  "extended regex, '-' negates); binaries with none are skipped")
+      ->type_name("RE");
+  app->add_option("--out", opt->out_dir,
+                  "store the JSON in DIR/runs/<date>_<commit>/, the dashboard in DIR/index.html")
+      ->type_name("DIR")
+      ->capture_default_str();
+  app->add_option("--bin-dir", opt->bin_dir,
+                  "where the *_bench binaries are (default: the build tree's benchmarks/)")
+      ->type_name("DIR");
+  app->add_option("--repetitions", opt->repetitions, "repetitions of each benchmark (the noise)")
+      ->type_name("N")
+      ->capture_default_str();
+  app->add_option("--min-time", opt->min_time, "Google Benchmark's --benchmark_min_time")
+      ->type_name("SECONDS");
+  app->add_flag("--dashboard-only", opt->dashboard_only,
+                "only regenerate the dashboard from the stored runs");
+  app->add_option("--compare", opt->compare,
+                  "Google Benchmark's compare.py (Debian libbenchmark-tools, U test needs "
+                  "python3-scipy) on the JSON of two stored runs: a run folder, its name under "
+                  "DIR/runs, a unique prefix, 'last' or 'previous'")
+      ->type_name("RUN_A RUN_B")
+      ->expected(2);
+  return {app, [opt](Context& ctx) { return bench_command(*opt, ctx); }};
 }
 
 }  // namespace incise::cli

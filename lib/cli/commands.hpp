@@ -1,36 +1,51 @@
 #pragma once
 /// \file commands.hpp
-/// Subcommands of the `incise` program. Each takes the arguments after its name and returns
-/// the process exit code; each prints to the streams it is given (the library never prints).
+/// Subcommands of the `incise` program, parsed by CLI11 (main.cpp). Each `add_*` function
+/// registers one command's options on a CLI11 App and returns the command: its App and the
+/// action main.cpp runs after parsing. An action prints results to Context::out (stdout) and
+/// progress, logs and errors through Context::log (stderr), and returns an exit status
+/// (cli_util.hpp Exit); it throws CommandLineError on a bad command line, incise::Error on bad
+/// input (the library never prints).
 
+#include <functional>
 #include <iosfwd>
 #include <string>
 #include <vector>
 
+#include "cli_util.hpp"
+
+namespace CLI {
+class App;
+}  // namespace CLI
+
 namespace incise::cli {
 
-using Args = std::vector<std::string>;
-
-/// A subcommand: its name, a one-line summary for `incise --help`, and its entry point.
-struct Command {
-  const char* name;
-  const char* summary;
-  int (*run)(const Args& args, std::ostream& out, std::ostream& err);
+/// What a command's action gets.
+struct Context {
+  std::ostream& out;                ///< results (stdout)
+  Log& log;                         ///< progress, logs, errors (stderr), by -q / -v
+  std::vector<std::string> extras;  ///< arguments CLI11 did not take (reject_extras)
 };
 
-/// `incise mesh check FILE [--vtu OUT] [--reorient] [--merge-duplicates]` (lib/cli/mesh.cpp).
-int run_mesh(const Args& args, std::ostream& out, std::ostream& err);
+/// A registered command: its CLI11 App (owned by the parent App) and its action.
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int(Context&)> run;
+};
 
-/// `incise run SCENE [--summary-json PATH] [--progress MODE]` (lib/cli/run.cpp).
-int run_scene_command(const Args& args, std::ostream& out, std::ostream& err);
+/// `incise mesh check FILE [--json] [--vtu OUT] ...` on `mesh` (lib/cli/mesh.cpp).
+Command add_mesh_check_command(CLI::App& mesh);
 
-/// `incise certify [--quick] [--out DIR] [--filter RE]` (lib/cli/certify.cpp).
-int run_certify_command(const Args& args, std::ostream& out, std::ostream& err);
+/// `incise run SCENE [--summary-json PATH] [--progress MODE] ...` (lib/cli/run.cpp).
+Command add_run_command(CLI::App& root);
 
-/// `incise bench [--filter RE] [--out DIR] [--bin-dir DIR]` (lib/cli/bench.cpp).
-int run_bench_command(const Args& args, std::ostream& out, std::ostream& err);
+/// `incise certify [--quick] [--out DIR] [--filter RE] [--junit FILE] ...` (lib/cli/certify.cpp).
+Command add_certify_command(CLI::App& root);
 
-/// `incise cut MESH SWEEPS [--out OUT.vtu] [...]` (lib/cli/cut.cpp): cut along sweep triangles.
-int run_cut(const Args& args, std::ostream& out, std::ostream& err);
+/// `incise bench [--filter RE] [--out DIR] ... | --compare A B` (lib/cli/bench.cpp).
+Command add_bench_command(CLI::App& root);
+
+/// `incise cut MESH SWEEPS [--out OUT.vtu] ...` (lib/cli/cut.cpp): cut along sweep triangles.
+Command add_cut_command(CLI::App& root);
 
 }  // namespace incise::cli

@@ -5,7 +5,7 @@
 //
 // SWEEPS: a sweep file (io/sweep_file.hpp), coordinates in the mesh file's units (× --scale),
 // processed in order; a line "end" finishes an incision (the next triangles start a new one). Exit
-// 0 when the result is valid; 1 unreadable input; 2 usage; 3 invalid result.
+// 0 when the result is valid; 1 unreadable input; 2 usage; 3 invalid result (cli_util.hpp Exit).
 
 #include <incise/core/error.hpp>
 #include <incise/cut/cutter.hpp>
@@ -13,6 +13,9 @@
 #include <incise/io/sweep_file.hpp>
 #include <incise/io/write_mesh.hpp>
 
+#include <CLI/CLI.hpp>
+
+#include <memory>
 #include <ostream>
 
 #include "cli_util.hpp"
@@ -22,59 +25,22 @@ namespace incise::cli {
 
 namespace {
 
-void cut_usage(std::ostream& os) {
-  os << "usage: incise cut MESH SWEEPS [--out OUT.vtu] [--no-snap] [--no-removal]\n"
-        "                  [--allow-inverting-snaps] [--scale S]\n"
-        "  MESH     tetrahedral mesh (.msh, .mesh, .node/.ele)\n"
-        "  SWEEPS   one sweep triangle per line: ax ay az bx by bz cx cy cz; 'end' ends an\n"
-        "           incision; '#' comments\n"
-        "  --out    write the cut mesh (reference configuration) as VTU\n"
-        "  --scale  multiply mesh and sweep coordinates by S\n"
-        "exit status: 0 valid result, 1 unreadable input, 2 usage, 3 invalid result\n";
-}
-
-}  // namespace
-
-int run_cut(const Args& args, std::ostream& out, std::ostream& err) {
-  std::string mesh_path, sweep_path, out_path;
+struct CutCommandOptions {
+  std::string mesh_path, sweep_path, out_path, scale = "1";
   cut::CutOptions options;
-  double scale = 1.0;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--out" && i + 1 < args.size()) {
-      out_path = args[++i];
-    } else if (a == "--scale" && i + 1 < args.size()) {
-      try {
-        scale = positive_number(args[++i], "--scale");
-      } catch (const UsageError& e) {
-        err << "incise cut: " << e.what() << "\n";
-        return 2;
-      }
-    } else if (a == "--no-snap") {
-      options.snap_nodes = false;
-    } else if (a == "--no-removal") {
-      options.remove_degeneracies = false;
-    } else if (a == "--allow-inverting-snaps") {
-      options.refuse_inverting_snaps = false;
-    } else if (a == "--help" || a == "-h") {
-      cut_usage(out);
-      return 0;
-    } else if (!a.empty() && a[0] == '-') {
-      cut_usage(err);
-      return 2;
-    } else if (mesh_path.empty()) {
-      mesh_path = a;
-    } else if (sweep_path.empty()) {
-      sweep_path = a;
-    } else {
-      cut_usage(err);
-      return 2;
-    }
-  }
-  if (mesh_path.empty() || sweep_path.empty() || !(scale > 0)) {
-    cut_usage(err);
-    return 2;
-  }
+};
+
+int cut_command(CutCommandOptions& opt, Context& ctx) {
+  reject_extras(ctx.extras, "cut", [](const std::string& a) {
+    return "unexpected argument '" + a + "' (expected MESH SWEEPS; see incise cut --help)";
+  });
+  const double scale = positive_number(opt.scale, "--scale");
+  const std::string& mesh_path = opt.mesh_path;
+  const std::string& sweep_path = opt.sweep_path;
+  const std::string& out_path = opt.out_path;
+  cut::CutOptions& options = opt.options;
+  std::ostream& out = ctx.out;
+  std::ostream& err = ctx.log.error();
   options.free_components = cut::FreeComponentPolicy::kReport;
   try {
     io::ReadOptions ro;
@@ -82,7 +48,7 @@ int run_cut(const Args& args, std::ostream& out, std::ostream& err) {
     const io::LoadedMesh loaded = io::read_mesh(mesh_path, ro);
     if (loaded.mesh.dimension != 3) {
       err << mesh_path << ": not a tetrahedral mesh\n";
-      return 1;
+      return exit_code(Exit::kBadInput);
     }
     cut::CutMesh mesh(loaded.mesh);
     cut::Cutter cutter(mesh, options);
@@ -119,11 +85,37 @@ int run_cut(const Args& args, std::ostream& out, std::ostream& err) {
       io::write_vtu(out_path, mesh.to_mesh_data(false, true));
       out << "wrote " << out_path << "\n";
     }
-    return v.ok() ? 0 : 3;
+    return exit_code(v.ok() ? Exit::kOk : Exit::kNumericalFailure);
   } catch (const ParseError& e) {
     err << e.what() << "\n";
-    return 1;
+    return exit_code(Exit::kBadInput);
   }
+}
+
+}  // namespace
+
+Command add_cut_command(CLI::App& root) {
+  auto opt = std::make_shared<CutCommandOptions>();
+  CLI::App* app =
+      root.add_subcommand("cut", "cut a tetrahedral mesh along sweep triangles (docs/cutting.md)");
+  app->add_option("MESH", opt->mesh_path, "tetrahedral mesh (.msh, .mesh, .node/.ele)")->required();
+  app->add_option("SWEEPS", opt->sweep_path,
+                  "one sweep triangle per line: ax ay az bx by bz cx cy cz; 'end' ends an "
+                  "incision; '#' comments")
+      ->required();
+  app->add_option("--out", opt->out_path, "write the cut mesh (reference configuration) as VTU")
+      ->type_name("OUT.vtu");
+  app->add_option("--scale", opt->scale, "multiply mesh and sweep coordinates by S")
+      ->type_name("S");
+  app->add_flag_callback(
+      "--no-snap", [opt] { opt->options.snap_nodes = false; }, "do not snap nodes to the sweep");
+  app->add_flag_callback(
+      "--no-removal", [opt] { opt->options.remove_degeneracies = false; },
+      "keep degenerate elements (no collapse)");
+  app->add_flag_callback(
+      "--allow-inverting-snaps", [opt] { opt->options.refuse_inverting_snaps = false; },
+      "allow snaps that invert an element");
+  return {app, [opt](Context& ctx) { return cut_command(*opt, ctx); }};
 }
 
 }  // namespace incise::cli

@@ -1,10 +1,16 @@
-// incise — command-line entry point. Dispatches to subcommands (see commands.hpp).
+// incise — command-line entry point. Parses the command line with CLI11 (Debian libcli11-dev),
+// runs the selected subcommand (commands.hpp) and maps what it throws to the one exit-status
+// table (cli_util.hpp Exit, docs/cli.md): CLI11 parse errors 2, and what a command throws by
+// report_exception (CommandLineError 2, incise::Error 1, any other exception 70).
 
 #include <incise/core/error.hpp>
 #include <incise/linalg/blas_threads.hpp>
 
+#include <CLI/CLI.hpp>
+
 #include <exception>
 #include <iostream>
+#include <regex>
 
 #include "cli_util.hpp"
 #include "commands.hpp"
@@ -12,61 +18,127 @@
 namespace incise::cli {
 namespace {
 
-int version(const Args&, std::ostream& out, std::ostream&) {
-  out << "incise " << build_version() << " (commit " << build_commit() << ")\n";
-  return 0;
+std::string version_line() {
+  return std::string("incise ") + build_version() + " (commit " + build_commit() + ")";
 }
 
-// Registered subcommands. Add one line per subcommand family (declared in commands.hpp).
-const Command kCommands[] = {
-    {"version", "print the version and the commit it was built from", &version},
-    {"mesh", "mesh check FILE [--vtu OUT]: load, report quality, validate (7.1)-(7.5)", &run_mesh},
-    {"run", "run SCENE [--summary-json PATH] [--progress MODE]: run a scene file (docs/scenes.md)",
-     &run_scene_command},
-    {"certify",
-     "certify [--quick] [--out DIR] [--filter RE] [--data DIR]: run the verification "
-     "catalogue, write a report",
-     &run_certify_command},
-    {"bench",
-     "bench [--filter RE] [--out DIR] | --compare A B: run benchmarks, update the dashboard",
-     &run_bench_command},
-    {"cut", "cut MESH SWEEPS [--out OUT.vtu]: cut along sweep triangles (docs/cutting.md)",
-     &run_cut},
-};
+/// "incise run", "incise mesh check": the deepest command CLI11 selected.
+const CLI::App* selected(const CLI::App& root, std::string& path) {
+  const CLI::App* app = &root;
+  path = "incise";
+  for (auto subs = app->get_subcommands(); !subs.empty(); subs = app->get_subcommands()) {
+    app = subs.front();
+    path += " " + app->get_name();
+  }
+  return app;
+}
 
-void usage(std::ostream& os) {
-  os << "usage: incise <command> [args...]\n\ncommands:\n";
-  for (const auto& c : kCommands) os << "  " << c.name << "\t" << c.summary << "\n";
+/// A CLI11 parse error as one line: "incise CMD: MESSAGE (see incise CMD --help)". CLI11's
+/// "--opt: 1 required TEXT missing" reads "--opt expects a value", "X is required" "missing X".
+std::string parse_error_line(const CLI::App& root, const CLI::ParseError& e) {
+  std::string path;
+  selected(root, path);
+  std::string what = e.what();
+  std::smatch m;
+  if (std::regex_match(what, m, std::regex("(\\S+): [0-9]+ required \\S+ missing")))
+    what = m[1].str() + " expects a value";
+  else if (std::regex_match(what, m, std::regex("(\\S+) is required")))
+    what = "missing " + m[1].str();
+  return path + ": " + what + " (see " + path + " --help)";
+}
+
+int run_command(const Command& c, const std::string& path, Log& log) {
+  Context context{std::cout, log, c.app->remaining()};
+  try {
+    // Stop the BLAS workers OpenBLAS started (and left spinning) at load; incise raises the
+    // count per call site (blas_threads.hpp, docs/solvers.md "BLAS threads").
+    incise::linalg::park_blas_threads();
+    return c.run(context);
+  } catch (...) {
+    return report_exception(std::current_exception(), path, log.error());
+  }
+}
+
+int run_main(int argc, char** argv) {
+  CLI::App app(
+      "incise: FEM soft-tissue simulation, cutting and needle insertion (thesis-based; "
+      "docs/cli.md)",
+      "incise");
+  // Set before the subcommands are added: they inherit these.
+  app.set_help_flag("-h,--help", "print this help and exit");
+  app.allow_extras();
+  app.footer(exit_status_help());
+  app.get_formatter()->column_width(34);
+
+  std::vector<Command> commands;
+  CLI::App* version = app.add_subcommand("version",
+                                         "print the version and the commit it was "
+                                         "built from");
+  commands.push_back({version, [](Context& c) {
+                        reject_extras(c.extras, "version", [](const std::string& a) {
+                          return "unexpected argument '" + a + "'";
+                        });
+                        c.out << version_line() << "\n";
+                        return exit_code(Exit::kOk);
+                      }});
+  CLI::App* mesh = app.add_subcommand("mesh",
+                                      "mesh tools: mesh check FILE loads a mesh, reports "
+                                      "its quality and validates (7.1)-(7.5)");
+  commands.push_back(add_mesh_check_command(*mesh));
+  commands.push_back(add_run_command(app));
+  commands.push_back(add_certify_command(app));
+  commands.push_back(add_bench_command(app));
+  commands.push_back(add_cut_command(app));
+
+  // --version on the program and every subcommand; -q / -v on every command.
+  bool quiet = false, verbose = false;
+  app.set_version_flag("--version", version_line(), "print the version and exit");
+  mesh->set_version_flag("--version", version_line(), "print the version and exit");
+  for (const Command& c : commands) {
+    c.app->set_version_flag("--version", version_line(), "print the version and exit");
+    c.app->add_flag("-q,--quiet", quiet, "nothing on stderr but errors (no progress, no logs)");
+    c.app->add_flag("-v,--verbose", verbose, "more detail on stderr (and in some reports)");
+  }
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << parse_error_line(app, e) << "\n";
+    return exit_code(Exit::kUsage);
+  }
+
+  std::string path;
+  const CLI::App* leaf = selected(app, path);
+  if (quiet && verbose) {
+    std::cerr << path << ": -q and -v exclude each other (see " << path << " --help)\n";
+    return exit_code(Exit::kUsage);
+  }
+  Log log(std::cerr, quiet     ? Verbosity::kQuiet
+                     : verbose ? Verbosity::kVerbose
+                               : Verbosity::kNormal);
+  for (const Command& c : commands)
+    if (c.app == leaf) return run_command(c, path, log);
+
+  // No command selected: `incise`, `incise frob`, `incise mesh`, `incise mesh frob`.
+  const std::vector<std::string> extras = leaf->remaining();
+  if (!extras.empty())
+    std::cerr << path << ": unknown " << (leaf == &app ? "command" : "subcommand") << " '"
+              << extras.front() << "'\n";
+  std::cerr << app.help();
+  return exit_code(Exit::kUsage);
 }
 
 }  // namespace
 }  // namespace incise::cli
 
 int main(int argc, char** argv) {
-  using namespace incise::cli;
-  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") {
-    usage(argc < 2 ? std::cerr : std::cout);
-    return argc < 2 ? 2 : 0;
+  try {
+    return incise::cli::run_main(argc, argv);
+  } catch (...) {
+    return incise::cli::report_exception(std::current_exception(), "incise", std::cerr);
   }
-  const std::string name = argv[1];
-  const Args args(argv + 2, argv + argc);
-  for (const auto& c : kCommands) {
-    if (name == c.name) {
-      try {
-        // Stop the BLAS workers OpenBLAS started (and left spinning) at load; incise raises
-        // the count per call site (blas_threads.hpp, docs/solvers.md "BLAS threads").
-        incise::linalg::park_blas_threads();
-        return c.run(args, std::cout, std::cerr);
-      } catch (const incise::Error& e) {
-        std::cerr << "incise " << name << ": " << e.what() << "\n";
-        return 1;
-      } catch (const std::exception& e) {
-        std::cerr << "incise " << name << ": internal error: " << e.what() << "\n";
-        return 70;
-      }
-    }
-  }
-  std::cerr << "incise: unknown command '" << name << "'\n";
-  usage(std::cerr);
-  return 2;
 }

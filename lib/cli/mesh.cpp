@@ -1,7 +1,8 @@
-// `incise mesh check FILE [--vtu OUT] [--reorient] [--merge-duplicates]`: load a mesh, print
-// what the loader found, counts, bounding box and quality, build the connectivity and validate
-// the invariants (7.1)-(7.5) of thesis ch. 7. Exit 0 when valid; 1 when unreadable (one line
-// "file:line: reason" on stderr); 3 when readable but invalid; 2 on usage errors.
+// `incise mesh check FILE [--json] [--vtu OUT] [--reorient] [--merge-duplicates] ...`: load a
+// mesh, print what the loader found, counts, bounding box and quality, build the connectivity
+// and validate the invariants (7.1)-(7.5) of thesis ch. 7 — as text or, with --json, as one JSON
+// document (docs/cli.md, "incise mesh check --json"). Exit 0 when valid; 1 (bad input) when
+// unreadable (one line "file:line: reason" on stderr) or readable but invalid; 2 on usage errors.
 
 #include <incise/core/error.hpp>
 #include <incise/io/read_mesh.hpp>
@@ -11,10 +12,15 @@
 #include <incise/mesh/tet_faces.hpp>
 #include <incise/mesh/validate.hpp>
 
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <iomanip>
+#include <memory>
+#include <optional>
 #include <ostream>
 #include <set>
 #include <sstream>
@@ -25,22 +31,6 @@
 namespace incise::cli {
 
 namespace {
-
-constexpr int kExitUnreadable = 1;
-constexpr int kExitUsage = 2;
-constexpr int kExitInvalid = 3;
-
-void mesh_usage(std::ostream& os) {
-  os << "usage: incise mesh check FILE [--vtu OUT] [--reorient] [--merge-duplicates]\n"
-        "                         [--keep-pinched] [--scale S]\n"
-        "  FILE: .msh (Gmsh 2.2/4.1 ASCII), .mesh (Medit), .node/.ele (TetGen), .off\n"
-        "  --vtu OUT            write the mesh with quality cell data as VTU (ParaView)\n"
-        "  --reorient           flip inverted cells instead of rejecting the file\n"
-        "  --merge-duplicates   merge vertices with identical coordinates\n"
-        "  --keep-pinched       do not split pinched vertices (star not connected, §7.3)\n"
-        "  --scale S            multiply coordinates by S (0.001: millimetres to metres)\n"
-        "exit status: 0 valid, 1 unreadable, 2 usage, 3 invalid\n";
-}
 
 std::string labels(const std::map<int, Index>& m) {
   if (m.empty()) return "none";
@@ -62,51 +52,48 @@ void stats_row(std::ostream& out, const char* name, const mesh::Stats& s) {
       << std::setw(11) << s.p95 << std::setw(11) << s.max << "\n";
 }
 
-int check(const Args& args, std::ostream& out, std::ostream& err) {
-  std::string file, vtu;
-  io::ReadOptions options;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--vtu" && i + 1 < args.size()) {
-      vtu = args[++i];
-    } else if (a == "--reorient") {
-      options.reorient = true;
-    } else if (a == "--merge-duplicates") {
-      options.merge_duplicate_vertices = true;
-    } else if (a == "--keep-pinched") {
-      options.split_pinched_vertices = false;
-    } else if (a == "--scale" && i + 1 < args.size()) {
-      try {
-        options.scale = positive_number(args[++i], "--scale");
-      } catch (const UsageError& e) {
-        err << "incise mesh check: " << e.what() << "\n";
-        return kExitUsage;
-      }
-    } else if (a == "-h" || a == "--help") {
-      mesh_usage(out);
-      return 0;
-    } else if (!a.empty() && a[0] == '-') {
-      err << "incise mesh check: unknown option '" << a << "'\n";
-      mesh_usage(err);
-      return kExitUsage;
-    } else if (file.empty()) {
-      file = a;
-    } else {
-      err << "incise mesh check: more than one FILE given\n";
-      return kExitUsage;
-    }
-  }
-  if (file.empty()) {
-    mesh_usage(err);
-    return kExitUsage;
-  }
+struct CheckOptions {
+  std::string file, vtu, scale = "1";
+  bool json = false;
+  io::ReadOptions read;
+};
+
+nlohmann::json stats_json(const mesh::Stats& s) {
+  return {{"min", s.min}, {"p05", s.p05}, {"median", s.median}, {"p95", s.p95}, {"max", s.max}};
+}
+
+nlohmann::json labels_json(const std::map<int, Index>& m) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [tag, n] : m) j[std::to_string(tag)] = n;
+  return j;
+}
+
+int check(CheckOptions& opt, Context& ctx) {
+  reject_extras(ctx.extras, "mesh check",
+                [](const std::string&) { return std::string("more than one FILE given"); });
+  io::ReadOptions& options = opt.read;
+  options.scale = positive_number(opt.scale, "--scale");
+  const std::string& file = opt.file;
+  const std::string& vtu = opt.vtu;
+  // Text to `out` unless --json; the JSON document is built either way and printed at the end.
+  std::ostringstream text;
+  std::ostream& out = text;
+  nlohmann::json j;
+  std::ostream& err = ctx.log.error();
+  const auto finish = [&](Exit status) {
+    if (opt.json)
+      ctx.out << j.dump(2) << "\n";
+    else
+      ctx.out << text.str();
+    return exit_code(status);
+  };
 
   io::LoadedMesh loaded;
   try {
     loaded = io::read_mesh(file, options);
   } catch (const ParseError& e) {
     err << e.what() << "\n";
-    return kExitUnreadable;
+    return exit_code(Exit::kBadInput);
   }
   const mesh::MeshData& m = loaded.mesh;
   const io::LoadReport& rep = loaded.report;
@@ -134,6 +121,28 @@ int check(const Args& args, std::ostream& out, std::ostream& err) {
       << " unused vertices, " << rep.pinched_vertices << " pinched vertices split, "
       << rep.ignored_elements << " ignored records\n";
   for (const auto& n : rep.notes) out << "  note: " << n << "\n";
+  j["file"] = file;
+  j["format"] = rep.format;
+  j["dimension"] = m.dimension;
+  j["surface"] = rep.surface;
+  j["counts"] = {{"vertices", m.num_points()}, {"cells", m.num_cells()}, {"cell_kind", cell_name}};
+  if (volume) j["counts"]["boundary_triangles_in_file"] = rep.num_facets;
+  j["bounding_box"] = {{"min", {bb[0].x(), bb[0].y(), bb[0].z()}},
+                       {"max", {bb[1].x(), bb[1].y(), bb[1].z()}}};
+  j["scale"] = options.scale;
+  j["labels"] = {{"cells", labels_json(rep.cell_labels)},
+                 {"points", labels_json(rep.point_labels)}};
+  if (volume) j["labels"]["facets"] = labels_json(rep.facet_labels);
+  j["physical_names"] = nlohmann::json::object();
+  for (const auto& [tag, name] : rep.physical_names)
+    j["physical_names"][std::to_string(tag)] = name;
+  j["loader"] = {{"reoriented", rep.reoriented},
+                 {"duplicate_vertices", rep.duplicate_vertices},
+                 {"merged_vertices", rep.merged_vertices},
+                 {"unused_vertices", rep.unused_vertices},
+                 {"pinched_vertices_split", rep.pinched_vertices},
+                 {"ignored_records", rep.ignored_elements},
+                 {"notes", rep.notes}};
 
   const bool planar = !rep.surface;
   const mesh::QualitySummary q = mesh::summarize_quality(m, {}, planar);
@@ -151,12 +160,27 @@ int check(const Args& args, std::ostream& out, std::ostream& err) {
   for (int c = 0; c < 6; ++c)
     out << " " << mesh::to_string(static_cast<mesh::ShapeClass>(c)) << " " << q.shape_counts[c];
   out << "\n";
+  nlohmann::json& jq = j["quality"];
+  jq[volume ? "volume" : "area"] = stats_json(q.size);
+  jq["aspect_ratio"] = stats_json(q.aspect_ratio);
+  jq["shewchuk"] = stats_json(q.shewchuk);
+  jq[volume ? "min_dihedral_deg" : "min_angle_deg"] = stats_json(q.min_angle_deg);
+  jq[volume ? "max_dihedral_deg" : "max_angle_deg"] = stats_json(q.max_angle_deg);
+  jq["edge_length"] = stats_json(q.edge_length);
+  jq[volume ? "total_volume" : "total_area"] = q.total_size;
+  jq["inverted"] = q.num_inverted;
+  for (int c = 0; c < 6; ++c)
+    jq["shapes"][mesh::to_string(static_cast<mesh::ShapeClass>(c))] = q.shape_counts[c];
+  j["wrote"] = nullptr;
+  j["valid"] = false;
+  j["violations"] = nlohmann::json::array();
 
   if (!vtu.empty()) {
     const mesh::CellQuality cq = mesh::cell_quality(m, {}, planar);
     const std::vector<io::DataArray> cell_data = io::quality_cell_data(cq);
     io::write_vtu(vtu, m, {}, cell_data);
     out << "wrote:       " << vtu << "\n";
+    j["wrote"] = vtu;
   }
 
   mesh::Connectivity conn(m.dimension);
@@ -165,7 +189,8 @@ int check(const Args& args, std::ostream& out, std::ostream& err) {
   } catch (const UsageError& e) {
     out << "validation:  FAILED to build the connectivity\n";
     err << file << ": invalid mesh: " << e.what() << "\n";
-    return kExitInvalid;
+    j["violations"].push_back({{"invariant", "connectivity"}, {"message", e.what()}});
+    return finish(Exit::kBadInput);
   }
   mesh::ValidateOptions vo;
   if (planar) vo.positions = &m.points;
@@ -173,34 +198,59 @@ int check(const Args& args, std::ostream& out, std::ostream& err) {
   out << "connectivity: " << conn.num_elements() << " elements, " << conn.num_faces() << " faces, "
       << conn.num_boundary_faces() << " boundary faces";
   out << "\n";
+  j["connectivity"] = {{"elements", conn.num_elements()},
+                       {"faces", conn.num_faces()},
+                       {"boundary_faces", conn.num_boundary_faces()}};
   if (volume && m.facets.cols() > 0) {
     const mesh::FacetCoverage c = mesh::facet_coverage(m.cells, m.facets);
+    j["file_facets"] = {{"distinct", c.distinct},
+                        {"on_boundary", c.on_boundary},
+                        {"interior", c.interior},
+                        {"boundary_not_listed", c.boundary_not_listed}};
     out << "file facets: " << c.distinct << " distinct, " << c.on_boundary << " on the boundary, "
         << c.interior << " interior (e.g. subdomain interfaces); " << c.boundary_not_listed
         << " boundary faces not listed\n";
   }
   if (!v.ok()) {
-    out << "validation:  " << v.violations.size() << " violations\n" << v.summary(20);
+    // -v: every violation found (validate() stops at ValidateOptions::max_violations).
+    out << "validation:  " << v.violations.size() << " violations\n"
+        << v.summary(ctx.log.verbosity() == Verbosity::kVerbose ? v.violations.size() : 20);
     err << file << ": invalid mesh: [" << v.violations.front().invariant << "] "
         << v.violations.front().message << "\n";
-    return kExitInvalid;
+    for (const auto& x : v.violations)
+      j["violations"].push_back({{"invariant", x.invariant}, {"message", x.message}});
+    return finish(Exit::kBadInput);
   }
   out << "validation:  ok ((7.1)-(7.5), mate symmetry, boundary map, connected stars"
       << (planar ? ", orientation" : "") << ")\n";
-  return 0;
+  j["valid"] = true;
+  return finish(Exit::kOk);
 }
 
 }  // namespace
 
-int run_mesh(const Args& args, std::ostream& out, std::ostream& err) {
-  if (args.empty() || args[0] == "-h" || args[0] == "--help") {
-    mesh_usage(args.empty() ? err : out);
-    return args.empty() ? kExitUsage : 0;
-  }
-  if (args[0] == "check") return check(Args(args.begin() + 1, args.end()), out, err);
-  err << "incise mesh: unknown subcommand '" << args[0] << "'\n";
-  mesh_usage(err);
-  return kExitUsage;
+Command add_mesh_check_command(CLI::App& mesh) {
+  auto opt = std::make_shared<CheckOptions>();
+  CLI::App* app = mesh.add_subcommand(
+      "check", "load a mesh, report counts and quality, validate (7.1)-(7.5) (thesis ch. 7)");
+  app->add_option("FILE", opt->file,
+                  ".msh (Gmsh 2.2/4.1 ASCII), .mesh (Medit), .node/.ele (TetGen), .off")
+      ->required();
+  app->add_flag("--json", opt->json,
+                "print the report as one JSON document (counts, labels, loader, quality, "
+                "validity; docs/cli.md)");
+  app->add_option("--vtu", opt->vtu, "write the mesh with quality cell data as VTU (ParaView)")
+      ->type_name("OUT");
+  app->add_flag("--reorient", opt->read.reorient,
+                "flip inverted cells instead of rejecting the file");
+  app->add_flag("--merge-duplicates", opt->read.merge_duplicate_vertices,
+                "merge vertices with identical coordinates");
+  app->add_flag_callback(
+      "--keep-pinched", [opt] { opt->read.split_pinched_vertices = false; },
+      "do not split pinched vertices (star not connected, 7.3)");
+  app->add_option("--scale", opt->scale, "multiply coordinates by S (0.001: millimetres to metres)")
+      ->type_name("S");
+  return {app, [opt](Context& ctx) { return check(*opt, ctx); }};
 }
 
 }  // namespace incise::cli

@@ -1,7 +1,8 @@
-// `incise run SCENE [--summary-json PATH] [--progress auto|bar|lines|none] [--memory-mb N]`:
-// parse and build a
-// scene (docs/scenes.md), run its solver with progress, print a summary (iterations, flops,
-// time, final residual, probes, what was built and what it cost), write the scene's outputs.
+// `incise run SCENE [--summary-json PATH] [--progress auto|bar|lines|none] [--memory-mb N] ...`:
+// parse and build a scene (docs/scenes.md), run its solver with progress (stderr), print a
+// summary (stdout: iterations, flops, time, final residual, probes, what was built and what it
+// cost), write the scene's outputs. Exit 0 converged, 1 bad scene or file, 2 usage, 3 no
+// converged solution (cli_util.hpp Exit).
 //
 // Nothing is written before the scene has been parsed and built completely; the library writes
 // the outputs (scene/scene_outputs.hpp), this file prints.
@@ -13,6 +14,8 @@
 #include <incise/scene/scene_runner.hpp>
 #include <incise/scene/solution_file.hpp>
 
+#include <CLI/CLI.hpp>
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -23,6 +26,7 @@
 #include <iomanip>
 #include <iostream>
 #include <limits>
+#include <memory>
 #include <sstream>
 
 #include "cli_util.hpp"
@@ -85,110 +89,90 @@ void print_residual_summary(std::ostream& out, const scene::SceneSpec& spec,
         << " (K at u_ref)\n";
 }
 
-}  // namespace
-
-int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
+struct RunOptions {
   std::string scene_path, summary_json, progress = "auto", write_solution, reference, csv;
-  std::int64_t memory_mb = 0;       // 0: the scene's limits (or the default budget)
-  std::int64_t max_iterations = 0;  // 0: the scene's
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--memory-mb") {
-      const std::string v = option_value(args, i, "--memory-mb");
-      char* end = nullptr;
-      errno = 0;
-      memory_mb = std::strtoll(v.c_str(), &end, 10);
-      if (v.empty() || *end != '\0' || errno == ERANGE || memory_mb < 1 ||
-          memory_mb > std::numeric_limits<int>::max())
-        throw UsageError("--memory-mb expects an integer in [1, 2147483647], got '" + v + "'");
-    } else if (a == "--max-iterations") {
-      const std::string v = option_value(args, i, "--max-iterations");
-      char* end = nullptr;
-      errno = 0;
-      max_iterations = std::strtoll(v.c_str(), &end, 10);
-      if (v.empty() || *end != '\0' || errno == ERANGE || max_iterations < 1 ||
-          max_iterations > 100000000)
-        throw UsageError("--max-iterations expects an integer in [1, 100000000], got '" + v + "'");
-    } else if (a == "--write-solution") {
-      write_solution = option_value(args, i, "--write-solution");
-    } else if (a == "--reference") {
-      reference = option_value(args, i, "--reference");
-    } else if (a == "--csv") {
-      csv = option_value(args, i, "--csv");
-    } else if (a == "--summary-json") {
-      summary_json = option_value(args, i, "--summary-json");
-    } else if (a == "--progress") {
-      progress = option_value(args, i, "--progress");
-      if (progress != "auto" && progress != "bar" && progress != "lines" && progress != "none")
-        throw UsageError("--progress expects auto, bar, lines or none, got '" + progress + "'");
-    } else if (a == "--help" || a == "-h") {
-      out << "usage: incise run SCENE.json [--summary-json PATH] "
-             "[--progress auto|bar|lines|none] [--memory-mb N] [--max-iterations N] [--csv FILE] "
-             "[--write-solution FILE] [--reference FILE]\n"
-             "Runs a scene (format: docs/scenes.md) and prints a summary.\n"
-             "  --memory-mb N   memory budget of the build in MiB (overrides the scene's\n"
-             "                  limits.memory_mb; default half the physical memory)\n"
-             "  --max-iterations N   iteration cap (overrides solver.max_iterations)\n"
-             "  --csv FILE      write the per-iteration trace here (overrides outputs.csv)\n"
-             "  --write-solution FILE   write the final displacement (for --reference)\n"
-             "  --reference FILE   a solution written by --write-solution: the trace gets\n"
-             "                  the relative energy-norm error per iteration\n";
-      return 0;
-    } else if (!a.empty() && a[0] == '-') {
-      throw UsageError("unknown option '" + a + "' (see incise run --help)");
-    } else if (scene_path.empty()) {
-      scene_path = a;
-    } else {
-      throw UsageError("expected one scene file, got '" + scene_path + "' and '" + a + "'");
-    }
-  }
-  if (scene_path.empty())
-    throw UsageError(
-        "usage: incise run SCENE.json [--summary-json PATH] [--progress auto|bar|lines|none] "
-        "[--memory-mb N] [--max-iterations N] [--csv FILE] [--write-solution FILE] "
-        "[--reference FILE]");
-  if (progress == "auto")
-    progress = (&out == &std::cout && isatty(STDOUT_FILENO)) ? "bar" : "lines";
+  std::string memory_mb, max_iterations;  // empty: the scene's
+};
+
+/// `value` as an integer in [lo, hi]; CommandLineError naming the option otherwise.
+std::int64_t integer_option(const std::string& value, const char* name, std::int64_t lo,
+                            std::int64_t hi) {
+  char* end = nullptr;
+  errno = 0;
+  const std::int64_t v = std::strtoll(value.c_str(), &end, 10);
+  if (value.empty() || *end != '\0' || errno == ERANGE || v < lo || v > hi)
+    throw CommandLineError(std::string(name) + " expects an integer in [" + std::to_string(lo) +
+                           ", " + std::to_string(hi) + "], got '" + value + "'");
+  return v;
+}
+
+int run_scene(RunOptions& opt, Context& ctx) {
+  reject_extras(ctx.extras, "run", [&](const std::string& a) {
+    return "expected one scene file, got '" + opt.scene_path + "' and '" + a + "'";
+  });
+  std::ostream& out = ctx.out;
+  std::ostream& err = ctx.log.error();
+  std::ostream& progress_out = ctx.log.info();
+  const bool verbose = ctx.log.verbosity() == Verbosity::kVerbose;
+  const std::string& scene_path = opt.scene_path;
+  const std::string& summary_json = opt.summary_json;
+  const std::string& write_solution = opt.write_solution;
+  const std::string& reference = opt.reference;
+  std::string progress = opt.progress;
+  if (progress != "auto" && progress != "bar" && progress != "lines" && progress != "none")
+    throw CommandLineError("--progress expects auto, bar, lines or none, got '" + progress + "'");
+  const std::int64_t memory_mb =
+      opt.memory_mb.empty()
+          ? 0
+          : integer_option(opt.memory_mb, "--memory-mb", 1, std::numeric_limits<int>::max());
+  const std::int64_t max_iterations =
+      opt.max_iterations.empty()
+          ? 0
+          : integer_option(opt.max_iterations, "--max-iterations", 1, 100000000);
+  if (ctx.log.verbosity() == Verbosity::kQuiet) progress = "none";
+  if (progress == "auto") progress = isatty(STDERR_FILENO) ? "bar" : "lines";
 
   // Parse and build everything first: errors stop the run before any file is written.
   Timer total;
   scene::SceneSpec spec = scene::load_scene(scene_path);
   if (memory_mb > 0) spec.limits.memory_mb = memory_mb;
   if (max_iterations > 0) spec.solver.max_iterations = static_cast<int>(max_iterations);
-  if (!csv.empty()) spec.outputs.csv = csv;
+  if (!opt.csv.empty()) spec.outputs.csv = opt.csv;
   scene::BuiltScene built = scene::build_scene(spec);
   // A reference is read (and checked against the problem) before anything runs.
   VecX reference_u;
   if (!reference.empty()) {
     if (built.needle != nullptr || !spec.tools.empty() ||
         spec.solver.method == scene::SolverSpec::Method::kAugmented)
-      throw UsageError(
+      throw CommandLineError(
           "--reference: only a relaxation scene (cg, nonlinear-cg, newton, "
           "dynamic-ss22 without tools) records an energy-norm error");
     reference_u = scene::read_solution(reference);
     if (reference_u.size() != built.problem->size())
-      throw UsageError("--reference " + reference + ": " + std::to_string(reference_u.size()) +
-                       " values, but the scene has " + std::to_string(built.problem->size()) +
-                       " DOFs (written for another mesh?)");
+      throw BadInputError("--reference " + reference + ": " + std::to_string(reference_u.size()) +
+                          " values, but the scene has " + std::to_string(built.problem->size()) +
+                          " DOFs (written for another mesh?)");
   }
 
-  out << "scene: " << scene_path << (spec.name.empty() ? "" : "  (" + spec.name + ")") << "\n";
+  progress_out << "scene: " << scene_path << (spec.name.empty() ? "" : "  (" + spec.name + ")")
+               << "\n";
   const bool needle_run = built.is_needle();
   const bool needle3d_run = built.needle3d != nullptr;
-  out << "solver: " << scene::to_string(spec.solver.method) << ", tolerance "
-      << spec.solver.tolerance
-      << (needle_run ? " (eps of (6.9), eps_round " + num(spec.solver.tolerance_round) + ")"
-                     : std::string(" (||r|| <= tol ||f_ext||)"));
+  progress_out << "solver: " << scene::to_string(spec.solver.method) << ", tolerance "
+               << spec.solver.tolerance
+               << (needle_run
+                       ? " (eps of (6.9), eps_round " + num(spec.solver.tolerance_round) + ")"
+                       : std::string(" (||r|| <= tol ||f_ext||)"));
   if (needle_run)
-    out << ", needle insertion: " << built.needle_plan.size() << " updates, budget "
-        << spec.solver.max_iterations << " iterations per solve\n";
+    progress_out << ", needle insertion: " << built.needle_plan.size() << " updates, budget "
+                 << spec.solver.max_iterations << " iterations per solve\n";
   else if (spec.solver.method == scene::SolverSpec::Method::kAugmented)
-    out << (spec.tools.empty()
-                ? ", direct solve\n"
-                : ", interactive cut: " + std::to_string(built.sweep_triangles.size()) +
-                      " sweep triangles, one augmented update each\n");
+    progress_out << (spec.tools.empty()
+                         ? ", direct solve\n"
+                         : ", interactive cut: " + std::to_string(built.sweep_triangles.size()) +
+                               " sweep triangles, one augmented update each\n");
   else
-    out << ", budget " << spec.solver.max_iterations << " iterations\n";
+    progress_out << ", budget " << spec.solver.max_iterations << " iterations\n";
 
   // Progress: fraction of the way (in log10 of the residual) from ||r_0|| to the threshold.
   const double threshold =
@@ -206,17 +190,19 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     if (progress == "bar" && (bar_timer.seconds() >= 0.1 || frac >= 1.0)) {
       bar_timer.restart();
       const int width = 30, filled = static_cast<int>(frac * width);
-      out << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
-          << std::string(static_cast<std::size_t>(width - filled), '.') << "] it " << std::setw(6)
-          << info.iteration << "  |r|/|f| = " << std::scientific << std::setprecision(2)
-          << info.residual_norm / std::max(built.problem->external_force_norm(), 1e-300)
-          << std::defaultfloat << std::setprecision(6) << std::flush;
+      progress_out << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
+                   << std::string(static_cast<std::size_t>(width - filled), '.') << "] it "
+                   << std::setw(6) << info.iteration << "  |r|/|f| = " << std::scientific
+                   << std::setprecision(2)
+                   << info.residual_norm / std::max(built.problem->external_force_norm(), 1e-300)
+                   << std::defaultfloat << std::setprecision(6) << std::flush;
     } else if (progress == "lines") {
       const int decile = static_cast<int>(frac * 10);
-      if (decile > last_decile) {
+      if (decile > last_decile || verbose) {  // -v: every iteration
         last_decile = decile;
-        out << "progress " << std::setw(3) << decile * 10 << "%: iteration " << info.iteration
-            << ", |r| = " << info.residual_norm << " N (target " << threshold << " N)\n";
+        progress_out << "progress " << std::setw(3) << decile * 10 << "%: iteration "
+                     << info.iteration << ", |r| = " << info.residual_norm << " N (target "
+                     << threshold << " N)\n";
       }
     }
     frames.iteration(info);
@@ -228,13 +214,14 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     if (progress == "bar") {
       const double frac = total_steps ? double(row.step) / double(total_steps) : 1.0;
       const int width = 30, filled = static_cast<int>(frac * width);
-      out << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
-          << std::string(static_cast<std::size_t>(width - filled), '.') << "] step " << std::setw(4)
-          << row.step << "/" << total_steps << "  m = " << std::setw(5) << row.m << std::flush;
+      progress_out << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
+                   << std::string(static_cast<std::size_t>(width - filled), '.') << "] step "
+                   << std::setw(4) << row.step << "/" << total_steps << "  m = " << std::setw(5)
+                   << row.m << std::flush;
     } else if (progress == "lines") {
-      out << "step " << row.step << "/" << total_steps << ": " << row.status << ", m = " << row.m
-          << ", GMRES " << row.gmres_iterations << " it, update " << row.seconds_update * 1e3
-          << " ms\n";
+      progress_out << "step " << row.step << "/" << total_steps << ": " << row.status
+                   << ", m = " << row.m << ", GMRES " << row.gmres_iterations << " it, update "
+                   << row.seconds_update * 1e3 << " ms\n";
     }
   };
   // Needle scene: one line (or bar frame) per update.
@@ -242,16 +229,17 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
     if (progress == "bar") {
       const double frac = total_updates ? double(row.update + 1) / double(total_updates) : 1.0;
       const int width = 30, filled = static_cast<int>(frac * width);
-      out << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
-          << std::string(static_cast<std::size_t>(width - filled), '.') << "] update "
-          << std::setw(5) << row.update << "/" << total_updates - 1 << "  depth " << std::fixed
-          << std::setprecision(2) << row.depth * 1e3 << " mm" << std::defaultfloat
-          << std::setprecision(6) << std::flush;
+      progress_out << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
+                   << std::string(static_cast<std::size_t>(width - filled), '.') << "] update "
+                   << std::setw(5) << row.update << "/" << total_updates - 1 << "  depth "
+                   << std::fixed << std::setprecision(2) << row.depth * 1e3 << " mm"
+                   << std::defaultfloat << std::setprecision(6) << std::flush;
     } else if (progress == "lines") {
-      out << "update " << row.update << "/" << total_updates - 1 << ": depth "
-          << num(row.depth * 1e3) << " mm, stick " << row.sticking << ", slip " << row.slipping
-          << ", rearrangements " << row.rearrangements << ", CG " << row.cg_iterations
-          << " it, update " << row.seconds * 1e3 << " ms, " << row.status << "\n";
+      progress_out << "update " << row.update << "/" << total_updates - 1 << ": depth "
+                   << num(row.depth * 1e3) << " mm, stick " << row.sticking << ", slip "
+                   << row.slipping << ", rearrangements " << row.rearrangements << ", CG "
+                   << row.cg_iterations << " it, update " << row.seconds * 1e3 << " ms, "
+                   << row.status << "\n";
     }
   };
   auto needle_observer = [&](const scene::NeedleUpdateRow& row, std::size_t total_updates,
@@ -267,7 +255,7 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   const scene::SceneRunResult res =
       scene::run_scene(built, observer, cut_observer, needle_observer, needle3d_observer,
                        reference.empty() ? nullptr : &reference_u);
-  if (progress == "bar") out << "\n";
+  if (progress == "bar") progress_out << "\n";
 
   const auto& rep = res.report;
   out << "\n== summary\n";
@@ -372,9 +360,40 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   }
   if (!rep.ok()) {
     err << "incise run: no converged solution: " << rep.brief() << "\n";
-    return 3;
+    return exit_code(Exit::kNumericalFailure);
   }
-  return 0;
+  return exit_code(Exit::kOk);
+}
+
+}  // namespace
+
+Command add_run_command(CLI::App& root) {
+  auto opt = std::make_shared<RunOptions>();
+  CLI::App* app = root.add_subcommand(
+      "run", "run a scene file (docs/scenes.md): summary on stdout, progress on stderr");
+  app->add_option("SCENE", opt->scene_path, "the scene (JSON, docs/scenes.md)")->required();
+  app->add_option("--summary-json", opt->summary_json, "write the run's summary as JSON here")
+      ->type_name("PATH");
+  app->add_option("--progress", opt->progress,
+                  "auto (bar on a terminal, else lines), bar, lines or none; on stderr")
+      ->type_name("MODE");
+  app->add_option("--memory-mb", opt->memory_mb,
+                  "memory budget of the build in MiB (overrides the scene's limits.memory_mb; "
+                  "default half the physical memory)")
+      ->type_name("N");
+  app->add_option("--max-iterations", opt->max_iterations,
+                  "iteration cap (overrides solver.max_iterations)")
+      ->type_name("N");
+  app->add_option("--csv", opt->csv, "write the per-iteration trace here (overrides outputs.csv)")
+      ->type_name("FILE");
+  app->add_option("--write-solution", opt->write_solution,
+                  "write the final displacement (for --reference)")
+      ->type_name("FILE");
+  app->add_option("--reference", opt->reference,
+                  "a solution written by --write-solution: the trace gets the relative "
+                  "energy-norm error per iteration")
+      ->type_name("FILE");
+  return {app, [opt](Context& ctx) { return run_scene(*opt, ctx); }};
 }
 
 }  // namespace incise::cli

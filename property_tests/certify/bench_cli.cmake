@@ -4,8 +4,8 @@
 #     1. --filter BM_alpha: exit 0, nothing on stderr, one run folder holding only
 #        alpha_bench.json (beta_bench, none of whose benchmarks the filter selects, is skipped:
 #        run, it would leave an empty JSON file and the old "not valid JSON" failure), index.html;
-#     2. a filter that selects nothing: exit 1, one stderr line "no benchmark matches", no run
-#        folder added;
+#     2. a filter that selects nothing: exit 2 (usage), one stderr line "no benchmark matches",
+#        no run folder added;
 #     3. --compare with INCISE_COMPARE_PY naming no file: exit 1, one stderr line naming it.
 #   cmake -DINCISE=... -DRUNS=<two run folders> -DWORKDIR=... -DMODE=compare -P bench_cli.cmake
 #     compare.py on two stored runs: exit 0, its "U Test" line on stdout; reported as skipped
@@ -19,13 +19,14 @@ if(MODE STREQUAL "compare")
     message(STATUS "compare.py not installed (Debian libbenchmark-tools); skipping")
     return()
   endif()
-  expect("compare" 0 "fixture_bench.json.*U Test" "^$" "${INCISE}" bench --compare ${RUNS})
+  expect("compare" 0 "fixture_bench.json.*U Test" "^$" "${INCISE}" bench -q --compare ${RUNS})
   return()
 endif()
 
 file(REMOVE_RECURSE "${WORKDIR}")
 file(MAKE_DIRECTORY "${WORKDIR}")
-set(bench "${INCISE}" bench --bin-dir "${FAKE}" --out "${WORKDIR}" --repetitions 1)
+# -q: nothing on stderr but errors (the progress lines "bench: running ..." are on stderr).
+set(bench "${INCISE}" bench -q --bin-dir "${FAKE}" --out "${WORKDIR}" --repetitions 1)
 function(expect_run_folders n)
   file(GLOB run_dirs "${WORKDIR}/runs/*")
   list(LENGTH run_dirs found)
@@ -47,8 +48,8 @@ if(NOT EXISTS "${WORKDIR}/index.html")
   message(FATAL_ERROR "no dashboard ${WORKDIR}/index.html")
 endif()
 
-# 2. Nothing selected: a clear message, exit 1, nothing stored.
-expect("filter selects nothing" 1 ""
+# 2. Nothing selected: a clear message, exit 2, nothing stored.
+expect("filter selects nothing" 2 ""
        "^incise bench: no benchmark matches --filter 'BM_gamma' in the 2 binaries under [^\n]*; nothing run or stored\n$"
        ${bench} --filter "BM_gamma")
 expect_run_folders(1)  # none added

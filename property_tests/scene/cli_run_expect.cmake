@@ -1,9 +1,10 @@
 # ctest helper for `incise run` on hostile scenes (issue 18): run CMD (a ;-list) in the current
 # directory (a scratch folder: the scene's outputs land there) and require
-#   exit status EXIT; stderr matching STDERR_REGEX (if given) on one line; stdout matching
-#   STDOUT_REGEX (if given); and neither stdout nor any file written (FILES, a ;-list, each of
-#   which must exist unless listed in ABSENT) holding a NaN or an infinity ("nan", "inf" as a
-#   word, any case).
+#   exit status EXIT; stderr matching STDERR_REGEX (if given) with at most one line besides the
+#   progress and log lines of `incise run` (lines starting "scene: ", "solver: ", "progress ",
+#   "step ", "update "); stdout matching STDOUT_REGEX (if given); and neither stdout, stderr nor
+#   any file written (FILES, a ;-list, each of which must exist unless listed in ABSENT) holding
+#   a NaN or an infinity ("nan", "inf" as a word, any case).
 #   cmake -DCMD=... -DEXIT=3 [-DSTDERR_REGEX=...] [-DSTDOUT_REGEX=...] [-DFILES=a;b]
 #         [-DABSENT=c] -P cli_run_expect.cmake
 foreach(f ${FILES} ${ABSENT})
@@ -17,10 +18,12 @@ endif()
 if(DEFINED STDERR_REGEX AND NOT err MATCHES "${STDERR_REGEX}")
   message(FATAL_ERROR "stderr does not match '${STDERR_REGEX}'")
 endif()
-string(REGEX MATCHALL "\n" lines "${err}")
+string(REGEX REPLACE "(^|\n)(scene: |solver: |progress |step |update )[^\n]*" "" errors "${err}")
+string(REGEX REPLACE "^\n+" "" errors "${errors}")
+string(REGEX MATCHALL "\n" lines "${errors}")
 list(LENGTH lines n)
 if(n GREATER 1)
-  message(FATAL_ERROR "stderr has ${n} lines; expected at most one")
+  message(FATAL_ERROR "stderr has ${n} lines besides progress and logs; expected at most one")
 endif()
 if(DEFINED STDOUT_REGEX AND NOT out MATCHES "${STDOUT_REGEX}")
   message(FATAL_ERROR "stdout does not match '${STDOUT_REGEX}'")
@@ -29,6 +32,10 @@ set(non_finite "(^|[^a-z])(nan|inf)([^a-z]|$)")
 string(TOLOWER "${out}" lower)
 if(lower MATCHES "${non_finite}")
   message(FATAL_ERROR "stdout holds a non-finite number: '${CMAKE_MATCH_0}'")
+endif()
+string(TOLOWER "${err}" lower)
+if(lower MATCHES "${non_finite}")
+  message(FATAL_ERROR "stderr holds a non-finite number: '${CMAKE_MATCH_0}'")
 endif()
 foreach(f ${FILES})
   if(NOT EXISTS "${f}")
