@@ -120,6 +120,18 @@ int run_main(int argc, char** argv) {
   Log log(std::cerr, quiet     ? Verbosity::kQuiet
                      : verbose ? Verbosity::kVerbose
                                : Verbosity::kNormal);
+  // An argument left over by a group before its subcommand (`incise --frob run ...`) is an
+  // error too: the groups allow extras only so that this program words the message.
+  std::string group = "incise";
+  for (const CLI::App* a = &app; a != leaf; a = a->get_subcommands().front()) {
+    const std::vector<std::string> extras = a->remaining();
+    if (!extras.empty()) {
+      std::cerr << group << ": unknown option '" << extras.front() << "' (see " << group
+                << " --help)\n";
+      return exit_code(Exit::kUsage);
+    }
+    group += " " + a->get_subcommands().front()->get_name();
+  }
   for (const Command& c : commands)
     if (c.app == leaf) return run_command(c, path, log);
 
