@@ -226,6 +226,27 @@ TEST(RoundTrip, VtuBinaryAndAsciiReadBackExactly) {
       UsageError);
 }
 
+// The mesh-check arrays are named for what they hold (issue 20): volume or area, dihedral
+// angles in 3D, and the shape class as UInt8 with the legend docs/mesh_formats.md gives.
+TEST(RoundTrip, QualityArraysNameVolumeDihedralAnglesAndShapeClassLegend) {
+  const MeshData tets = tagged_box();
+  const auto d3 = quality_cell_data(mesh::cell_quality(tets));
+  std::vector<std::string> names;
+  for (const auto& a : d3) names.push_back(a.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"volume", "aspect_ratio", "shewchuk_quality",
+                                             "min_dihedral_angle_deg", "max_dihedral_angle_deg",
+                                             "shape_class"}));
+  EXPECT_EQ(d3[5].type, DataArray::Type::kUInt8);
+  const MeshData tris = mesh::make_rectangle(2, 2, 1.0, 1.0, mesh::GridDiagonal::kForward);
+  const auto d2 = quality_cell_data(mesh::cell_quality(tris));
+  EXPECT_EQ(d2[0].name, "area");
+  EXPECT_EQ(d2[3].name, "min_angle_deg");
+  // The legend of shape_class (docs/mesh_formats.md, write_mesh.hpp).
+  const char* legend[] = {"good", "needle", "spindle", "sliver", "cap", "flat"};
+  for (int k = 0; k < 6; ++k)
+    EXPECT_STREQ(mesh::to_string(static_cast<mesh::ShapeClass>(k)), legend[k]) << k;
+}
+
 // A truncated binary file is a ParseError naming the file, never a crash.
 TEST(RoundTrip, VtuTruncatedBinaryIsParseError) {
   const MeshData m = tagged_box();

@@ -396,12 +396,13 @@ void write_off(const std::string& path, const mesh::MeshData& m) {
 
 std::vector<DataArray> quality_cell_data(const mesh::CellQuality& q) {
   constexpr double kDegrees = 180.0 / 3.14159265358979323846;
-  std::vector<DataArray> d = {{"size", 1, q.size},
+  const bool tets = q.dimension == 3;
+  std::vector<DataArray> d = {{tets ? "volume" : "area", 1, q.size},
                               {"aspect_ratio", 1, q.aspect_ratio},
                               {"shewchuk_quality", 1, q.shewchuk},
-                              {"min_angle_deg", 1, q.min_angle},
-                              {"max_angle_deg", 1, q.max_angle},
-                              {"shape_class", 1, {}}};
+                              {tets ? "min_dihedral_angle_deg" : "min_angle_deg", 1, q.min_angle},
+                              {tets ? "max_dihedral_angle_deg" : "max_angle_deg", 1, q.max_angle},
+                              {"shape_class", 1, {}, DataArray::Type::kUInt8}};
   for (auto* a : {&d[3], &d[4]})
     for (double& v : a->values) v *= kDegrees;
   for (auto s : q.shape) d[5].values.push_back(static_cast<double>(s));

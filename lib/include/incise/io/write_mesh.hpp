@@ -98,10 +98,12 @@ void write_tetgen(const std::string& base, const mesh::MeshData& m);
 /// OFF writer for triangle meshes (dimension 2).
 void write_off(const std::string& path, const mesh::MeshData& m);
 
-/// The per-cell quality arrays `incise mesh check --vtu` writes (mesh::cell_quality): "size"
-/// (signed volume m³ or area m²), "aspect_ratio" (§3.2.3), "shewchuk_quality", "min_angle_deg"
-/// and "max_angle_deg" (dihedral angles in 3D, angles in 2D; degrees), "shape_class"
-/// (mesh::ShapeClass as a number, mesh::to_string for names).
+/// The per-cell quality arrays `incise mesh check --vtu` writes (mesh::cell_quality), named
+/// for what they hold: tetrahedra "volume" (signed, m³), "aspect_ratio" (§3.2.3),
+/// "shewchuk_quality", "min_dihedral_angle_deg", "max_dihedral_angle_deg" (degrees), and
+/// "shape_class" (UInt8: 0 good, 1 needle, 2 spindle, 3 sliver, 4 cap, 5 flat — the order of
+/// mesh::ShapeClass, names mesh::to_string); triangles "area" (m²) and "min_angle_deg",
+/// "max_angle_deg" instead.
 std::vector<DataArray> quality_cell_data(const mesh::CellQuality& q);
 
 }  // namespace incise::io
