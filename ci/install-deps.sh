@@ -9,13 +9,15 @@ set -euo pipefail
 # NumPy, pytest and Matplotlib: the Python module, its tests and example (docs/python.md).
 # libbenchmark-tools (Google Benchmark's compare.py) with python3-scipy (its U test imports it
 # and NumPy): `incise bench --compare` and the test cli_bench_compare_py. libcli11-dev
-# (header-only): the command line of the `incise` program (lib/cli/).
+# (header-only): the command line of the `incise` program (lib/cli/). zlib1g-dev: the VTU
+# writer's compressed binary data; python3-vtk9: VTK's own reader in the test io_vtk_readback
+# (label vtk, docs/mesh_formats.md).
 packages=(
   build-essential cmake ccache pkg-config clang-format clang libclang-rt-14-dev
   libeigen3-dev libsuitesparse-dev libfftw3-dev nlohmann-json3-dev libopenblas-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev doxygen
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
-  libbenchmark-tools python3-scipy libcli11-dev
+  libbenchmark-tools python3-scipy libcli11-dev zlib1g-dev python3-vtk9
 )
 # Headless Chromium (large) only on request, for the `slow` render test of the certification
 # report and the benchmark dashboard (verification/scene/render_pages.sh).

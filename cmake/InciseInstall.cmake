@@ -73,7 +73,7 @@ install(FILES ${PROJECT_BINARY_DIR}/cmake/install/inciseConfig.cmake
 
 # incise.pc. The libraries are static, so Libs names every module (dependents first) and the
 # libraries they need: SuiteSparse (no .pc on Debian: the paths FindCHOLMOD found) and threads;
-# Eigen, nlohmann_json and FFTW come through Requires.
+# Eigen, nlohmann_json, FFTW and zlib come through Requires.
 set(incise_pc_libs "-L\${libdir}")
 list(REVERSE incise_libraries)
 foreach(lib ${incise_libraries})

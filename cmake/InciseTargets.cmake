@@ -18,7 +18,8 @@ endfunction()
 # incise_add_gtest(NAME SOURCES ... LIBS ... LABELS ... [TIMEOUT s])
 #   A GoogleTest executable; every TEST becomes one ctest case carrying LABELS.
 #   Label vocabulary: unit, property, verification, slow, threads (starts threads: run under
-#   ThreadSanitizer by ci/test.sh), plus the module name.
+#   ThreadSanitizer by ci/test.sh), plus the module name; outside gtest also python, examples
+#   and vtk (VTK's own reader, property_tests/io/vtk_readback.py).
 function(incise_add_gtest name)
   cmake_parse_arguments(A "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
   if(NOT A_TIMEOUT)

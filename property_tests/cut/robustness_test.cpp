@@ -11,6 +11,7 @@
 #include <incise_test/seed.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <iostream>
 #include <random>
 
@@ -178,6 +179,58 @@ TEST(CutRobustness, CornerChoppedOffIsReportedAsFreeComponent) {
   EXPECT_EQ(count_components(m), 2);
   EXPECT_EQ(tot.free_components, 1);  // the corner piece, found by the local search
   EXPECT_FALSE(every_component_fixed(m));
+}
+
+// Cell tags survive the cut (issue 20): dissection keeps each element's tag, replacements
+// (collapses of the degeneracy removal) give new elements the tag of the removed element they
+// share most nodes with, and to_mesh_data() exports them. The box is tagged 1 for x < 0.5 and
+// 2 beyond; after an oblique cut, every element whose reference centroid lies farther than one
+// cell (0.2 m) from x = 0.5 keeps its side's tag (snapping moves nodes by less than a cell).
+TEST(CutRobustness, CellTagsSurviveTheCut) {
+  mesh::MeshData box = mesh::make_box(5, 5, 5, 1, 1, 1);
+  auto side = [](const Vec3& c) { return c.x() < 0.5 ? 1 : 2; };
+  for (Index c = 0; c < box.num_cells(); ++c) {
+    Vec3 centroid = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) centroid += box.points.col(box.cells(k, c)) / 4.0;
+    box.cell_tags.push_back(side(centroid));
+  }
+  CutMesh m(box);
+  EXPECT_EQ(m.to_mesh_data().cell_tags, box.cell_tags);  // unchanged mesh: same tags, same order
+  for (Index v = 0; v < m.num_nodes(); ++v)
+    if (m.reference(v).z() == 0.0) m.set_fixed(v, true);
+  Cutter cutter(m);
+  CutTotals tot;
+  for (const auto& tri : square(Vec3(0.5, 0.5, 0.55), Vec3(0.3, 0.2, 1), 2.0))
+    tot.add(cutter.step(tri[0], tri[1], tri[2]));
+  expect_valid(m, "tagged oblique plane");
+  ASSERT_GT(tot.faces_dissected, 0);
+  const mesh::MeshData out = m.to_mesh_data(false, true);
+  ASSERT_EQ(out.cell_tags.size(), static_cast<std::size_t>(out.num_cells()));
+  Index checked = 0;
+  for (Index c = 0; c < out.num_cells(); ++c) {
+    Vec3 centroid = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) centroid += out.points.col(out.cells(k, c)) / 4.0;
+    EXPECT_TRUE(out.cell_tags[c] == 1 || out.cell_tags[c] == 2) << out.cell_tags[c];
+    if (std::abs(centroid.x() - 0.5) < 0.2) continue;
+    ++checked;
+    EXPECT_EQ(out.cell_tags[c], side(centroid)) << "cell " << c;
+  }
+  EXPECT_GT(checked, out.num_cells() / 2);
+  // replace() directly: two elements replaced by one over their nodes takes the tag of the
+  // removed element sharing most nodes.
+  mesh::MeshData two;
+  two.dimension = 3;
+  two.points.resize(3, 5);
+  two.points << 0, 1, 0, 0, 1, 0, 0, 1, 0, 1, 0, 0, 0, 1, 1;
+  two.cells.resize(4, 1);
+  two.cells << 0, 1, 2, 3;
+  two.cell_tags = {7};
+  CutMesh t(two);
+  const Index added = t.add_node(Vec3(0.2, 0.2, 0.2), Vec3(0.2, 0.2, 0.2), false, 4);
+  const auto slots = t.replace({0}, {Tet{0, 1, 2, added}});
+  ASSERT_EQ(slots.size(), 1u);
+  EXPECT_EQ(t.tag(slots[0]), 7);
+  EXPECT_EQ(t.to_mesh_data().cell_tags, std::vector<int>{7});
 }
 
 /// Runs two plane sweeps of different orientation as one incision on a 2×2×2 box.

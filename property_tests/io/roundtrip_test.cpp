@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <random>
@@ -140,7 +141,7 @@ TEST(RoundTrip, VtuPointAndCellDataParseBack) {
   const mesh::CellQuality q = mesh::cell_quality(m);
   const DataArray quality{"aspect_ratio", 1, q.aspect_ratio};
   const std::string p = temp_path("rt.vtu");
-  write_vtu(p, m, {disp}, {quality});
+  write_vtu(p, m, {disp}, {quality}, VtuEncoding::kAscii);
   std::ifstream in(p);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("NumberOfPoints=\"" + std::to_string(m.num_points()) + "\""),
@@ -164,6 +165,104 @@ TEST(RoundTrip, VtuPointAndCellDataParseBack) {
   EXPECT_EQ(tags[4], m.cell_tags[4]);
   // Wrong array length is misuse.
   EXPECT_THROW(write_vtu(p, m, {DataArray{"bad", 2, {1.0}}}), UsageError);
+}
+
+// Both encodings read back exactly with read_vtu: points, cells, tags, Float64/Int32/UInt8
+// arrays. 16³ = 4096 points make the 1-component Float64 array exactly one 32768-byte block
+// (header "last block size" 0) and the 3-component one 1.5 blocks (a partial last block).
+TEST(RoundTrip, VtuBinaryAndAsciiReadBackExactly) {
+  MeshData m = mesh::make_box(15, 15, 15, 1.0, 1.0, 1.0, mesh::CubeSplit::kSix);
+  ASSERT_EQ(m.num_points(), 4096);
+  m.cell_tags.assign(static_cast<std::size_t>(m.num_cells()), 0);
+  m.point_tags.assign(static_cast<std::size_t>(m.num_points()), 0);
+  for (Index c = 0; c < m.num_cells(); ++c) m.cell_tags[c] = static_cast<int>(c % 5) - 2;
+  for (Index i = 0; i < m.num_points(); ++i) m.point_tags[i] = static_cast<int>(i % 3);
+  DataArray disp{"displacement", 3, {}};
+  for (Index i = 0; i < m.num_points(); ++i)
+    for (int c = 0; c < 3; ++c) disp.values.push_back(std::sqrt(2.0) * i + c / 7.0 - 1e-300);
+  DataArray one{"one_block", 1, std::vector<double>(4096)};
+  for (std::size_t i = 0; i < one.values.size(); ++i) one.values[i] = 1.0 / (1.0 + i);
+  DataArray marker{"marker", 1, {}, DataArray::Type::kUInt8};
+  for (Index i = 0; i < m.num_points(); ++i) marker.values.push_back(i % 2);
+  DataArray ints{"ints", 2, {}, DataArray::Type::kInt32};
+  for (Index c = 0; c < m.num_cells(); ++c) {
+    ints.values.push_back(-static_cast<double>(c));
+    ints.values.push_back(2147483647.0);
+  }
+  std::uintmax_t size[2] = {0, 0};
+  for (VtuEncoding e : {VtuEncoding::kBinaryZlib, VtuEncoding::kAscii}) {
+    SCOPED_TRACE(to_string(e));
+    const std::string p = temp_path(std::string("rt_") + to_string(e) + ".vtu");
+    write_vtu(p, m, {disp, one, marker}, {ints}, e);
+    size[e == VtuEncoding::kAscii] = std::filesystem::file_size(p);
+    const VtuContents r = read_vtu(p);
+    EXPECT_EQ(r.mesh.dimension, 3);
+    EXPECT_TRUE(r.mesh.points == m.points);
+    EXPECT_TRUE(r.mesh.cells == m.cells);
+    EXPECT_EQ(r.mesh.cell_tags, m.cell_tags);
+    EXPECT_EQ(r.mesh.point_tags, m.point_tags);
+    ASSERT_EQ(r.point_data.size(), 3u);
+    ASSERT_EQ(r.cell_data.size(), 1u);
+    for (const DataArray* want : {&disp, &one, &marker}) {
+      const DataArray* got = VtuContents::find(r.point_data, want->name);
+      ASSERT_NE(got, nullptr) << want->name;
+      EXPECT_EQ(got->values, want->values) << want->name;
+      EXPECT_EQ(got->components, want->components) << want->name;
+      EXPECT_EQ(got->type, want->type) << want->name;
+    }
+    EXPECT_EQ(r.cell_data[0].values, ints.values);
+    EXPECT_EQ(r.cell_data[0].type, DataArray::Type::kInt32);
+  }
+  // Compression pays on these arrays (measured ≈ 3×; asserted only "smaller").
+  EXPECT_LT(size[0], size[1]);
+  // Integer arrays refuse values outside their type.
+  EXPECT_THROW(
+      write_vtu(temp_path("bad.vtu"), m,
+                {DataArray{"m", 1, std::vector<double>(4096, 256.0), DataArray::Type::kUInt8}}),
+      UsageError);
+  EXPECT_THROW(
+      write_vtu(temp_path("bad.vtu"), m,
+                {DataArray{"m", 1, std::vector<double>(4096, 0.5), DataArray::Type::kInt32}}),
+      UsageError);
+}
+
+// The mesh-check arrays are named for what they hold (issue 20): volume or area, dihedral
+// angles in 3D, and the shape class as UInt8 with the legend docs/mesh_formats.md gives.
+TEST(RoundTrip, QualityArraysNameVolumeDihedralAnglesAndShapeClassLegend) {
+  const MeshData tets = tagged_box();
+  const auto d3 = quality_cell_data(mesh::cell_quality(tets));
+  std::vector<std::string> names;
+  for (const auto& a : d3) names.push_back(a.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"volume", "aspect_ratio", "shewchuk_quality",
+                                             "min_dihedral_angle_deg", "max_dihedral_angle_deg",
+                                             "shape_class"}));
+  EXPECT_EQ(d3[5].type, DataArray::Type::kUInt8);
+  const MeshData tris = mesh::make_rectangle(2, 2, 1.0, 1.0, mesh::GridDiagonal::kForward);
+  const auto d2 = quality_cell_data(mesh::cell_quality(tris));
+  EXPECT_EQ(d2[0].name, "area");
+  EXPECT_EQ(d2[3].name, "min_angle_deg");
+  // The legend of shape_class (docs/mesh_formats.md, write_mesh.hpp).
+  const char* legend[] = {"good", "needle", "spindle", "sliver", "cap", "flat"};
+  for (int k = 0; k < 6; ++k)
+    EXPECT_STREQ(mesh::to_string(static_cast<mesh::ShapeClass>(k)), legend[k]) << k;
+}
+
+// A truncated binary file is a ParseError naming the file, never a crash.
+TEST(RoundTrip, VtuTruncatedBinaryIsParseError) {
+  const MeshData m = tagged_box();
+  const std::string p = temp_path("trunc.vtu");
+  write_vtu(p, m);
+  std::ifstream in(p, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (std::size_t keep : {text.size() / 2, text.size() - 40}) {
+    write_temp("trunc_cut.vtu", text.substr(0, keep));
+    try {
+      (void)read_vtu(temp_path("trunc_cut.vtu"));
+      ADD_FAILURE() << "accepted a file truncated to " << keep << " bytes";
+    } catch (const ParseError& e) {
+      EXPECT_NE(std::string(e.what()).find("trunc_cut.vtu"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(HandWritten, Gmsh41EntitiesPhysicalNamesParametricNodesAndIgnoredElements) {

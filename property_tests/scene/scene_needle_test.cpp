@@ -5,6 +5,7 @@
 // (docs/bad_input.md); numerical failure is a reported status.
 
 #include <incise/core/error.hpp>
+#include <incise/io/write_mesh.hpp>
 #include <incise/mesh/slab2d.hpp>
 #include <incise/scene/scene_outputs.hpp>
 #include <incise/scene/scene_parser.hpp>
@@ -92,16 +93,16 @@ std::string read(const fs::path& p) {
   return incise::test::read_file(p);
 }
 
-// The values of the DataArray named `name` in a VTU text (ASCII), whitespace-separated.
-std::vector<double> vtu_array(const std::string& vtu, const std::string& name) {
-  const std::string open = "Name=\"" + name + "\"";
-  const auto a = vtu.find(open);
-  if (a == std::string::npos) return {};
-  const auto b = vtu.find('>', a) + 1, e = vtu.find("</DataArray>", b);
-  std::istringstream in(vtu.substr(b, e - b));
-  std::vector<double> v;
-  for (double x; in >> x;) v.push_back(x);
-  return v;
+// The values of the point or cell array named `name` of a VTU file (io::read_vtu, either
+// encoding); "types": the VTK cell type of each cell (10 tetrahedra, 5 triangles).
+std::vector<double> vtu_array(const fs::path& file, const std::string& name) {
+  const io::VtuContents v = io::read_vtu(file.string());
+  if (name == "types")
+    return std::vector<double>(static_cast<std::size_t>(v.mesh.num_cells()),
+                               v.mesh.dimension == 3 ? 10.0 : 5.0);
+  for (const auto* arrays : {&v.point_data, &v.cell_data})
+    if (const io::DataArray* a = io::VtuContents::find(*arrays, name)) return a->values;
+  return {};
 }
 
 TEST(SceneNeedle, ShippedSceneParsesIntoTheThesisSlabAndNeedle) {
@@ -247,7 +248,7 @@ TEST(SceneNeedle, SmallInsertionRunsAndWritesCsvVtuSeriesAndPvd) {
   // The last frame and the final VTU: triangles (VTK type 5), displacement with z = 0, the
   // needle-node states of the last update.
   for (const fs::path& f : {dir / "needle_0005.vtu", dir / "needle.vtu"}) {
-    const std::string vtu = read(f);
+    const fs::path& vtu = f;
     const auto types = vtu_array(vtu, "types");
     ASSERT_EQ(types.size(), static_cast<std::size_t>(last.triangles)) << f;
     for (double t : types) EXPECT_EQ(t, 5.0);
@@ -558,7 +559,7 @@ TEST(SceneNeedle3D, SmallInsertionRunsAndWritesCsvVtuSeriesAndNeedleSurface) {
             std::string::npos);
   // The final VTU: tetrahedra, the needle-face counts of each; the surface VTU: triangles whose
   // areas sum to the reported surface area.
-  const std::string vtu = read(dir / "needle.vtu");
+  const fs::path vtu = dir / "needle.vtu";
   const auto types = vtu_array(vtu, "types");
   ASSERT_EQ(types.size(), static_cast<std::size_t>(last.triangles));
   for (double t : types) EXPECT_EQ(t, 10.0);
@@ -573,7 +574,7 @@ TEST(SceneNeedle3D, SmallInsertionRunsAndWritesCsvVtuSeriesAndNeedleSurface) {
   // Every needle face lies on one or two tetrahedra.
   EXPECT_GE(incident, last.surface_faces);
   EXPECT_LE(incident, 2.0 * last.surface_faces);
-  const std::string surface = read(dir / "needle_needle.vtu");
+  const fs::path surface = dir / "needle_needle.vtu";
   const auto stypes = vtu_array(surface, "types");
   ASSERT_EQ(stypes.size(), static_cast<std::size_t>(last.surface_faces));
   for (double t : stypes) EXPECT_EQ(t, 5.0);

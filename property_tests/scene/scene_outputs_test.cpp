@@ -2,6 +2,7 @@
 // names from FrameWriter (frames during the run) and write_outputs (CSV trace, final VTU, summary
 // JSON), each renamed into place, and the list of what was written.
 
+#include <incise/io/write_mesh.hpp>
 #include <incise/scene/scene_outputs.hpp>
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
@@ -11,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -32,6 +34,12 @@ fs::path fresh_dir(const std::string& name) {
 }
 
 using incise::test::lines_of;
+
+/// `index` zero-padded to `width` digits.
+std::string padded(long index, std::size_t width) {
+  std::string s = std::to_string(index);
+  return std::string(width - std::min(width, s.size()), '0') + s;
+}
 std::string read(const fs::path& p) {
   return incise::test::read_file(p);
 }
@@ -82,14 +90,24 @@ TEST(SceneOutputs, RunSceneAndWriteOutputsWriteTheFilesTheSceneNames) {
   ASSERT_GE(res.trace.size(), 6u);  // at least one frame after the initial state
 
   long frames = 0;
+  std::string pvd_files;
   for (const auto& row : res.trace) {
     if (row.iteration % 5 != 0) continue;
     ++frames;
-    const fs::path frame = stem + "_" + std::to_string(row.iteration) + ".vtu";
-    EXPECT_TRUE(fs::is_regular_file(frame)) << frame;
+    const std::string name = "state_" + padded(row.iteration, 6) + ".vtu";  // 6 digits
+    EXPECT_TRUE(fs::is_regular_file(dir / "vtu" / name)) << name;
+    pvd_files += "timestep=\"" + std::to_string(row.iteration) +
+                 "\" group=\"\" part=\"0\" file=\"" + name + "\"";
   }
+  // The ParaView index lists every frame in order with the iteration as its time.
+  const std::string pvd = read(stem + ".pvd");
+  std::string listed;
+  for (auto p = pvd.find("timestep="); p != std::string::npos; p = pvd.find("timestep=", p + 1))
+    listed += pvd.substr(p, pvd.find("/>", p) - p);
+  EXPECT_EQ(listed, pvd_files);
   const std::vector<std::string> expected = {
-      csv, stem + ".vtu", std::to_string(frames) + " frames " + stem + "_<it>.vtu", summary};
+      csv, stem + ".vtu",
+      std::to_string(frames) + " frames " + stem + "_<it>.vtu, index " + stem + ".pvd", summary};
   EXPECT_EQ(written, expected);
 
   // The trace: a header with the probe's columns, then one row per iteration.
@@ -139,9 +157,10 @@ TEST(SceneOutputs, InteractiveCutRunWritesOneRowAndOneFramePerSolve) {
   ASSERT_TRUE(res.report.ok());
   const std::size_t solves = res.cut_steps.size();
   ASSERT_GE(solves, 2u);
-  EXPECT_EQ(written, (std::vector<std::string>{
-                         spec.outputs.csv, spec.outputs.vtu + ".vtu",
-                         std::to_string(solves) + " frames " + spec.outputs.vtu + "_<step>.vtu"}));
+  EXPECT_EQ(written,
+            (std::vector<std::string>{spec.outputs.csv, spec.outputs.vtu + ".vtu",
+                                      std::to_string(solves) + " frames " + spec.outputs.vtu +
+                                          "_<step>.vtu, index " + spec.outputs.vtu + ".pvd"}));
   const std::vector<std::string> rows = lines_of(read(spec.outputs.csv));
   ASSERT_EQ(rows.size(), solves + 1);
   EXPECT_EQ(rows[0].rfind("step,tool,status,", 0), 0u) << rows[0];
@@ -196,12 +215,79 @@ TEST(SceneOutputs, InteractiveCutRunWritesOneRowAndOneFramePerSolve) {
   EXPECT_GT(res.cut_steps[0].amplification, 0.0);  // the loaded initial solve (steps that
                                                    // change nothing are not solved: 0)
   for (std::size_t k = 0; k < solves; ++k)
-    EXPECT_TRUE(fs::is_regular_file(spec.outputs.vtu + "_" + std::to_string(k) + ".vtu")) << k;
+    EXPECT_TRUE(
+        fs::is_regular_file(spec.outputs.vtu + "_" + padded(static_cast<long>(k), 6) + ".vtu"))
+        << k;
+  EXPECT_NE(read(spec.outputs.vtu + ".pvd")
+                .find("timestep=\"" + std::to_string(solves - 1) +
+                      "\" group=\"\" part=\"0\" file=\"cube_" +
+                      padded(static_cast<long>(solves - 1), 6) + ".vtu\""),
+            std::string::npos);
   // The final state is on the final cut mesh (the run replaced built.mesh by it).
   EXPECT_NE(read(spec.outputs.vtu + ".vtu")
                 .find("NumberOfPoints=\"" + std::to_string(built.mesh.num_points()) + "\""),
             std::string::npos);
   EXPECT_EQ(temporary_files(dir), 0);
+}
+
+// The shipped cantilever (Table 3.1 mesh, CG to 1e-8) at convergence: the final VTU's reaction
+// forces at the fixed nodes sum to minus the applied load (global equilibrium: Σ f_int = 0 over
+// all nodes and f_int = f_ext at free nodes up to the residual), with the markers and the cell
+// fields of docs/mesh_formats.md, in both encodings. Tolerance: ‖r‖ ≤ 1e-8·‖f_ext‖ bounds the
+// free-node imbalance by √n·1e-8·‖f_ext‖ ≈ 2e-7 N; 1e-6 N (of 3 N) is above it.
+TEST(SceneOutputs, CantileverReactionsBalanceTheLoadInTheFinalVtu) {
+  const fs::path dir = fresh_dir("reactions");
+  for (const char* format : {"binary", "ascii"}) {
+    SCOPED_TRACE(format);
+    scene::SceneSpec spec =
+        scene::load_scene(test::source_path("reference_data/scenes/cantilever.json"));
+    spec.outputs.csv.clear();
+    spec.outputs.vtu = (dir / format).string();
+    spec.outputs.vtu_format =
+        std::string(format) == "ascii" ? io::VtuEncoding::kAscii : io::VtuEncoding::kBinaryZlib;
+    scene::BuiltScene built = scene::build_scene(spec);
+    scene::SceneRunResult res;
+    (void)run_and_write(built, "", res);
+    ASSERT_TRUE(res.report.ok()) << res.report.message;
+    const std::string text = read(spec.outputs.vtu + ".vtu");
+    EXPECT_EQ(text.find("vtkZLibDataCompressor") != std::string::npos,
+              std::string(format) == "binary");
+    const io::VtuContents v = io::read_vtu(spec.outputs.vtu + ".vtu");
+    const io::DataArray* r = io::VtuContents::find(v.point_data, "reaction_force");
+    const io::DataArray* fixed = io::VtuContents::find(v.point_data, "fixed");
+    const io::DataArray* loaded = io::VtuContents::find(v.point_data, "loaded");
+    const io::DataArray* u = io::VtuContents::find(v.point_data, "displacement");
+    ASSERT_TRUE(r && fixed && loaded && u);
+    EXPECT_EQ(fixed->type, io::DataArray::Type::kUInt8);
+    Vec3 sum = Vec3::Zero();
+    long n_fixed = 0, n_loaded = 0;
+    for (Index i = 0; i < v.mesh.num_points(); ++i) {
+      const Vec3 ri(r->values[3 * i], r->values[3 * i + 1], r->values[3 * i + 2]);
+      sum += ri;
+      n_fixed += fixed->values[i] != 0;
+      n_loaded += loaded->values[i] != 0;
+      if (fixed->values[i] == 0) {
+        EXPECT_EQ(ri.norm(), 0.0) << "free node " << i;
+      }
+      EXPECT_EQ(u->values[3 * i + 1], res.u[3 * i + 1]);  // exact in both encodings
+    }
+    EXPECT_NEAR(sum.y(), 3.0, 1e-6);  // the load is 3 N in −y
+    EXPECT_NEAR(sum.x(), 0.0, 1e-6);
+    EXPECT_NEAR(sum.z(), 0.0, 1e-6);
+    EXPECT_EQ(n_fixed, static_cast<long>(built.fixed_nodes.size()));
+    EXPECT_EQ(n_loaded, 5 * 5);  // the nodes of the 4×4-cell loose end
+    for (const char* name : {"strain", "second_piola_stress", "cauchy_stress"})
+      EXPECT_EQ(io::VtuContents::find(v.cell_data, name)->components, 6) << name;
+    for (const char* name : {"von_mises_stress", "strain_energy_density", "inverted"})
+      EXPECT_EQ(io::VtuContents::find(v.cell_data, name)->components, 1) << name;
+    // Σ W·v(τ) = the elastic energy; with the work f_extᵀu = 2·that at equilibrium (linear
+    // model), Π = −½ f_extᵀu: the summary's energy. Tolerance 1e-6 relative (the residual).
+    const io::DataArray* w = io::VtuContents::find(v.cell_data, "strain_energy_density");
+    double elastic = 0;
+    for (Index e = 0; e < v.mesh.num_cells(); ++e)
+      elastic += w->values[e] * built.problem->reference(e).volume;
+    EXPECT_NEAR(-elastic, res.report.energy, 1e-6 * std::abs(res.report.energy));
+  }
 }
 
 // A scene without outputs: nothing is written and nothing is listed.

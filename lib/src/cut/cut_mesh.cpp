@@ -40,6 +40,12 @@ CutMesh::CutMesh(const mesh::MeshData& data) : conn_(checked_connectivity(data))
   origin_.resize(static_cast<size_t>(n));
   for (Index i = 0; i < n; ++i) origin_[static_cast<size_t>(i)] = i;
   for (Index e = 0; e < element_capacity(); ++e) refresh(e);
+  if (!data.cell_tags.empty()) {
+    INCISE_CHECK_PARAM(static_cast<Index>(data.cell_tags.size()) == data.num_cells() &&
+                           element_capacity() == data.num_cells(),
+                       "cell_tags must hold one tag per cell");
+    tags_ = data.cell_tags;  // from_mesh_data puts cell c in slot c
+  }
 }
 
 void CutMesh::refresh(Index e) {
@@ -127,8 +133,25 @@ std::vector<Index> CutMesh::replace(const std::vector<Index>& remove, const std:
   std::vector<mesh::Simplex> simplices;
   simplices.reserve(add.size());
   for (const Tet& t : add) simplices.push_back(to_simplex(t));
+  std::vector<Tet> removed;
+  for (Index e : remove) removed.push_back(element(e));
+  std::vector<int> removed_tags;
+  for (Index e : remove) removed_tags.push_back(tag(e));
   const auto added = conn_.replace_elements(old, simplices);
   for (Index e : remove) refresh(e);
+  if (!tags_.empty()) {
+    if (static_cast<Index>(tags_.size()) < element_capacity())
+      tags_.resize(static_cast<size_t>(element_capacity()), 0);
+    for (std::size_t a = 0; a < added.size(); ++a) {
+      int best = -1, best_tag = 0;
+      for (std::size_t r = 0; r < removed.size(); ++r) {
+        int shared = 0;
+        for (Index v : add[a]) shared += std::count(removed[r].begin(), removed[r].end(), v) > 0;
+        if (shared > best) best = shared, best_tag = removed_tags[r];
+      }
+      tags_[static_cast<size_t>(added[a].index)] = best_tag;
+    }
+  }
   std::vector<Index> out;
   out.reserve(added.size());
   for (const auto& h : added) {
@@ -301,6 +324,7 @@ mesh::MeshData CutMesh::to_mesh_data(bool deformed_positions, bool compact,
     if (!alive(e)) continue;
     for (int k = 0; k < 4; ++k)
       d.cells(k, c) = map[static_cast<size_t>(element(e)[static_cast<size_t>(k)])];
+    if (has_tags()) d.cell_tags.push_back(tag(e));
     ++c;
   }
   if (node_map) *node_map = std::move(map);

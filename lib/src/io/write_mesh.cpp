@@ -2,8 +2,15 @@
 #include <incise/io/write_mesh.hpp>
 #include <incise/mesh/quality.hpp>
 
+#include <zlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <map>
 #include <set>
+#include <type_traits>
 
 #include "writer_support.hpp"
 
@@ -42,58 +49,157 @@ void check_array(const DataArray& a, Eigen::Index n, const char* what) {
       std::string("write_vtu: ") + what + " array '" + a.name + "' has the wrong length");
   INCISE_CHECK(!a.name.empty() && a.name.find_first_of("\"<>&") == std::string::npos,
                "write_vtu: array names must be non-empty without \" < > &");
+  if (a.type == DataArray::Type::kFloat64) return;
+  const double lo = a.type == DataArray::Type::kInt32 ? -2147483648.0 : 0.0;
+  const double hi = a.type == DataArray::Type::kInt32 ? 2147483647.0 : 255.0;
+  for (double v : a.values)
+    INCISE_CHECK(v == std::floor(v) && v >= lo && v <= hi,
+                 "write_vtu: integer array '" + a.name + "' holds a value outside its type");
 }
 
-void vtu_array(TextWriter& w, const DataArray& a) {
-  w << "        <DataArray type=\"Float64\" Name=\"" << a.name << "\" NumberOfComponents=\""
-    << a.components << "\" format=\"ascii\">\n";
-  for (std::size_t i = 0; i < a.values.size(); ++i)
-    w << a.values[i] << ((i + 1) % static_cast<std::size_t>(a.components) == 0 ? '\n' : ' ');
-  w << "        </DataArray>\n";
+const char* type_name(DataArray::Type t) {
+  switch (t) {
+    case DataArray::Type::kInt32: return "Int32";
+    case DataArray::Type::kUInt8: return "UInt8";
+    default: return "Float64";
+  }
 }
 
-void vtu_tags(TextWriter& w, const std::vector<int>& tags) {
-  w << "        <DataArray type=\"Int32\" Name=\"tag\" format=\"ascii\">\n";
-  for (int t : tags) w << t << '\n';
-  w << "        </DataArray>\n";
+/// The VTU body: the XML in `xml`, and (binary encoding) the appended block in `appended`.
+class VtuBody {
+ public:
+  explicit VtuBody(VtuEncoding e) : encoding_(e) {}
+  TextWriter xml;
+
+  /// One DataArray element. `name` "" for the unnamed Points array. Values are converted to
+  /// `type` (Int64 for connectivity and offsets, which DataArray::Type does not offer).
+  template <class Value>
+  void array(const std::string& name, const char* type, int components,
+             const std::vector<Value>& values) {
+    xml << "        <DataArray type=\"" << type << "\"";
+    if (!name.empty()) xml << " Name=\"" << name << "\"";
+    if (components > 1 || name.empty()) xml << " NumberOfComponents=\"" << components << "\"";
+    if (encoding_ == VtuEncoding::kAscii) {
+      xml << " format=\"ascii\">\n";
+      const std::size_t k = static_cast<std::size_t>(components);
+      for (std::size_t i = 0; i < values.size(); ++i) {
+        if constexpr (std::is_floating_point_v<Value>)
+          xml << values[i];
+        else
+          xml << static_cast<long long>(values[i]);
+        xml << ((i + 1) % k == 0 ? '\n' : ' ');
+      }
+      xml << "        </DataArray>\n";
+      return;
+    }
+    xml << " format=\"appended\" offset=\"" << static_cast<long long>(appended_.size()) << "\"/>\n";
+    append_compressed(reinterpret_cast<const unsigned char*>(values.data()),
+                      values.size() * sizeof(Value));
+  }
+
+  /// A DataArray of the caller's, converted to its type.
+  void array(const DataArray& a) {
+    switch (a.type) {
+      case DataArray::Type::kInt32:
+        array(a.name, type_name(a.type), a.components,
+              std::vector<std::int32_t>(a.values.begin(), a.values.end()));
+        return;
+      case DataArray::Type::kUInt8:
+        array(a.name, type_name(a.type), a.components,
+              std::vector<std::uint8_t>(a.values.begin(), a.values.end()));
+        return;
+      default: array(a.name, type_name(a.type), a.components, a.values);
+    }
+  }
+
+  bool binary() const { return encoding_ == VtuEncoding::kBinaryZlib; }
+  const std::string& appended() const { return appended_; }
+
+ private:
+  /// VTK's compressed layout: UInt64 header [blocks, block size, last partial block size (0
+  /// when the last block is full), compressed size of each block], then the compressed blocks.
+  void append_compressed(const unsigned char* data, std::size_t bytes) {
+    constexpr std::size_t kBlock = 32768;
+    const std::size_t blocks = (bytes + kBlock - 1) / kBlock;
+    std::vector<std::uint64_t> header(3 + blocks);
+    header[0] = blocks;
+    header[1] = kBlock;
+    header[2] = bytes % kBlock;
+    std::string body;
+    std::vector<unsigned char> out(compressBound(static_cast<uLong>(kBlock)));
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const std::size_t n = std::min(kBlock, bytes - b * kBlock);
+      uLongf len = static_cast<uLongf>(out.size());
+      if (compress2(out.data(), &len, data + b * kBlock, static_cast<uLong>(n),
+                    Z_DEFAULT_COMPRESSION) != Z_OK)
+        throw Error("write_vtu: zlib compression failed");
+      header[3 + b] = len;
+      body.append(reinterpret_cast<const char*>(out.data()), len);
+    }
+    appended_.append(reinterpret_cast<const char*>(header.data()),
+                     header.size() * sizeof(std::uint64_t));
+    appended_ += body;
+  }
+
+  VtuEncoding encoding_;
+  std::string appended_;
+};
+
+bool little_endian() {
+  const std::uint16_t one = 1;
+  unsigned char first = 0;
+  std::memcpy(&first, &one, 1);
+  return first == 1;
 }
 
 }  // namespace
 
 void write_vtu(const std::string& path, const mesh::MeshData& m,
-               const std::vector<DataArray>& point_data, const std::vector<DataArray>& cell_data) {
+               const std::vector<DataArray>& point_data, const std::vector<DataArray>& cell_data,
+               VtuEncoding encoding) {
   check_mesh(m);
   for (const auto& a : point_data) check_array(a, m.num_points(), "point");
   for (const auto& a : cell_data) check_array(a, m.num_cells(), "cell");
+  INCISE_CHECK(encoding == VtuEncoding::kAscii || little_endian(),
+               "write_vtu: binary VTU is written little-endian only");
   const int k = m.dimension + 1;
-  TextWriter w;
+  VtuBody v(encoding);
+  TextWriter& w = v.xml;
   w << "<?xml version=\"1.0\"?>\n"
-    << "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
-    << "  <UnstructuredGrid>\n"
+    << "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\"";
+  if (v.binary()) w << " header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\"";
+  w << ">\n  <UnstructuredGrid>\n"
     << "    <Piece NumberOfPoints=\"" << static_cast<long long>(m.num_points())
     << "\" NumberOfCells=\"" << static_cast<long long>(m.num_cells()) << "\">\n";
   w << "      <PointData>\n";
-  if (!m.point_tags.empty()) vtu_tags(w, m.point_tags);
-  for (const auto& a : point_data) vtu_array(w, a);
+  if (!m.point_tags.empty()) v.array("tag", "Int32", 1, m.point_tags);
+  for (const auto& a : point_data) v.array(a);
   w << "      </PointData>\n      <CellData>\n";
-  if (!m.cell_tags.empty()) vtu_tags(w, m.cell_tags);
-  for (const auto& a : cell_data) vtu_array(w, a);
-  w << "      </CellData>\n      <Points>\n"
-    << "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  if (!m.cell_tags.empty()) v.array("tag", "Int32", 1, m.cell_tags);
+  for (const auto& a : cell_data) v.array(a);
+  w << "      </CellData>\n      <Points>\n";
+  std::vector<double> points(static_cast<std::size_t>(3 * m.num_points()));
   for (Index i = 0; i < m.num_points(); ++i)
-    w << m.points(0, i) << ' ' << m.points(1, i) << ' ' << m.points(2, i) << '\n';
-  w << "        </DataArray>\n      </Points>\n      <Cells>\n"
-    << "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n";
+    for (int d = 0; d < 3; ++d) points[static_cast<std::size_t>(3 * i + d)] = m.points(d, i);
+  v.array("", "Float64", 3, points);
+  w << "      </Points>\n      <Cells>\n";
+  std::vector<std::int64_t> conn, offsets;
+  conn.reserve(static_cast<std::size_t>(k * m.num_cells()));
   for (Index c = 0; c < m.num_cells(); ++c)
-    for (int r = 0; r < k; ++r) w << m.cells(r, c) << (r + 1 == k ? '\n' : ' ');
-  w << "        </DataArray>\n"
-    << "        <DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n";
-  for (Index c = 0; c < m.num_cells(); ++c) w << static_cast<long long>(c + 1) * k << '\n';
-  w << "        </DataArray>\n"
-    << "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-  const int type = m.dimension == 3 ? 10 : 5;  // VTK_TETRA, VTK_TRIANGLE
-  for (Index c = 0; c < m.num_cells(); ++c) w << type << '\n';
-  w << "        </DataArray>\n      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
+    for (int r = 0; r < k; ++r) conn.push_back(m.cells(r, c));
+  for (Index c = 0; c < m.num_cells(); ++c) offsets.push_back(static_cast<std::int64_t>(c + 1) * k);
+  const std::uint8_t type = m.dimension == 3 ? 10 : 5;  // VTK_TETRA, VTK_TRIANGLE
+  v.array("connectivity", "Int64", 1, conn);
+  v.array("offsets", "Int64", 1, offsets);
+  v.array("types", "UInt8", 1,
+          std::vector<std::uint8_t>(static_cast<std::size_t>(m.num_cells()), type));
+  w << "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n";
+  if (v.binary()) {
+    w << "  <AppendedData encoding=\"raw\">\n   _";
+    w << v.appended();
+    w << "\n  </AppendedData>\n";
+  }
+  w << "</VTKFile>\n";
   w.save(path);
 }
 
@@ -290,12 +396,13 @@ void write_off(const std::string& path, const mesh::MeshData& m) {
 
 std::vector<DataArray> quality_cell_data(const mesh::CellQuality& q) {
   constexpr double kDegrees = 180.0 / 3.14159265358979323846;
-  std::vector<DataArray> d = {{"size", 1, q.size},
+  const bool tets = q.dimension == 3;
+  std::vector<DataArray> d = {{tets ? "volume" : "area", 1, q.size},
                               {"aspect_ratio", 1, q.aspect_ratio},
                               {"shewchuk_quality", 1, q.shewchuk},
-                              {"min_angle_deg", 1, q.min_angle},
-                              {"max_angle_deg", 1, q.max_angle},
-                              {"shape_class", 1, {}}};
+                              {tets ? "min_dihedral_angle_deg" : "min_angle_deg", 1, q.min_angle},
+                              {tets ? "max_dihedral_angle_deg" : "max_angle_deg", 1, q.max_angle},
+                              {"shape_class", 1, {}, DataArray::Type::kUInt8}};
   for (auto* a : {&d[3], &d[4]})
     for (double& v : a->values) v *= kDegrees;
   for (auto s : q.shape) d[5].values.push_back(static_cast<double>(s));

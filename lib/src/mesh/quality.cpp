@@ -171,6 +171,7 @@ CellQuality cell_quality(const MeshData& m, const ShapeThresholds& t, bool plana
   INCISE_CHECK(m.cells.rows() == m.dimension + 1, "cell_quality: cells must have d+1 rows");
   const Index n = m.num_cells();
   CellQuality q;
+  q.dimension = m.dimension;
   q.size.resize(n);
   q.aspect_ratio.resize(n);
   q.shewchuk.resize(n);

@@ -358,6 +358,9 @@ mesh::MeshData live_mesh_data(const cut::CutMesh& cm) {
   m.cells.resize(4, static_cast<Eigen::Index>(live.size()));
   for (std::size_t e = 0; e < live.size(); ++e)
     for (int k = 0; k < 4; ++k) m.cells(k, static_cast<Eigen::Index>(e)) = live[e][k];
+  if (cm.has_tags())
+    for (Index e = 0; e < cm.element_capacity(); ++e)
+      if (cm.alive(e)) m.cell_tags.push_back(cm.tag(e));
   return m;
 }
 

@@ -1,6 +1,7 @@
 #include <incise/scene/scene_outputs.hpp>
 
 #include <incise/core/atomic_file.hpp>
+#include <incise/fem/element_fields.hpp>
 #include <incise/interactive/augmented_cut_session.hpp>
 #include <incise/io/write_mesh.hpp>
 #include <incise/mesh/tet_faces.hpp>
@@ -28,9 +29,19 @@ io::DataArray displacement_array(const VecX& u) {
   return a;
 }
 
-void write_vtu_atomic(const std::string& path, const mesh::MeshData& mesh, const VecX& u) {
+/// Writes `mesh` with `point` and `cell` arrays atomically in the scene's VTU encoding.
+void write_vtu_atomic(const std::string& path, const mesh::MeshData& mesh,
+                      const std::vector<io::DataArray>& point,
+                      const std::vector<io::DataArray>& cell, io::VtuEncoding encoding) {
   write_atomically(
-      path, [&](const std::string& tmp) { io::write_vtu(tmp, mesh, {displacement_array(u)}); });
+      path, [&](const std::string& tmp) { io::write_vtu(tmp, mesh, point, cell, encoding); });
+}
+
+/// `width` digits of `index`, zero-padded.
+std::string padded(long index, std::size_t width) {
+  std::string s = std::to_string(index);
+  s.insert(0, width > s.size() ? width - s.size() : 0, '0');
+  return s;
 }
 
 /// A finite number, or JSON null (never NaN or ∞ in a file).
@@ -132,13 +143,33 @@ std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
 
 }  // namespace
 
+namespace {
+
+/// Digits of the frame index of iteration and cut-step frames: 6, more when `last` needs more.
+std::size_t frame_index_width(long last) {
+  return std::max<std::size_t>(6, std::to_string(std::max(last, 0L)).size());
+}
+
+}  // namespace
+
+void FrameWriter::frame(const std::string& file, double time) {
+  const OutputSpec& outs = scene_.spec.outputs;
+  ++frames_;
+  pvd_.push_back({time, std::filesystem::path(file).filename().string()});
+  write_atomically(outs.vtu + ".pvd", [&](const std::string& tmp) { io::write_pvd(tmp, pvd_); });
+}
+
 void FrameWriter::iteration(const solver::IterationInfo& info) {
   const OutputSpec& outs = scene_.spec.outputs;
   if (outs.vtu.empty() || outs.vtu_every <= 0 || info.iteration % outs.vtu_every != 0 ||
       !info.u->allFinite())
     return;
-  write_vtu_atomic(outs.vtu + "_" + std::to_string(info.iteration) + ".vtu", scene_.mesh, *info.u);
-  ++frames_;
+  const std::string file =
+      outs.vtu + "_" +
+      padded(info.iteration, frame_index_width(scene_.spec.solver.max_iterations)) + ".vtu";
+  const TetFields f = tet_fields(scene_, *info.u);
+  write_vtu_atomic(file, scene_.mesh, f.point, f.cell, outs.vtu_format);
+  frame(file, info.time >= 0 ? info.time : static_cast<double>(info.iteration));
 }
 
 void FrameWriter::cut_step(const CutStepRow& row, const interactive::AugmentedCutSession& session) {
@@ -146,9 +177,56 @@ void FrameWriter::cut_step(const CutStepRow& row, const interactive::AugmentedCu
   const Eigen::Matrix3Xd& d = session.displacement();
   if (outs.vtu.empty() || outs.vtu_every <= 0 || row.step % outs.vtu_every != 0 || !d.allFinite())
     return;
-  write_vtu_atomic(outs.vtu + "_" + std::to_string(row.step) + ".vtu",
-                   live_mesh_data(session.mesh()), Eigen::Map<const VecX>(d.data(), d.size()));
-  ++frames_;
+  const std::string file = outs.vtu + "_" + padded(row.step, frame_index_width(0)) + ".vtu";
+  write_vtu_atomic(file, live_mesh_data(session.mesh()),
+                   {displacement_array(Eigen::Map<const VecX>(d.data(), d.size()))}, {},
+                   outs.vtu_format);
+  frame(file, static_cast<double>(row.step));
+}
+
+namespace {
+
+/// Appends `a` to `to` unless it holds a NaN or infinity (never written to a file).
+void add_finite(std::vector<io::DataArray>& to, io::DataArray a) {
+  for (double v : a.values)
+    if (!std::isfinite(v)) return;
+  to.push_back(std::move(a));
+}
+
+}  // namespace
+
+TetFields tet_fields(const BuiltScene& scene, const VecX& u) {
+  TetFields out;
+  out.point.push_back(displacement_array(u));
+  if (!scene.problem || scene.problem->size() != u.size()) return out;
+  fem::ElasticProblem& p = *scene.problem;
+  const std::size_t n = static_cast<std::size_t>(p.num_nodes());
+  VecX g;
+  io::DataArray reaction{"reaction_force", 3, std::vector<double>(3 * n, 0.0)};
+  if (p.gradient(u, g) == EvalStatus::kOk)
+    for (Eigen::Index i = 0; i < p.size(); ++i)
+      if (p.is_fixed(i)) reaction.values[static_cast<std::size_t>(i)] = g[i];
+  io::DataArray fixed{"fixed", 1, std::vector<double>(n, 0.0), io::DataArray::Type::kUInt8};
+  io::DataArray loaded{"loaded", 1, std::vector<double>(n, 0.0), io::DataArray::Type::kUInt8};
+  const VecX& f = p.external_force();
+  for (std::size_t v = 0; v < n; ++v)
+    for (int c = 0; c < 3; ++c) {
+      const auto i = static_cast<Eigen::Index>(3 * v + c);
+      if (p.is_fixed(i)) fixed.values[v] = 1;
+      if (f[i] != 0.0) loaded.values[v] = 1;
+    }
+  add_finite(out.point, std::move(reaction));
+  out.point.push_back(std::move(fixed));
+  out.point.push_back(std::move(loaded));
+  fem::ElementFields e = fem::element_fields(p, u);
+  add_finite(out.cell, {"strain", 6, std::move(e.strain)});
+  add_finite(out.cell, {"second_piola_stress", 6, std::move(e.second_piola)});
+  add_finite(out.cell, {"cauchy_stress", 6, std::move(e.cauchy)});
+  add_finite(out.cell, {"von_mises_stress", 1, std::move(e.von_mises)});
+  add_finite(out.cell, {"strain_energy_density", 1, std::move(e.energy_density)});
+  out.cell.push_back({"inverted", 1, std::vector<double>(e.inverted.begin(), e.inverted.end()),
+                      io::DataArray::Type::kUInt8});
+  return out;
 }
 
 std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion& insertion) {
@@ -194,11 +272,8 @@ void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_up
   const std::string file = outs.vtu + "_" + index + ".vtu";
   const mesh::MeshData m = insertion.mesh().to_mesh_data();
   const std::vector<io::DataArray> data = needle_point_data(insertion);
-  write_atomically(file, [&](const std::string& tmp) { io::write_vtu(tmp, m, data); });
-  ++frames_;
-  pvd_.push_back(
-      {static_cast<double>(row.update), std::filesystem::path(file).filename().string()});
-  write_atomically(outs.vtu + ".pvd", [&](const std::string& tmp) { io::write_pvd(tmp, pvd_); });
+  write_vtu_atomic(file, m, data, {}, outs.vtu_format);
+  frame(file, static_cast<double>(row.update));
 }
 
 std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion3D& insertion) {
@@ -231,7 +306,8 @@ io::DataArray needle_cell_data(const needle::NeedleInsertion3D& insertion,
   return a;
 }
 
-void write_needle_surface_vtu(const std::string& path, const needle::NeedleInsertion3D& insertion) {
+void write_needle_surface_vtu(const std::string& path, const needle::NeedleInsertion3D& insertion,
+                              io::VtuEncoding encoding) {
   mesh::MeshData m;
   m.dimension = 2;
   m.points = insertion.mesh().points();
@@ -244,7 +320,7 @@ void write_needle_surface_vtu(const std::string& path, const needle::NeedleInser
                   .cross(x.col(m.cells(2, f)) - x.col(m.cells(0, f)))
                   .norm();
   const std::vector<io::DataArray> point = {needle_point_data(insertion)[0]};
-  write_atomically(path, [&](const std::string& tmp) { io::write_vtu(tmp, m, point, {area}); });
+  write_vtu_atomic(path, m, point, {area}, encoding);
 }
 
 void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_updates,
@@ -257,14 +333,11 @@ void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_up
   const mesh::MeshData m = insertion.mesh().to_mesh_data();
   const std::vector<io::DataArray> data = needle_point_data(insertion);
   const io::DataArray cells = needle_cell_data(insertion, m);
-  write_atomically(file, [&](const std::string& tmp) { io::write_vtu(tmp, m, data, {cells}); });
-  write_needle_surface_vtu(surface, insertion);
-  ++frames_;
-  pvd_.push_back(
-      {static_cast<double>(row.update), std::filesystem::path(file).filename().string()});
+  write_vtu_atomic(file, m, data, {cells}, outs.vtu_format);
+  write_needle_surface_vtu(surface, insertion, outs.vtu_format);
   surface_pvd_.push_back(
       {static_cast<double>(row.update), std::filesystem::path(surface).filename().string()});
-  write_atomically(outs.vtu + ".pvd", [&](const std::string& tmp) { io::write_pvd(tmp, pvd_); });
+  frame(file, static_cast<double>(row.update));
   write_atomically(outs.vtu + "_needle.pvd",
                    [&](const std::string& tmp) { io::write_pvd(tmp, surface_pvd_); });
 }
@@ -281,19 +354,17 @@ std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunRe
     const std::string f = outs.vtu + ".vtu";
     std::string f_extra;  // 3D needle: the final needle surface, listed after f
     if (scene.needle) {
-      const std::vector<io::DataArray> data = needle_point_data(*scene.needle);
-      write_atomically(f, [&](const std::string& tmp) { io::write_vtu(tmp, scene.mesh, data); });
+      write_vtu_atomic(f, scene.mesh, needle_point_data(*scene.needle), {}, outs.vtu_format);
     } else if (scene.needle3d) {
-      const std::vector<io::DataArray> data = needle_point_data(*scene.needle3d);
-      const io::DataArray cells = needle_cell_data(*scene.needle3d, scene.mesh);
-      write_atomically(
-          f, [&](const std::string& tmp) { io::write_vtu(tmp, scene.mesh, data, {cells}); });
+      write_vtu_atomic(f, scene.mesh, needle_point_data(*scene.needle3d),
+                       {needle_cell_data(*scene.needle3d, scene.mesh)}, outs.vtu_format);
       const std::string sf = outs.vtu + "_needle.vtu";
-      write_needle_surface_vtu(sf, *scene.needle3d);
+      write_needle_surface_vtu(sf, *scene.needle3d, outs.vtu_format);
       written.push_back(f);
       f_extra = sf;
-    } else {
-      write_vtu_atomic(f, scene.mesh, result.u);
+    } else {  // an augmented cut run has replaced scene.mesh and scene.problem by the cut ones
+      const TetFields fields = tet_fields(scene, result.u);
+      write_vtu_atomic(f, scene.mesh, fields.point, fields.cell, outs.vtu_format);
     }
     written.push_back(f_extra.empty() ? f : f_extra);
     if (options.frames > 0)
@@ -302,8 +373,8 @@ std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunRe
                              ? "_<update>.vtu and " + outs.vtu + "_needle_<update>.vtu, indices " +
                                    outs.vtu + ".pvd and " + outs.vtu + "_needle.pvd"
                          : scene.needle             ? "_<update>.vtu, index " + outs.vtu + ".pvd"
-                         : result.cut_steps.empty() ? "_<it>.vtu"
-                                                    : "_<step>.vtu"));
+                         : result.cut_steps.empty() ? "_<it>.vtu, index " + outs.vtu + ".pvd"
+                                                    : "_<step>.vtu, index " + outs.vtu + ".pvd"));
   }
   if (!options.summary_json.empty()) {
     write_file_atomic(options.summary_json,

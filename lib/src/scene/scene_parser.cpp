@@ -405,8 +405,10 @@ OutputSpec parse_outputs(JsonObject o) {
   out.vtu = o.string("vtu", "");
   if (!out.vtu.empty()) {
     out.vtu_every = o.integer("vtu_every", 0, kMaxIterations, 0);
+    out.vtu_format = o.choice("vtu_format", io::kVtuEncodingNames, io::VtuEncoding::kBinaryZlib);
   } else {
     o.forbid("vtu_every", "set \"vtu\" (the output file stem) first");
+    o.forbid("vtu_format", "set \"vtu\" (the output file stem) first");
   }
   out.csv = o.string("csv", "");
   const std::string file = o.file();

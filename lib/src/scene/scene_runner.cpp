@@ -252,7 +252,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
                    std::to_string(totals.collapses) + " collapses, " +
                    std::to_string(totals.new_nodes) + " new nodes, " + std::to_string(unused) +
                    " unused nodes -> " + std::to_string(final_mesh.num_cells()) + " tets, " +
-                   std::to_string(final_mesh.num_points()) + " nodes (cell tags dropped)",
+                   std::to_string(final_mesh.num_points()) + " nodes",
                cut_seconds, matrix_bytes_of(final_mesh));
   auto check = std::make_unique<fem::ElasticProblem>(final_mesh, mat);
   check->fix_nodes(held);

@@ -47,6 +47,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   double e_start = 0.0, e_min = 0.0;
   bool have_e = false;
   long k = 0;
+  double t = 0.0;  // simulated time of u: Σ Δt over the steps taken (IterationInfo::time)
   StopReason reason = StopReason::kConverged;
   std::string event;  // what made the last restart necessary
   bool have_residual = false;
@@ -105,7 +106,9 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
     have_residual = true;
     rep.residual_history.push_back(rnorm);
     rep.energy_history.push_back(energy);
-    if (k > 0) meter.observe(options.observer, IterationInfo{k, &ubar, rnorm, energy, 0, 0.0});
+    if (k > 0)
+      meter.observe(options.observer,
+                    IterationInfo{k, &ubar, rnorm, energy, 0, 0.0, 0.0, t + 0.5 * dt});
     if (rnorm <= threshold) {
       reason = StopReason::kConverged;
       break;
@@ -118,6 +121,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
     v += dt * acc;                        // (2.60)
     meter.add(16 * nn);
     ++k;
+    t += dt;
     const double unorm = u.norm();
     if (!std::isfinite(unorm) || unorm > options.blowup_norm) {
       if (restart(StopReason::kUnstable, "blow-up")) continue;

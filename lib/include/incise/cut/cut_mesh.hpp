@@ -145,8 +145,16 @@ class CutMesh {
   /// Mutable access for registering watchers; edits must go through CutMesh.
   mesh::Connectivity& connectivity() { return conn_; }
 
-  /// Exports the live elements and all nodes. With `compact`, unused nodes are dropped and
-  /// `node_map` (old → new, −1 for dropped) is filled. Positions: reference if !deformed.
+  /// Whether the elements carry cell tags (the MeshData built from had cell_tags).
+  bool has_tags() const { return !tags_.empty(); }
+  /// Cell tag of live element e (0 when the mesh has no tags). Tags survive every change:
+  /// dissection keeps each element's slot and tag; replace() gives each added element the tag
+  /// of the removed element sharing most of its nodes (the first such one).
+  int tag(Index e) const { return tags_.empty() ? 0 : tags_[static_cast<size_t>(e)]; }
+
+  /// Exports the live elements and all nodes, with cell_tags when has_tags(). With `compact`,
+  /// unused nodes are dropped and `node_map` (old → new, −1 for dropped) is filled. Positions:
+  /// reference if !deformed.
   mesh::MeshData to_mesh_data(bool deformed_positions = false, bool compact = false,
                               std::vector<Index>* node_map = nullptr) const;
 
@@ -154,6 +162,7 @@ class CutMesh {
   void refresh(Index e);
 
   mesh::Connectivity conn_;
+  std::vector<int> tags_;  ///< per element slot (empty: no tags)
   std::vector<Tet> tets_;  ///< per slot: cells() order of the element's simplex
   std::vector<Vec3> ref_;
   std::vector<Vec3> def_;

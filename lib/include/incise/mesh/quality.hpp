@@ -121,6 +121,7 @@ Stats summarize(std::vector<double> values);
 
 /// Per-cell quality measures of a mesh (one entry per cell).
 struct CellQuality {
+  int dimension = 3;                 ///< of the mesh measured: 3 tetrahedra, 2 triangles
   std::vector<double> size;          ///< signed volume (m³) or signed xy area (m²)
   std::vector<double> aspect_ratio;  ///< thesis aspect ratio (§3.2.3)
   std::vector<double> shewchuk;      ///< volume–area (3D) / area–length (2D) quality

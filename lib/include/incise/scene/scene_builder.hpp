@@ -123,7 +123,7 @@ std::vector<std::array<Vec3, 3>> sweep_triangles(const ToolSpec& tool);
 
 /// The live tetrahedra of a cut mesh as MeshData: every node (unused ones included, so node
 /// indices are those of the CutMesh), reference positions (m), cells in element-handle order,
-/// no tags.
+/// with their cell tags when the cut mesh has them (cut::CutMesh::tag).
 mesh::MeshData live_mesh_data(const cut::CutMesh& cut_mesh);
 
 /// The material a scene names (registry model and its parameters); throws ParameterError for an

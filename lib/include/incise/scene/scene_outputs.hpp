@@ -21,13 +21,17 @@ class AugmentedCutSession;
 
 namespace incise::scene {
 
-/// Writes the VTU frames `outputs.vtu_every` asks for (none when it is 0 or `vtu` is empty):
-/// `<vtu>_<iteration>.vtu` of the scene's mesh with point array "displacement" (m) every
-/// vtu_every iterations, or in an interactive cutting run `<vtu>_<step>.vtu` of the cut mesh
-/// every vtu_every steps (step 0 = initial solve). In a needle scene: `<vtu>_<update>.vtu` of
-/// the refined slab (triangles; point arrays "displacement", z = 0, and "needle_state", 0 no
-/// needle node, 1 sticking, 2 slipping) every vtu_every updates and at the last planned update,
-/// the update zero-padded to max(4, digits of the last update), each frame followed by
+/// Writes the VTU frames `outputs.vtu_every` asks for (none when it is 0 or `vtu` is empty), in
+/// the encoding `outputs.vtu_format`, each followed by the ParaView index `<vtu>.pvd` of the
+/// frames so far: `<vtu>_<iteration>.vtu` of the scene's mesh with tet_fields() every vtu_every
+/// iterations (pvd time: the simulated time of dynamic relaxation, IterationInfo::time, else the
+/// iteration), or in an interactive cutting run `<vtu>_<step>.vtu` of the cut mesh with
+/// "displacement" every vtu_every steps (step 0 = initial solve; pvd time = step); the index is
+/// zero-padded to 6 digits (more when max_iterations has more). In a needle scene:
+/// `<vtu>_<update>.vtu` of the refined slab (triangles; point arrays "displacement", z = 0, and
+/// "needle_state", 0 no needle node, 1 sticking, 2 slipping) every vtu_every updates and at the
+/// last planned update, the update zero-padded to max(4, digits of the last update), each frame
+/// followed by
 /// `<vtu>.pvd`, the ParaView index of the frames so far (timestep = update). A 3D needle scene
 /// writes the refined tetrahedral mesh the same way (needle_point_data, and the cell array
 /// "needle_faces": how many needle-surface faces each tetrahedron has, 0–4) and beside it
@@ -52,11 +56,29 @@ class FrameWriter {
   long frames() const { return frames_; }
 
  private:
+  /// Counts the frame `file` and rewrites `<vtu>.pvd` with it appended at `time`.
+  void frame(const std::string& file, double time);
   const BuiltScene& scene_;
   long frames_ = 0;
-  std::vector<io::PvdFrame> pvd_;          ///< needle frames, for the .pvd index
+  std::vector<io::PvdFrame> pvd_;          ///< frames so far, for the .pvd index
   std::vector<io::PvdFrame> surface_pvd_;  ///< 3D needle-surface frames, for their index
 };
+
+/// The arrays of a tetrahedral scene's state (docs/mesh_formats.md "Fields"; units SI).
+struct TetFields {
+  std::vector<io::DataArray> point;  ///< see tet_fields()
+  std::vector<io::DataArray> cell;   ///< see tet_fields()
+};
+/// The arrays written for displacement `u` of a scene with an elastic problem on its mesh
+/// (static and dynamic runs, and the final state of an augmented cut run): point data
+/// "displacement" (m), "reaction_force" (N: the residual Σq − f_ext at fixed DOFs, the force
+/// the supports exert; 0 at free DOFs), "fixed" and "loaded" (UInt8 0/1: a DOF of the node is
+/// fixed / carries a nonzero external force); cell data fem::element_fields(): "strain",
+/// "second_piola_stress", "cauchy_stress" (6 components xx yy zz xy yz xz; Pa),
+/// "von_mises_stress" (Pa), "strain_energy_density" (J/m³) and "inverted" (UInt8). An array
+/// with a NaN or infinity (a diverged run) is left out. Without a problem matching u (needle
+/// scenes): "displacement" only.
+TetFields tet_fields(const BuiltScene& scene, const VecX& u);
 
 /// The point arrays of a needle insertion's mesh: "displacement" (m, 3 components, z = 0) and
 /// "needle_state" (0: no needle node, 1: sticking, 2: slipping; needle::NodeState).
@@ -70,7 +92,8 @@ io::DataArray needle_cell_data(const needle::NeedleInsertion3D& insertion,
 /// The needle surface of a 3D insertion as a triangle mesh on all its vertices (reference
 /// positions), with point array "displacement" and cell array "area" (m², deformed); written
 /// beside every 3D needle frame.
-void write_needle_surface_vtu(const std::string& path, const needle::NeedleInsertion3D& insertion);
+void write_needle_surface_vtu(const std::string& path, const needle::NeedleInsertion3D& insertion,
+                              io::VtuEncoding encoding = io::VtuEncoding::kBinaryZlib);
 
 /// Options of write_outputs().
 struct OutputOptions {
@@ -83,8 +106,9 @@ struct OutputOptions {
 /// per solve of an interactive cutting run, or per update of a needle scene), the final state
 /// `<vtu>.vtu` (a needle scene's with needle_point_data()) and, when
 /// options.summary_json is set, summary_json() there. Returns what was written, in that order:
-/// the paths, with "<n> frames <vtu>_<it>.vtu" (or "_<step>.vtu"; a needle scene's
-/// "<n> frames <vtu>_<update>.vtu, index <vtu>.pvd") after the final VTU when options.frames > 0.
+/// the paths, with "<n> frames <vtu>_<it>.vtu, index <vtu>.pvd" (or "_<step>.vtu, ..."; a
+/// needle scene's "_<update>.vtu, ...") after the final VTU when options.frames > 0. The final
+/// VTU of a tetrahedral scene holds tet_fields().
 /// Throws Error (or std::filesystem::filesystem_error) when a file cannot be written.
 std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunResult& result,
                                        const OutputOptions& options = {});

@@ -12,6 +12,7 @@
 
 #include <incise/core/name_table.hpp>
 #include <incise/core/types.hpp>
+#include <incise/io/write_mesh.hpp>
 #include <incise/linalg/augmented_system.hpp>
 #include <incise/material/parameters.hpp>
 #include <incise/mesh/generators.hpp>
@@ -280,7 +281,9 @@ inline constexpr NameTable<ProbeSpec::Quantity, 1> kProbeQuantityNames{{{
 struct OutputSpec {
   std::string vtu;    ///< VTU file stem ("" = none); written every `vtu_every` iterations
   int vtu_every = 0;  ///< 0: final state only
-  std::string csv;    ///< CSV trace of iteration, residual, probes ("" = none)
+  /// `vtu_format`: "binary" (default: raw appended, zlib-compressed) or "ascii".
+  io::VtuEncoding vtu_format = io::VtuEncoding::kBinaryZlib;
+  std::string csv;  ///< CSV trace of iteration, residual, probes ("" = none)
   std::vector<ProbeSpec> probes;
 };
 

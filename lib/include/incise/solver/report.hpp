@@ -76,6 +76,9 @@ struct IterationInfo {
   std::uint64_t flops = 0;     ///< flops spent by the solver so far (observer excluded)
   double seconds = 0.0;        ///< seconds spent by the solver so far (observer excluded)
   double cpu_seconds = 0.0;    ///< process CPU seconds so far (all threads; observer excluded)
+  /// Simulated time (s) of `u` in dynamic relaxation (ū of (2.56): Σ Δt over the steps taken,
+  /// plus ½Δt); −1 for the static solvers, which have no time.
+  double time = -1.0;
 };
 
 /// Called after every iteration. The time and flops spent inside it are excluded from the
