@@ -8,6 +8,7 @@
 
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
+#include <incise/scene/delaunay_scene.hpp>
 #include <incise/scene/scene_outputs.hpp>
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
@@ -87,6 +88,11 @@ void print_residual_summary(std::ostream& out, const scene::SceneSpec& spec,
 
 }  // namespace
 
+// run_delaunay.cpp: a Delaunay cutting scene (scene/delaunay_scene.hpp).
+int run_delaunay_scene_command(const std::string& scene_path, const std::string& summary_json,
+                               const std::string& progress, const std::string& csv,
+                               std::ostream& out, std::ostream& err);
+
 int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
   std::string scene_path, summary_json, progress = "auto", write_solution, reference, csv;
   std::int64_t memory_mb = 0;       // 0: the scene's limits (or the default budget)
@@ -149,6 +155,15 @@ int run_scene_command(const Args& args, std::ostream& out, std::ostream& err) {
         "[--reference FILE]");
   if (progress == "auto")
     progress = (&out == &std::cout && isatty(STDOUT_FILENO)) ? "bar" : "lines";
+
+  // A Delaunay cutting scene (thesis ch. 5) has its own parser, runner and outputs.
+  if (scene::is_delaunay_scene(scene_path)) {
+    if (memory_mb > 0 || max_iterations > 0 || !write_solution.empty() || !reference.empty())
+      throw UsageError(
+          "--memory-mb, --max-iterations, --write-solution and --reference are not for a "
+          "Delaunay cutting scene");
+    return run_delaunay_scene_command(scene_path, summary_json, progress, csv, out, err);
+  }
 
   // Parse and build everything first: errors stop the run before any file is written.
   Timer total;
