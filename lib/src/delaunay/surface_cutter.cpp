@@ -62,8 +62,9 @@ SurfaceCutter::SurfaceCutter(Surface& surface, Cutter2DOptions options)
   INCISE_CHECK_PARAM(positive(options.dilation) && options.dilation <= 0.1,
                      "SurfaceCutter: dilation must be in (0, 0.1] (a fraction of the mean edge)");
   INCISE_CHECK_PARAM(options.max_substeps >= 1, "SurfaceCutter: max_substeps must be >= 1");
-  INCISE_CHECK_PARAM(options.short_edge == ShortEdgeRule::kDistance,
-                     "SurfaceCutter: only the distance rule (kDistance) is built for surfaces");
+  INCISE_CHECK_PARAM(
+      std::isfinite(options.min_angle) && options.min_angle > 0 && options.min_angle < M_PI / 3,
+      "SurfaceCutter: min_angle must be in (0, pi/3) rad");
   const std::vector<Edge> edges = mesh_.edges();
   INCISE_CHECK_PARAM(!edges.empty(), "SurfaceCutter: the surface has no edges");
   double sum = 0;
@@ -386,10 +387,23 @@ bool SurfaceCutter::near_exit(double radius, Index& p, Index& q, Vec3& x) const 
   return pick_exit_edge(distance, radius, p, q, x);
 }
 
+bool SurfaceCutter::too_short(Index v) const {
+  const Vec3 a = mesh_.point(active_), pv = mesh_.point(v);
+  if (options_.short_edge == ShortEdgeRule::kDistance) return (pv - a).norm() < eps_edge_;
+  // §5.5 (as Cutter2D::too_short): the angles opposite the edge a–v in its triangles.
+  for (const mesh::ElementHandle e : mesh_.incident(active_, v)) {
+    Index o = -1;
+    for (const Index w : mesh_.triangle(e))
+      if (w != v && w != active_) o = w;
+    const Vec3 x = a - mesh_.point(o), y = pv - mesh_.point(o);
+    if (std::atan2(x.cross(y).norm(), x.dot(y)) < options_.min_angle) return true;
+  }
+  return false;
+}
+
 void SurfaceCutter::remove_close_nodes(SurfaceMoveReport& r) {
-  const Vec3 a = mesh_.point(active_);
   r.removals += detail::remove_close_nodes(
-      mesh_, active_, [&](Index v) { return (mesh_.point(v) - a).norm() < eps_edge_; },
+      mesh_, active_, [&](Index v) { return too_short(v); },
       [&](Index v) {
         // Restriction 2 of §5.3.2: a node next to another active node separates incisions.
         if (v == track_.left || v == track_.right) return true;  // a tip incision's entry node
@@ -510,14 +524,14 @@ bool SurfaceCutter::annihilate(SurfaceMoveReport& r) {
   // from another active node b (restriction 2 keeps s from being removed).
   const Vec3 pa = mesh_.point(active_);
   Index s = -1, b = -1;
-  double best = eps_edge_;
+  double best = std::numeric_limits<double>::infinity();
   for (const Index v : mesh_.neighbours(active_)) {
     if (!mesh_.is_interior_vertex(v)) continue;
     Index w = -1;
     for (const Index u : mesh_.neighbours(v))
       if (u != active_ && mesh_.is_active_node(u) && !is_sibling(u)) w = u;
     const double d = (mesh_.point(v) - pa).norm();
-    if (w >= 0 && d < best) {
+    if (w >= 0 && too_short(v) && d < best) {
       best = d;
       s = v;
       b = w;
