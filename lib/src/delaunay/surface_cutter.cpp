@@ -43,6 +43,24 @@ bool segment_triangle(const ScalpelSegment& s, const Vec3& a, const Vec3& b, con
   return true;
 }
 
+/// The unit normal of a star triangle of v at the crease guard's limit against the triangle
+/// beyond its opposite edge, which a step of v by a small part of d would make sharper (surface.hpp
+/// guard); zero when there is none.
+Vec3 blocking_crease_normal(const Surface& m, Index v, const Vec3& d) {
+  const Vec3 x = m.point(v) + 1e-3 * d;
+  auto cosine = [](const Vec3& p, const Vec3& q) { return p.dot(q) / (p.norm() * q.norm()); };
+  for (const ElementHandle e : m.connectivity().star(v)) {
+    auto t = m.triangle(e);
+    while (t[0] != v) t = {t[1], t[2], t[0]};
+    const ElementHandle beyond = m.left_of(t[2], t[1]);
+    if (!beyond.valid()) continue;
+    const Vec3 n = (m.point(t[1]) - x).cross(m.point(t[2]) - x), old = m.area_normal(e),
+               nb = m.area_normal(beyond);
+    if (cosine(n, nb) < std::min(0.5, cosine(old, nb))) return old.normalized();
+  }
+  return Vec3::Zero();
+}
+
 }  // namespace
 
 const char* to_string(SurfaceMoveStatus status) {
@@ -415,6 +433,7 @@ void SurfaceCutter::remove_close_nodes(SurfaceMoveReport& r) {
 
 void SurfaceCutter::move_active(const Vec3& target, SurfaceMoveReport& r) {
   int stalled = 0;  // consecutive partial steps without a mesh change
+  int slides = 0;   // steps within a blocking triangle's plane (at most 4 per movement)
   for (int step = 0; step < options_.max_substeps; ++step) {
     const Vec3 a = mesh_.point(active_);
     const Vec3 d = target - a;
@@ -427,6 +446,22 @@ void SurfaceCutter::move_active(const Vec3& target, SurfaceMoveReport& r) {
     if (moved) grid_->refresh(active_);  // its triangles and edges are elsewhere now
     s *= 2;                              // the fraction taken
     ++r.substeps;
+    if (!moved && slides < 4) {
+      // A star triangle at the 60° crease limit holds the node: slide it within that
+      // triangle's plane (its crease stays), towards the scalpel as far as the guards allow.
+      const Vec3 n = blocking_crease_normal(mesh_, active_, d);
+      const Vec3 dp = d - d.dot(n) * n;
+      if (n.squaredNorm() > 0 && dp.norm() > 1e-3 * d.norm()) {
+        double f = 1;
+        for (int k = 0; k < 12 && !moved; ++k, f *= 0.5)
+          moved = mesh_.move_vertex(active_, a + f * dp);
+        if (moved) {
+          ++slides;
+          grid_->refresh(active_);
+          s = 0.5;  // partial
+        }
+      }
+    }
     if (!moved) {
       r.status = SurfaceMoveStatus::kBlocked;
       r.message =

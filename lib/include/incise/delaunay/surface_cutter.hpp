@@ -22,7 +22,9 @@
 ///  2. per sub-movement, a sweep that crosses a boundary edge opposite the active node (eq. (5.1))
 ///     is an exit there; otherwise the scalpel segment is intersected with the active triangles
 ///     (the star of the active node) and the active node moves to the intersection — in halving
-///     steps when a star triangle would fold or flatten (surface.hpp guards), with the active
+///     steps when a star triangle would fold or flatten (surface.hpp guards); a node held by a
+///     star triangle at the 60° crease limit (every step, however small, would sharpen it)
+///     slides within that triangle's plane instead (at most 4 slides per movement), with the active
 ///     triangles legalized by the unfolded criterion and interior nodes closer than ε_edge
 ///     removed by ear flips (Fig. 5.10) after each step — but not a node next to another active
 ///     node (restriction 2);
