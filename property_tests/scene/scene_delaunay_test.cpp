@@ -161,6 +161,23 @@ TEST(DelaunayScene, ShippedBellSurfaceScene) {
   EXPECT_TRUE(fs::exists(s.vtu + ".pvd"));
 }
 
+// Fig. 5.19's self-intersecting loop as a shipped scene (one movement per sample, as the
+// reproduction moves): it crosses its own slit — an exit into it and an entry beyond it — and
+// cuts out the loop's inside, the numbers of Chapter5.Fig5_19SelfIntersectingPathOnTheBell.
+TEST(DelaunayScene, ShippedSelfIntersectingLoopCrossesItsOwnSlit) {
+  const fs::path dir = fresh_dir("bell_loop");
+  const scene::DelaunaySceneSpec s = shipped("delaunay_bell_loop", dir);
+  const scene::DelaunayRunResult r = scene::run_delaunay_scene(s, "");
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(r.rows.size(), 201u);
+  EXPECT_EQ(r.entries, 2);
+  EXPECT_EQ(r.exits, 2);
+  EXPECT_EQ(r.blocked + r.lost, 0);
+  EXPECT_EQ(r.components, 3);
+  EXPECT_EQ(r.triangles_after, 408);
+  expect_csv_matches(s.csv, r, false);
+}
+
 // The §5.5 angle rule on a surface scene (SurfaceCutter accepts it): the bell scene parsed from
 // text with "short_edge": "angle" cuts the bell in two.
 TEST(DelaunayScene, SurfaceScalpelTakesTheAngleRule) {
