@@ -273,6 +273,18 @@ TEST(DelaunaySceneBad, ThresholdsMustBePositive) {
       << error_of(angle);
 }
 
+// A step so small that the movements would not fit (nor their count an int): refused before
+// anything runs, at the step, with the count.
+TEST(DelaunaySceneBad, TooManyMovements) {
+  const std::string e = error_of(replaced(kGood2d, "\"eps_edge\": 0.3", "\"step\": 1e-9"));
+  EXPECT_EQ(e.rfind("s.json:5: /tools/0/step: the scalpel's samples joined by movements of step * "
+                    "h = ",
+                    0),
+            0u)
+      << e;
+  EXPECT_NE(e.find("more than the limit of 1e6"), std::string::npos) << e;
+}
+
 /// Writes an OFF file of `tris` over `pts` into `dir` and returns a surface scene naming it.
 std::string surface_scene(const fs::path& dir, const std::vector<Vec3>& pts,
                           const std::vector<std::array<int, 3>>& tris) {

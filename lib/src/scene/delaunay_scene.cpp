@@ -130,9 +130,42 @@ Index boundary_edges(const mesh::MeshData& m) {
       std::count_if(count.begin(), count.end(), [](const auto& e) { return e.second == 1; }));
 }
 
-/// Checks that the start mesh is what the cutter takes, at /mesh.
+/// Mean edge length h̄ of a triangle mesh (each edge once, as the cutters compute it).
+double mean_edge(const mesh::MeshData& m) {
+  std::set<std::pair<Index, Index>> edges;
+  for (Index c = 0; c < m.num_cells(); ++c)
+    for (int i = 0; i < 3; ++i) {
+      const Index a = m.cells(i, c), b = m.cells((i + 1) % 3, c);
+      edges.insert({std::min(a, b), std::max(a, b)});
+    }
+  double sum = 0;
+  for (const auto& [a, b] : edges) sum += (m.points.col(a) - m.points.col(b)).norm();
+  return edges.empty() ? 0 : sum / static_cast<double>(edges.size());
+}
+
+/// Most movements a scene may plan.
+constexpr double kMaxMovements = 1e6;
+
+/// Checks that the start mesh is what the cutter takes, at /mesh, and that the scalpel's
+/// movements (samples joined by steps of step · h̄) are at most kMaxMovements, at /tools/0/step.
 void check_mesh(const DelaunaySceneSpec& s) {
   const mesh::MeshData m = build_mesh(s.mesh, s.surface, s.file);
+  if (s.cutter == DelaunayCutterKind::kDelaunay) {
+    const double step = s.step * mean_edge(m);
+    double planned = 1;
+    auto add = [&](double length) { planned += std::max(1.0, std::ceil(length / step)); };
+    for (std::size_t i = 1; i < s.path.size(); ++i) add((s.path[i] - s.path[i - 1]).norm());
+    for (std::size_t i = 1; i < s.blade.size(); ++i)
+      add(std::max((s.blade[i].head - s.blade[i - 1].head).norm(),
+                   (s.blade[i].tail - s.blade[i - 1].tail).norm()));
+    if (!(planned <= kMaxMovements)) {
+      std::ostringstream os;
+      os << "the scalpel's samples joined by movements of step * h = " << step
+         << " m (h = the mean edge length of the mesh) take " << planned
+         << " movements, more than the limit of 1e6; expected a larger step or a shorter path";
+      fail(s.file, "/tools/0/step", os.str());
+    }
+  }
   try {
     if (s.surface) {
       delaunay::Surface check(m);
