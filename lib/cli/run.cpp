@@ -9,6 +9,7 @@
 
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
+#include <incise/scene/delaunay_scene.hpp>
 #include <incise/scene/scene_outputs.hpp>
 #include <incise/scene/scene_parser.hpp>
 #include <incise/scene/scene_runner.hpp>
@@ -33,6 +34,11 @@
 #include "commands.hpp"
 
 namespace incise::cli {
+
+// run_delaunay.cpp: a Delaunay cutting scene (scene/delaunay_scene.hpp).
+int run_delaunay_scene_command(const std::string& scene_path, const std::string& summary_json,
+                               const std::string& progress, const std::string& csv,
+                               std::ostream& out, std::ostream& err);
 
 namespace {
 
@@ -131,6 +137,15 @@ int run_scene(RunOptions& opt, Context& ctx) {
           : integer_option(opt.max_iterations, "--max-iterations", 1, 100000000);
   if (ctx.log.verbosity() == Verbosity::kQuiet) progress = "none";
   if (progress == "auto") progress = isatty(STDERR_FILENO) ? "bar" : "lines";
+
+  // A Delaunay cutting scene (thesis ch. 5) has its own parser, runner and outputs.
+  if (scene::is_delaunay_scene(scene_path)) {
+    if (memory_mb > 0 || max_iterations > 0 || !write_solution.empty() || !reference.empty())
+      throw CommandLineError(
+          "--memory-mb, --max-iterations, --write-solution and --reference are not for a "
+          "Delaunay cutting scene");
+    return run_delaunay_scene_command(scene_path, summary_json, progress, opt.csv, out, err);
+  }
 
   // Parse and build everything first: errors stop the run before any file is written.
   Timer total;

@@ -169,12 +169,12 @@ TEST(DelaunaySurfaceCutter, StraightCutAcrossTheCylinderPatchSeparatesIt) {
 /// within ±45°, turns by up to ±`turn` rad per step of `step`, and ends when it leaves
 /// [−0.2, 1.2]² or after 200 steps. Several paths cut the same surface one after the other.
 Tally random_paths(const TestSurface& shape, int meshes, int paths_per_mesh, double turn,
-                   double step, std::mt19937_64& rng) {
+                   double step, std::mt19937_64& rng, const Cutter2DOptions& options = {}) {
   std::uniform_real_distribution<double> U(0, 1);
   Tally t;
   for (int m = 0; m < meshes; ++m) {
     Surface s(shape.mesh());
-    SurfaceCutter cutter(s);
+    SurfaceCutter cutter(s, options);
     for (int p = 0; p < paths_per_mesh; ++p) {
       const int side = static_cast<int>(U(rng) * 4) % 4;
       double u = 0, v = 0.15 + 0.7 * U(rng), heading = (U(rng) - 0.5) * M_PI / 2;
@@ -600,6 +600,49 @@ TEST(DelaunaySurfaceCutter, Fig5_12RidgeEntriesAtRandomPlacesKeepTheFoldValid) {
   EXPECT_GE(8 * two_pieces, 5 * n) << all;
 }
 
+// §5.5's scale-free short-edge rule on surfaces (ShortEdgeRule::kAngle, as in Cutter2D): the
+// straight cut of StraightCutAcrossTheCylinderPatchSeparatesIt cuts the patch in two with it,
+// removing nodes; random paths over both shapes stay valid after every movement, with entries,
+// exits and removals. The rule's own decision: with min_angle just below π/3 nearly every
+// neighbour of the active node is "too close", so more nodes are removed than with the default
+// 0.35 rad on the same paths (asserted — it fails if the option is ignored).
+TEST(DelaunaySurfaceCutter, Sec5_5AngleRuleCutsSurfacesAndRemovesByAngle) {
+  auto straight = [](double min_angle) {
+    Surface s(make_surface(SurfaceShape::kCylinder, 10));
+    Cutter2DOptions o;
+    o.short_edge = ShortEdgeRule::kAngle;
+    o.min_angle = min_angle;
+    SurfaceCutter cutter(s, o);
+    Tally t;
+    for (int k = 0; k <= 70; ++k) {
+      const double u = -0.2 + 1.4 * k / 70;
+      const auto r = cutter.move_to(scalpel_at(SurfaceShape::kCylinder, u, 0.43 + 0.05 * u));
+      t.add(r);
+      EXPECT_TRUE(valid(s, generated(SurfaceShape::kCylinder))) << "after movement " << k;
+    }
+    EXPECT_EQ(t.entered, 1) << t;
+    EXPECT_EQ(t.exited, 1) << t;
+    EXPECT_EQ(test::components(s), 2) << "min_angle " << min_angle;
+    std::cout << "angle rule " << min_angle << " rad, straight cut: " << t << ", "
+              << s.num_triangles() << " triangles\n";
+    return t;
+  };
+  const Tally loose = straight(0.35), strict = straight(1.0);
+  EXPECT_GT(loose.removals, 0) << loose;
+  EXPECT_GT(strict.removals, loose.removals);
+  INCISE_SEEDED_RNG(rng, 5505);
+  Cutter2DOptions o;
+  o.short_edge = ShortEdgeRule::kAngle;
+  for (const SurfaceShape shape : {SurfaceShape::kCylinder, SurfaceShape::kBell}) {
+    const Tally t =
+        random_paths(generated(shape), test::scaled_for_checks(3, 3), 3, 0.35, 0.03, rng, o);
+    EXPECT_GT(t.entered, 0) << t;
+    EXPECT_GT(t.exited, 0) << t;
+    EXPECT_GT(t.removals, 0) << t;
+    std::cout << "angle rule, random paths: " << t << "\n";
+  }
+}
+
 TEST(DelaunaySurfaceCutter, RejectsBadScalpelsAndOptions) {
   Surface s(make_surface(SurfaceShape::kBell, 4));
   Cutter2DOptions bad;
@@ -607,6 +650,10 @@ TEST(DelaunaySurfaceCutter, RejectsBadScalpelsAndOptions) {
   EXPECT_THROW(SurfaceCutter(s, bad), ParameterError);
   Cutter2DOptions angle;
   angle.short_edge = ShortEdgeRule::kAngle;
+  EXPECT_NO_THROW(SurfaceCutter(s, angle));  // §5.5's rule (test Sec5_5AngleRule...)
+  angle.min_angle = 0;
+  EXPECT_THROW(SurfaceCutter(s, angle), ParameterError);
+  angle.min_angle = M_PI / 3;
   EXPECT_THROW(SurfaceCutter(s, angle), ParameterError);
   SurfaceCutter cutter(s);
   EXPECT_THROW((void)cutter.move_to({Vec3(0, 0, 1), Vec3(0, 0, 1)}), ParameterError);

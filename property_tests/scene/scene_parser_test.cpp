@@ -3,6 +3,7 @@
 
 #include <incise/core/error.hpp>
 #include <incise/material/material.hpp>
+#include <incise/scene/delaunay_scene.hpp>
 #include <incise/scene/scene_parser.hpp>
 
 #include <gtest/gtest.h>
@@ -427,7 +428,10 @@ TEST(SceneParser, ShippedScenesParse) {
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     if (entry.path().extension() != ".json") continue;
     SCOPED_TRACE(entry.path().string());
-    EXPECT_NO_THROW((void)incise::scene::load_scene(entry.path().string()));
+    if (incise::scene::is_delaunay_scene(entry.path().string()))  // thesis ch. 5 (own parser)
+      EXPECT_NO_THROW((void)incise::scene::load_delaunay_scene(entry.path().string()));
+    else
+      EXPECT_NO_THROW((void)incise::scene::load_scene(entry.path().string()));
     ++count;
   }
   EXPECT_GE(count, 1);

@@ -43,6 +43,24 @@ bool segment_triangle(const ScalpelSegment& s, const Vec3& a, const Vec3& b, con
   return true;
 }
 
+/// The unit normal of a star triangle of v at the crease guard's limit against the triangle
+/// beyond its opposite edge, which a step of v by a small part of d would make sharper (surface.hpp
+/// guard); zero when there is none.
+Vec3 blocking_crease_normal(const Surface& m, Index v, const Vec3& d) {
+  const Vec3 x = m.point(v) + 1e-3 * d;
+  auto cosine = [](const Vec3& p, const Vec3& q) { return p.dot(q) / (p.norm() * q.norm()); };
+  for (const ElementHandle e : m.connectivity().star(v)) {
+    auto t = m.triangle(e);
+    while (t[0] != v) t = {t[1], t[2], t[0]};
+    const ElementHandle beyond = m.left_of(t[2], t[1]);
+    if (!beyond.valid()) continue;
+    const Vec3 n = (m.point(t[1]) - x).cross(m.point(t[2]) - x), old = m.area_normal(e),
+               nb = m.area_normal(beyond);
+    if (cosine(n, nb) < std::min(0.5, cosine(old, nb))) return old.normalized();
+  }
+  return Vec3::Zero();
+}
+
 }  // namespace
 
 const char* to_string(SurfaceMoveStatus status) {
@@ -62,8 +80,9 @@ SurfaceCutter::SurfaceCutter(Surface& surface, Cutter2DOptions options)
   INCISE_CHECK_PARAM(positive(options.dilation) && options.dilation <= 0.1,
                      "SurfaceCutter: dilation must be in (0, 0.1] (a fraction of the mean edge)");
   INCISE_CHECK_PARAM(options.max_substeps >= 1, "SurfaceCutter: max_substeps must be >= 1");
-  INCISE_CHECK_PARAM(options.short_edge == ShortEdgeRule::kDistance,
-                     "SurfaceCutter: only the distance rule (kDistance) is built for surfaces");
+  INCISE_CHECK_PARAM(
+      std::isfinite(options.min_angle) && options.min_angle > 0 && options.min_angle < M_PI / 3,
+      "SurfaceCutter: min_angle must be in (0, pi/3) rad");
   const std::vector<Edge> edges = mesh_.edges();
   INCISE_CHECK_PARAM(!edges.empty(), "SurfaceCutter: the surface has no edges");
   double sum = 0;
@@ -386,10 +405,23 @@ bool SurfaceCutter::near_exit(double radius, Index& p, Index& q, Vec3& x) const 
   return pick_exit_edge(distance, radius, p, q, x);
 }
 
+bool SurfaceCutter::too_short(Index v) const {
+  const Vec3 a = mesh_.point(active_), pv = mesh_.point(v);
+  if (options_.short_edge == ShortEdgeRule::kDistance) return (pv - a).norm() < eps_edge_;
+  // §5.5 (as Cutter2D::too_short): the angles opposite the edge a–v in its triangles.
+  for (const mesh::ElementHandle e : mesh_.incident(active_, v)) {
+    Index o = -1;
+    for (const Index w : mesh_.triangle(e))
+      if (w != v && w != active_) o = w;
+    const Vec3 x = a - mesh_.point(o), y = pv - mesh_.point(o);
+    if (std::atan2(x.cross(y).norm(), x.dot(y)) < options_.min_angle) return true;
+  }
+  return false;
+}
+
 void SurfaceCutter::remove_close_nodes(SurfaceMoveReport& r) {
-  const Vec3 a = mesh_.point(active_);
   r.removals += detail::remove_close_nodes(
-      mesh_, active_, [&](Index v) { return (mesh_.point(v) - a).norm() < eps_edge_; },
+      mesh_, active_, [&](Index v) { return too_short(v); },
       [&](Index v) {
         // Restriction 2 of §5.3.2: a node next to another active node separates incisions.
         if (v == track_.left || v == track_.right) return true;  // a tip incision's entry node
@@ -401,6 +433,7 @@ void SurfaceCutter::remove_close_nodes(SurfaceMoveReport& r) {
 
 void SurfaceCutter::move_active(const Vec3& target, SurfaceMoveReport& r) {
   int stalled = 0;  // consecutive partial steps without a mesh change
+  int slides = 0;   // steps within a blocking triangle's plane (at most 4 per movement)
   for (int step = 0; step < options_.max_substeps; ++step) {
     const Vec3 a = mesh_.point(active_);
     const Vec3 d = target - a;
@@ -413,6 +446,22 @@ void SurfaceCutter::move_active(const Vec3& target, SurfaceMoveReport& r) {
     if (moved) grid_->refresh(active_);  // its triangles and edges are elsewhere now
     s *= 2;                              // the fraction taken
     ++r.substeps;
+    if (!moved && slides < 4) {
+      // A star triangle at the 60° crease limit holds the node: slide it within that
+      // triangle's plane (its crease stays), towards the scalpel as far as the guards allow.
+      const Vec3 n = blocking_crease_normal(mesh_, active_, d);
+      const Vec3 dp = d - d.dot(n) * n;
+      if (n.squaredNorm() > 0 && dp.norm() > 1e-3 * d.norm()) {
+        double f = 1;
+        for (int k = 0; k < 12 && !moved; ++k, f *= 0.5)
+          moved = mesh_.move_vertex(active_, a + f * dp);
+        if (moved) {
+          ++slides;
+          grid_->refresh(active_);
+          s = 0.5;  // partial
+        }
+      }
+    }
     if (!moved) {
       r.status = SurfaceMoveStatus::kBlocked;
       r.message =
@@ -510,14 +559,14 @@ bool SurfaceCutter::annihilate(SurfaceMoveReport& r) {
   // from another active node b (restriction 2 keeps s from being removed).
   const Vec3 pa = mesh_.point(active_);
   Index s = -1, b = -1;
-  double best = eps_edge_;
+  double best = std::numeric_limits<double>::infinity();
   for (const Index v : mesh_.neighbours(active_)) {
     if (!mesh_.is_interior_vertex(v)) continue;
     Index w = -1;
     for (const Index u : mesh_.neighbours(v))
       if (u != active_ && mesh_.is_active_node(u) && !is_sibling(u)) w = u;
     const double d = (mesh_.point(v) - pa).norm();
-    if (w >= 0 && d < best) {
+    if (w >= 0 && too_short(v) && d < best) {
       best = d;
       s = v;
       b = w;

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "json_reader.hpp"
+#include "scene_parts.hpp"
 
 namespace incise::scene {
 
@@ -163,6 +164,10 @@ void validate_material(const JsonObject& o, const material::Parameters& p) {
   }
 }
 
+}  // namespace
+
+namespace detail {
+
 // `rho_reason` is non-empty when the scene needs a density (gravity, dynamic solver): then
 // "rho" is required and must be > 0.
 MaterialSpec parse_material(JsonObject o, const std::string& rho_reason) {
@@ -195,6 +200,10 @@ MaterialSpec parse_material(JsonObject o, const std::string& rho_reason) {
   o.finish();
   return m;
 }
+
+}  // namespace detail
+
+namespace {
 
 LoadSpec parse_load(const Json& j, const std::string& path, const std::string& file) {
   JsonObject o(j, path, file, typed_object("load", kLoadKindNames));
@@ -632,8 +641,8 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
   }
   if (dynamic && rho_reason.empty())
     rho_reason = "the \"dynamic-ss22\" solver needs a density for the lumped mass";
-  s.material =
-      parse_material(root.object("material", "a material object {\"model\": ...}"), rho_reason);
+  s.material = detail::parse_material(root.object("material", "a material object {\"model\": ...}"),
+                                      rho_reason);
   if (s.solver.method == SolverSpec::Method::kCG &&
       s.material.model != material::LinearElastic::kName)
     fail(file, "/solver/method",

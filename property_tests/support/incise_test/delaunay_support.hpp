@@ -3,6 +3,7 @@
 // verification/papers/nienhuys2003_ch5): validity with orientation, components, and moving a
 // Cutter2D along a polyline in bounded steps.
 #include <incise/delaunay/cutter2d.hpp>
+#include <incise/delaunay/scalpel_path.hpp>
 #include <incise/mesh/validate.hpp>
 
 #include <gtest/gtest.h>
@@ -48,21 +49,15 @@ int components(const Mesh& t) {
   return n;
 }
 
-/// Moves the scalpel along the polyline `path` in steps of at most `step` (m); validates after
-/// every movement. Returns the reports.
+/// Moves the scalpel along the polyline `path` in steps of at most `step` (m)
+/// (delaunay::movement_points). Returns the reports.
 inline std::vector<delaunay::CutMove2DReport> cut_along(delaunay::Cutter2D& cutter,
                                                         delaunay::Triangulation& t,
                                                         const std::vector<Vec2>& path,
                                                         double step) {
+  (void)t;
   std::vector<delaunay::CutMove2DReport> out;
-  out.push_back(cutter.move_to(path[0]));
-  for (size_t i = 1; i < path.size(); ++i) {
-    const Vec2 a = path[i - 1], b = path[i];
-    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step)));
-    for (int k = 1; k <= n; ++k) {
-      out.push_back(cutter.move_to(a + (b - a) * (static_cast<double>(k) / n)));
-    }
-  }
+  for (const Vec2& x : delaunay::movement_points(path, step)) out.push_back(cutter.move_to(x));
   return out;
 }
 

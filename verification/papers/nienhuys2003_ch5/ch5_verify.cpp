@@ -7,6 +7,7 @@
 // SVG pictures of the cut meshes.
 #include <incise/delaunay/cutter2d.hpp>
 #include <incise/delaunay/subdivision.hpp>
+#include <incise/delaunay/svg.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise_test/delaunay_support.hpp>
 
@@ -120,20 +121,7 @@ void write_svg(const Triangulation& t, const std::vector<Vec2>& path, double n,
   const char* dir = std::getenv("INCISE_CH5_SVG");
   if (dir == nullptr || *dir == '\0') return;
   std::ofstream f(std::string(dir) + "/" + name + ".svg");
-  const double s = 400.0 / (n + 2);
-  auto X = [&](const Vec2& p) { return s * (p.x() + 1); };
-  auto Y = [&](const Vec2& p) { return s * (n + 1 - p.y()); };
-  f << "<svg xmlns='http://www.w3.org/2000/svg' width='400' height='400'>\n"
-    << "<rect width='400' height='400' fill='white'/>\n";
-  for (const auto& e : t.connectivity().elements()) {
-    const auto tri = t.triangle(e);
-    f << "<polygon fill='#dde8f4' stroke='#345' stroke-width='0.6' points='";
-    for (const Index v : tri) f << X(t.point(v)) << "," << Y(t.point(v)) << " ";
-    f << "'/>\n";
-  }
-  f << "<polyline fill='none' stroke='#c22' stroke-width='1' stroke-dasharray='3,2' points='";
-  for (const Vec2& p : path) f << X(p) << "," << Y(p) << " ";
-  f << "'/>\n</svg>\n";
+  f << mesh_svg(t, path, SvgFrame{Vec2::Zero(), n, 1.0});  // the square [-1, n + 1]²
 }
 
 struct CutResult {

@@ -254,9 +254,11 @@ TEST(Chapter5, Fig5_19SelfIntersectingPathOnTheBell) {
   // Fig. 5.19's last image ("more self-intersecting paths"), a guessed trajectory: the trochoid
   // x = −1.2 + 2.4u + 0.6 sin 2πu, y = 0.1 − 0.6 cos 2πu (u ∈ [0, 1]) enters at (−1.2, −0.5),
   // loops once over the bell's top (x runs backwards for u near ½, so the path crosses itself)
-  // and leaves at (1.2, −0.5). Measured (README, reported): the incision is blocked on the
-  // bell's top and lost before the path reaches its crossing point — only the entry and
-  // validity are asserted.
+  // and leaves at (1.2, −0.5). The incision runs the loop, reaches its own slit at the crossing
+  // point (an exit into the slit), enters again beyond it and leaves at the boundary: the loop's
+  // inside is cut out, three pieces (asserted). Before the slide of SurfaceCutter::move_active
+  // (a node held at the 60° crease limit moves within that triangle's plane) it was blocked on
+  // the bell's top and lost before the crossing point (README).
   Surface s(make_surface(SurfaceShape::kBell, 14));
   SurfaceCutter cutter(s);
   std::vector<Vec3> drawn;
@@ -272,7 +274,10 @@ TEST(Chapter5, Fig5_19SelfIntersectingPathOnTheBell) {
   write_svg(s, drawn, "fig5_19_bell_loop");
   std::cout << "Fig. 5.19  loop: " << s.num_triangles() << " triangles (" << test::components(s)
             << " pieces), " << t << "; " << angles(s) << "\n";
-  EXPECT_GE(t.entered, 1) << t;
+  EXPECT_EQ(t.entered, 2) << t;
+  EXPECT_EQ(t.exited, 2) << t;
+  EXPECT_EQ(t.blocked + t.lost, 0) << t;
+  EXPECT_EQ(test::components(s), 3);
 }
 
 TEST(Chapter5, Fig5_18TurnedScalpelBranchesOnACoarseFold) {

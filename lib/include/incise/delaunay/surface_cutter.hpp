@@ -22,7 +22,9 @@
 ///  2. per sub-movement, a sweep that crosses a boundary edge opposite the active node (eq. (5.1))
 ///     is an exit there; otherwise the scalpel segment is intersected with the active triangles
 ///     (the star of the active node) and the active node moves to the intersection — in halving
-///     steps when a star triangle would fold or flatten (surface.hpp guards), with the active
+///     steps when a star triangle would fold or flatten (surface.hpp guards); a node held by a
+///     star triangle at the 60° crease limit (every step, however small, would sharpen it)
+///     slides within that triangle's plane instead (at most 4 slides per movement), with the active
 ///     triangles legalized by the unfolded criterion and interior nodes closer than ε_edge
 ///     removed by ear flips (Fig. 5.10) after each step — but not a node next to another active
 ///     node (restriction 2);
@@ -109,9 +111,12 @@ struct [[nodiscard]] SurfaceMoveReport
 class SurfaceCutter {
  public:
   /// Takes the surface to cut; thresholds from `options` (the fields edge, entry, exit,
-  /// dilation, max_substeps; short_edge must be kDistance) times its mean edge length. Throws
-  /// ParameterError for thresholds ≤ 0 or non-finite, dilation outside (0, 0.1],
-  /// max_substeps < 1, or short_edge = kAngle.
+  /// dilation, max_substeps) times its mean edge length. With short_edge = kAngle (§5.5's
+  /// scale-free rule, as in Cutter2D) an interior node v next to the active node a is "too
+  /// close" — removed (Fig. 5.10) or, next to another active node, the node of an annihilation
+  /// (Fig. 5.13) — when an angle opposite the edge a–v in one of its triangles (in 3D) is below
+  /// min_angle, instead of when |a − v| < ε_edge. Throws ParameterError for thresholds ≤ 0 or
+  /// non-finite, dilation outside (0, 0.1], max_substeps < 1, or min_angle outside (0, π/3).
   explicit SurfaceCutter(Surface& surface, Cutter2DOptions options = {});
   ~SurfaceCutter();
   SurfaceCutter(const SurfaceCutter&) = delete;
@@ -179,6 +184,7 @@ class SurfaceCutter {
   double d_max(const ScalpelSegment& s) const;
   void move_active(const Vec3& target, SurfaceMoveReport& r);
   void remove_close_nodes(SurfaceMoveReport& r);
+  bool too_short(Index v) const;  ///< the edge active–v is short (ε_edge or the §5.5 angle)
   void fix_up(SurfaceMoveReport& r);
   void split_incision(SurfaceMoveReport& r);
   bool exit_at(Index p, Index q, const Vec3& x, SurfaceMoveReport& r);
