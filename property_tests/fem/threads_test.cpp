@@ -1,7 +1,7 @@
 /// Element loops on T threads (issue 19; core/parallel.hpp, ElasticProblem): energy, gradient
 /// (alone and fused with the energy), K·d, the fused gradient+energy+product, the diagonal and
 /// the assembled tangent are bitwise equal (memcmp) for T = 1, 2, 3, 4, 7 on a random
-/// deformation of a 3,072-tet box, for every registered material; a whole nonlinear-CG solve
+/// deformation of a 4,800-tet box, for every registered material; a whole nonlinear-CG solve
 /// takes identical iterates and iteration counts for every T; the thread-count parser names
 /// INCISE_THREADS in its errors; the chunk schedule never lets two conflicting chunks share a
 /// colour. Labelled `threads`: ci/test.sh runs it under ThreadSanitizer.
@@ -41,15 +41,15 @@ incise::material::Parameters test_parameters() {
   return p;
 }
 
-/// 8 × 8 × 8 cubes × 6 = 3,072 tetrahedra: 12 chunks of kElementChunk, several per colour.
+/// 10 × 10 × 8 cubes × 6 = 4,800 tetrahedra: above the one-chunk size (4,096), 19 chunks of
+/// kElementChunk, several per colour.
 incise::mesh::MeshData test_box() {
-  return incise::mesh::make_box(8, 8, 8, 0.1, 0.1, 0.1);
+  return incise::mesh::make_box(10, 10, 8, 0.1, 0.1, 0.08);
 }
 
 bool same_bits(const VecX& a, const VecX& b) {
   return a.size() == b.size() &&
-         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<std::size_t>(a.size())) ==
-             0;
+         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<std::size_t>(a.size())) == 0;
 }
 
 bool same_bits(double a, double b) {
@@ -205,6 +205,12 @@ TEST(Threads, ThreadCountParserNamesTheVariable) {
   }
   ElasticProblem p(test_box(), Material("linear", test_parameters()));
   EXPECT_THROW(p.set_threads(0), incise::ParameterError);
+  // Up to 4,096 elements the loops are one chunk (the serial order); above, chunks of 256.
+  ElasticProblem small(incise::mesh::make_box(8, 8, 8, 0.1, 0.1, 0.1),
+                       Material("linear", test_parameters()));
+  EXPECT_EQ(small.chunk_schedule().num_chunks(), 1);
+  EXPECT_EQ(p.chunk_schedule().num_chunks(),
+            (4800 + incise::fem::kElementChunk - 1) / incise::fem::kElementChunk);
   EXPECT_THROW(p.set_threads(incise::kMaxThreads + 1), incise::ParameterError);
 }
 

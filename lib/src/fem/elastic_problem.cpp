@@ -22,6 +22,18 @@ using L4 = Lanes4;
 /// Ints per element in the scatter map (ElasticProblem::build_pattern).
 constexpr int kScatterStride = 20;
 
+/// A mesh of at most this many elements is one chunk: its loops run in the plain sweep order on
+/// the calling thread (a sweep of 4,096 tets takes ≈ 0.2–0.5 ms, about the cost of waking a
+/// worker a few times; and the sums are those of the serial loop before issue 19, which the
+/// round-off-sensitive reproductions of small meshes were recorded with, e.g.
+/// Nienhuys2003Ch3.LargeDiagonalCutInTheCube's case (b), docs/fem_performance.md).
+constexpr Index kSingleChunkElements = 4096;
+
+/// Elements per chunk of a mesh of m elements (depends on m only, never on the thread count).
+Index chunk_elements(Index m) {
+  return m <= kSingleChunkElements ? std::max<Index>(m, 1) : kElementChunk;
+}
+
 /// One element (T = double) or a block of four consecutive elements in SIMD lanes (T = Lanes4)
 /// as a kernel sees it: reference data, gather of nodal values, and scatter-add of element
 /// results into global vectors and the assembled matrix. ElasticProblem::sweep() hands either
@@ -324,15 +336,15 @@ ElasticProblem::ElasticProblem(const mesh::MeshData& mesh, const material::Mater
 }
 
 void ElasticProblem::build_schedule() {
-  // Chunks of kElementChunk consecutive sweep positions; the resources a chunk touches are its
-  // elements' nodes (every scatter — nodal vectors, diagonal, matrix entry (a, b) — goes to
-  // DOFs or DOF pairs of one element's nodes, so chunks without a common node never write a
-  // common value).
+  // Chunks of chunk_elements(m) consecutive sweep positions (one chunk up to 4,096 elements); the
+  // resources a chunk touches are its elements' nodes (every scatter — nodal vectors, diagonal,
+  // matrix entry (a, b) — goes to DOFs or DOF pairs of one element's nodes, so chunks without a
+  // common node never write a common value).
   const Index m = num_elements();
-  const Index nc = (m + kElementChunk - 1) / kElementChunk;
+  const Index chunk_ = chunk_elements(m);
+  const Index nc = (m + chunk_ - 1) / chunk_;
   std::vector<Index> start(static_cast<std::size_t>(nc) + 1);
-  for (Index c = 0; c <= nc; ++c)
-    start[static_cast<std::size_t>(c)] = 4 * std::min(m, c * kElementChunk);
+  for (Index c = 0; c <= nc; ++c) start[static_cast<std::size_t>(c)] = 4 * std::min(m, c * chunk_);
   schedule_ = make_chunk_schedule(start, sweep_cells_, num_nodes());
   free_schedule_ = ChunkSchedule{};
   free_schedule_.colour.assign(static_cast<std::size_t>(nc), 0);
@@ -462,9 +474,10 @@ bool ElasticProblem::sweep(bool scatters, double& total, Visit&& visit) const {
   const int* scatter = scatter_.empty() ? nullptr : scatter_.data();
   const Index m = num_elements();
   const int nc = schedule_.num_chunks();
+  const Index chunk_ = chunk_elements(m);
   std::vector<double> partial(static_cast<std::size_t>(nc), 0.0);
   std::vector<char> ok(static_cast<std::size_t>(nc), 1);
-  // Chunk c: sweep positions [c·kElementChunk, min((c+1)·kElementChunk, m)); whole blocks of
+  // Chunk c: sweep positions [c·chunk_, min((c+1)·chunk_, m)); whole blocks of
   // four in SIMD lanes, the tail (m mod 4, last chunk only) one by one.
   const auto chunk = [&](int c) {
     Scratch<double> w1;
@@ -477,8 +490,8 @@ bool ElasticProblem::sweep(bool scatters, double& total, Visit&& visit) const {
                                     scatter ? scatter + kScatterStride * i : nullptr),
                    w1, sum);
     };
-    const Index begin = c * kElementChunk;
-    const Index end = std::min(m, begin + kElementChunk);
+    const Index begin = c * chunk_;
+    const Index end = std::min(m, begin + chunk_);
     const Index kb = begin / 4;
     const Index ke = end / 4;
     for (Index k = kb; k < ke; ++k) {

@@ -81,8 +81,8 @@ mesh::CellMatrix boundary_faces_on_plane(const Eigen::Matrix3Xd& points,
 double add_surface_traction(const Eigen::Matrix3Xd& points, const mesh::CellMatrix& faces,
                             const Vec3& traction, VecX& f);
 
-/// Elements per chunk of the element loops (a multiple of 4; docs/fem_performance.md "Element
-/// loops on T threads"): the partition depends on the mesh only, never on the thread count.
+/// Elements per chunk of the element loops (a multiple of 4; a mesh of ≤ 4,096 elements is one
+/// chunk; docs/fem_performance.md "Element loops on T threads"): never depends on the threads.
 inline constexpr Index kElementChunk = 256;
 
 /// Elastic body made of linear tetrahedra of one material. See file comment for conventions.
