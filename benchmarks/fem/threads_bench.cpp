@@ -52,7 +52,8 @@ void sweep_benchmark(benchmark::State& state, const std::string& name, Sweep swe
     benchmark::DoNotOptimize(e);
     benchmark::ClobberMemory();
   }
-  const double tets = static_cast<double>(pb.num_elements()) * static_cast<double>(state.iterations());
+  const double tets =
+      static_cast<double>(pb.num_elements()) * static_cast<double>(state.iterations());
   state.counters["tets_per_s"] = benchmark::Counter(tets, benchmark::Counter::kIsRate);
   state.counters["chunks"] = pb.chunk_schedule().num_chunks();
   state.counters["colours"] = pb.chunk_schedule().num_colours;
