@@ -8,6 +8,7 @@
 //   box (tangent kernels + scatter map);
 // - MatrixFree/<model>: ElasticProblem::hessian_product (K(u)·d) on the same box;
 // - Gradient/<model>: ElasticProblem::gradient on the same box.
+// The global loops run on one thread here (set_threads(1)); fem_threads_bench measures T threads.
 // Counters: tets_per_s, counted MFLOP/s (element counts from the counting scalar × tets/s),
 // % of the vector-add baseline measured in this run (thesis Table 4.5) and % of the nominal FMA
 // peak of one core.
@@ -201,6 +202,7 @@ VecX box_state(const fem::ElasticProblem& pb) {
 
 void assembly_benchmark(benchmark::State& state, const std::string& name) {
   fem::ElasticProblem pb(box(), material::Material(name, bench_parameters()));
+  pb.set_threads(1);  // one core; threads: fem_threads_bench
   const VecX u = box_state(pb);
   if (pb.assemble_tangent(u) != EvalStatus::kOk) state.SkipWithError("inverted state");
   for (auto _ : state) {
@@ -214,6 +216,7 @@ void assembly_benchmark(benchmark::State& state, const std::string& name) {
 
 void matrix_free_benchmark(benchmark::State& state, const std::string& name) {
   fem::ElasticProblem pb(box(), material::Material(name, bench_parameters()));
+  pb.set_threads(1);  // one core; threads: fem_threads_bench
   const VecX u = box_state(pb);
   const VecX d = VecX::Ones(pb.size());
   VecX out;
@@ -227,6 +230,7 @@ void matrix_free_benchmark(benchmark::State& state, const std::string& name) {
 
 void gradient_benchmark(benchmark::State& state, const std::string& name) {
   fem::ElasticProblem pb(box(), material::Material(name, bench_parameters()));
+  pb.set_threads(1);  // one core; threads: fem_threads_bench
   const VecX u = box_state(pb);
   VecX g;
   for (auto _ : state) {
@@ -241,6 +245,7 @@ void gradient_benchmark(benchmark::State& state, const std::string& name) {
 /// matrix-free product.
 void assembled_product_benchmark(benchmark::State& state) {
   fem::ElasticProblem pb(box(), material::Material("neohookean", bench_parameters()));
+  pb.set_threads(1);
   const VecX u = box_state(pb);
   if (pb.assemble_tangent(u) != EvalStatus::kOk) state.SkipWithError("inverted state");
   const VecX d = VecX::Ones(pb.size());

@@ -376,6 +376,9 @@ TEST(SceneNeedleBad, SlabSceneRefusesTetrahedralParts) {
 
 TEST(SceneNeedleBad, SlabValues) {
   Json j = small_needle_scene();
+  j["solver"]["threads"] = 2;
+  expect_error(j, "/solver/threads", "not allowed here: a needle scene rebuilds its problem");
+  j = small_needle_scene();
   j["mesh"]["thickness"] = -0.01;
   expect_error(j, "/mesh/thickness", "expected a number > 0, got -0.01");
   j = small_needle_scene();

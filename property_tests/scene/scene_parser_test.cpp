@@ -517,6 +517,23 @@ TEST(SceneParserBad, RefactorAtMOnANonAugmentedSolver) {
       << e;
 }
 
+// threads (docs/scenes.md: the element loops' thread count, fem::ElasticProblem::set_threads).
+TEST(SceneParser, ThreadsParses) {
+  Json j = valid_scene();
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.threads, 0);  // default: 0 = all cores
+  j["solver"]["threads"] = 3;
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.threads, 3);
+}
+
+TEST(SceneParserBad, ThreadsOutOfRange) {
+  for (const Json& bad : {Json(0), Json(257), Json(1.5), Json("2")}) {
+    Json j = valid_scene();
+    j["solver"]["threads"] = bad;
+    const std::string e = error_of(j);
+    EXPECT_NE(e.find("/solver/threads: expected an integer in [1, 256]"), std::string::npos) << e;
+  }
+}
+
 // solve_threads (docs/scenes.md, interactive cutting run; AugmentedOptions::solve_threads).
 TEST(SceneParser, SolveThreadsParses) {
   Json j = augmented_cut_scene();

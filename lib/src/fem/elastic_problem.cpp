@@ -22,6 +22,18 @@ using L4 = Lanes4;
 /// Ints per element in the scatter map (ElasticProblem::build_pattern).
 constexpr int kScatterStride = 20;
 
+/// A mesh of at most this many elements is one chunk: its loops run in the plain sweep order on
+/// the calling thread (a sweep of 4,096 tets takes ≈ 0.2–0.5 ms, about the cost of waking a
+/// worker a few times; and the sums are those of the serial loop before issue 19, which the
+/// round-off-sensitive reproductions of small meshes were recorded with, e.g.
+/// Nienhuys2003Ch3.LargeDiagonalCutInTheCube's case (b), docs/fem_performance.md).
+constexpr Index kSingleChunkElements = 4096;
+
+/// Elements per chunk of a mesh of m elements (depends on m only, never on the thread count).
+Index chunk_elements(Index m) {
+  return m <= kSingleChunkElements ? std::max<Index>(m, 1) : kElementChunk;
+}
+
 /// One element (T = double) or a block of four consecutive elements in SIMD lanes (T = Lanes4)
 /// as a kernel sees it: reference data, gather of nodal values, and scatter-add of element
 /// results into global vectors and the assembled matrix. ElasticProblem::sweep() hands either
@@ -319,6 +331,33 @@ ElasticProblem::ElasticProblem(const mesh::MeshData& mesh, const material::Mater
   f_ext_ = VecX::Zero(size());
   rebuild_mass();
   element_flops_ = element_flops(material_);
+  threads_ = default_thread_count();
+  build_schedule();
+}
+
+void ElasticProblem::build_schedule() {
+  // Chunks of chunk_elements(m) consecutive sweep positions (one chunk up to 4,096 elements); the
+  // resources a chunk touches are its elements' nodes (every scatter — nodal vectors, diagonal,
+  // matrix entry (a, b) — goes to DOFs or DOF pairs of one element's nodes, so chunks without a
+  // common node never write a common value).
+  const Index m = num_elements();
+  const Index chunk_ = chunk_elements(m);
+  const Index nc = (m + chunk_ - 1) / chunk_;
+  std::vector<Index> start(static_cast<std::size_t>(nc) + 1);
+  for (Index c = 0; c <= nc; ++c) start[static_cast<std::size_t>(c)] = 4 * std::min(m, c * chunk_);
+  schedule_ = make_chunk_schedule(start, sweep_cells_, num_nodes());
+  free_schedule_ = ChunkSchedule{};
+  free_schedule_.colour.assign(static_cast<std::size_t>(nc), 0);
+  free_schedule_.order.resize(static_cast<std::size_t>(nc));
+  for (Index c = 0; c < nc; ++c) free_schedule_.order[static_cast<std::size_t>(c)] = c;
+  free_schedule_.pred_start.assign(static_cast<std::size_t>(nc) + 1, 0);
+  free_schedule_.num_colours = nc > 0 ? 1 : 0;
+}
+
+void ElasticProblem::set_threads(int threads) {
+  INCISE_CHECK_PARAM(threads >= 1 && threads <= kMaxThreads,
+                     "ElasticProblem::set_threads: threads must be from 1 to 256");
+  threads_ = threads;
 }
 
 void ElasticProblem::rebuild_mass() {
@@ -430,33 +469,59 @@ double ElasticProblem::volume() const {
 }
 
 template <class Visit>
-bool ElasticProblem::sweep(Visit&& visit) const {
+bool ElasticProblem::sweep(bool scatters, double& total, Visit&& visit) const {
   const Index* cells = sweep_cells_.data();
   const int* scatter = scatter_.empty() ? nullptr : scatter_.data();
-  Scratch<double> w1;
-  Scratch<L4> w4;
-  // Position i in the sweep order (order_) is element order_[i].
-  const auto element = [&](Index pos) {
-    const std::size_t i = static_cast<std::size_t>(pos);
-    return visit(Elements<double>(refs_[static_cast<std::size_t>(order_[i])], cells + 4 * i,
-                                  scatter ? scatter + kScatterStride * i : nullptr),
-                 w1);
+  const Index m = num_elements();
+  const int nc = schedule_.num_chunks();
+  const Index chunk_ = chunk_elements(m);
+  std::vector<double> partial(static_cast<std::size_t>(nc), 0.0);
+  std::vector<char> ok(static_cast<std::size_t>(nc), 1);
+  // Chunk c: sweep positions [c·chunk_, min((c+1)·chunk_, m)); whole blocks of
+  // four in SIMD lanes, the tail (m mod 4, last chunk only) one by one.
+  const auto chunk = [&](int c) {
+    Scratch<double> w1;
+    Scratch<L4> w4;
+    double& sum = partial[static_cast<std::size_t>(c)];
+    // Position i in the sweep order (order_) is element order_[i].
+    const auto element = [&](Index pos) {
+      const std::size_t i = static_cast<std::size_t>(pos);
+      return visit(Elements<double>(refs_[static_cast<std::size_t>(order_[i])], cells + 4 * i,
+                                    scatter ? scatter + kScatterStride * i : nullptr),
+                   w1, sum);
+    };
+    const Index begin = c * chunk_;
+    const Index end = std::min(m, begin + chunk_);
+    const Index kb = begin / 4;
+    const Index ke = end / 4;
+    for (Index k = kb; k < ke; ++k) {
+      const std::size_t i = static_cast<std::size_t>(k);
+      const RefBlock& rb = blocks_[i];
+      if (visit(Elements<L4>(rb.z_inv, rb.b, rb.volume, cells + 16 * i,
+                             scatter ? scatter + 4 * kScatterStride * i : nullptr),
+                w4, sum))
+        continue;
+      // Some lane is inverted: the block had no side effects; redo its elements one by one.
+      for (Index e = 4 * k; e < 4 * k + 4; ++e)
+        if (!element(e)) {
+          ok[static_cast<std::size_t>(c)] = 0;
+          return;
+        }
+    }
+    for (Index e = 4 * ke; e < end; ++e)
+      if (!element(e)) {
+        ok[static_cast<std::size_t>(c)] = 0;
+        return;
+      }
   };
-  const Index nb = num_full_blocks();
-  for (Index k = 0; k < nb; ++k) {
-    const std::size_t i = static_cast<std::size_t>(k);
-    const RefBlock& rb = blocks_[i];
-    if (visit(Elements<L4>(rb.z_inv, rb.b, rb.volume, cells + 16 * i,
-                           scatter ? scatter + 4 * kScatterStride * i : nullptr),
-              w4))
-      continue;
-    // Some lane is inverted: the block had no side effects; redo its elements one by one.
-    for (Index e = 4 * k; e < 4 * k + 4; ++e)
-      if (!element(e)) return false;
+  run_chunks(scatters ? schedule_ : free_schedule_, threads_, chunk);
+  total = 0.0;
+  bool all_ok = true;
+  for (int c = 0; c < nc; ++c) {
+    total += partial[static_cast<std::size_t>(c)];
+    all_ok = all_ok && ok[static_cast<std::size_t>(c)] != 0;
   }
-  for (Index e = 4 * nb; e < num_elements(); ++e)
-    if (!element(e)) return false;
-  return true;
+  return all_ok;
 }
 
 EvalStatus ElasticProblem::energy(const VecX& u, double& energy) {
@@ -464,12 +529,12 @@ EvalStatus ElasticProblem::energy(const VecX& u, double& energy) {
   const material::Lame p = material_.lame();
   double sum = 0.0;
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep([&](const auto& el, auto& w) {
+    return sweep(false, sum, [&](const auto& el, auto& w, double& part) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       T e(0);
       if (!TetKernel<decltype(m), T>::energy(p, el.z_inv(), el.volume(), w.x, e)) return false;
-      sum += el.sum(e);
+      part += el.sum(e);
       return true;
     });
   });
@@ -487,8 +552,9 @@ EvalStatus ElasticProblem::internal_forces(const VecX& u, VecX& f_int) {
   const material::Lame p = material_.lame();
   f_int.setZero(size());
   double* out = f_int.data();
+  double unused = 0.0;  // no energy in this sweep
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep([&](const auto& el, auto& w) {
+    return sweep(true, unused, [&](const auto& el, auto& w, double& /*part*/) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       if (!TetKernel<decltype(m), T>::forces(p, el.z_inv(), el.b(), w.x, w.q)) return false;
@@ -518,7 +584,7 @@ EvalStatus ElasticProblem::gradient(const VecX& u, VecX& g, double* energy_out) 
   double* out = g.data();
   double sum = 0.0;
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep([&](const auto& el, auto& w) {
+    return sweep(true, sum, [&](const auto& el, auto& w, double& part) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       T e(0);
@@ -526,7 +592,7 @@ EvalStatus ElasticProblem::gradient(const VecX& u, VecX& g, double* energy_out) 
                                                         w.q, e))
         return false;
       el.add(w.q, out);
-      sum += el.sum(e);
+      part += el.sum(e);
       return true;
     });
   });
@@ -552,7 +618,7 @@ EvalStatus ElasticProblem::gradient_energy_product(const VecX& u, const VecX& d,
   double* dst = out.data();
   double sum = 0.0;
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep([&](const auto& el, auto& w) {
+    return sweep(true, sum, [&](const auto& el, auto& w, double& part) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       el.gather(d.data(), w.d);
@@ -562,7 +628,7 @@ EvalStatus ElasticProblem::gradient_energy_product(const VecX& u, const VecX& d,
         return false;
       el.add(w.q, gq);
       el.add(w.dq, dst);
-      sum += el.sum(e);
+      part += el.sum(e);
       return true;
     });
   });
@@ -585,8 +651,9 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
   const material::Lame p = material_.lame();
   out.setZero(size());
   double* dst = out.data();
+  double unused = 0.0;  // no energy in this sweep
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep([&](const auto& el, auto& w) {
+    return sweep(true, unused, [&](const auto& el, auto& w, double& /*part*/) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       el.gather(d.data(), w.d);
@@ -606,8 +673,9 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
 template <class Sink>
 bool ElasticProblem::tangent_sweep(const VecX& u, Sink&& sink) const {
   const material::Lame p = material_.lame();
+  double unused = 0.0;  // no energy in this sweep
   return material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep([&](const auto& el, auto& w) {
+    return sweep(true, unused, [&](const auto& el, auto& w, double& /*part*/) {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       if (!TetKernel<decltype(m), T>::tangent(p, el.z_inv(), el.b(), el.volume(), w.x, w.k))

@@ -615,6 +615,7 @@ BuiltScene build_scene(const SceneSpec& spec) {
   {
     Timer tp;
     b.problem = std::make_unique<fem::ElasticProblem>(b.mesh, make_material(spec.material));
+    if (spec.solver.threads > 0) b.problem->set_threads(spec.solver.threads);
     b.problem->fix_nodes(b.fixed_nodes);
     for (Index i = 0; i < n; ++i) {
       const Vec3 f = b.external_force.segment<3>(3 * i);
@@ -627,7 +628,8 @@ BuiltScene build_scene(const SceneSpec& spec) {
     const auto& ef = b.problem->element_flop_counts();
     b.record("elastic problem: material \"" + spec.material.model + "\", " + std::to_string(m) +
                  " element references; counted flops/element: force " + std::to_string(ef.force) +
-                 ", force+K.d " + std::to_string(ef.force_and_product) +
+                 ", force+K.d " + std::to_string(ef.force_and_product) + "; element loops on " +
+                 std::to_string(b.problem->threads()) + " thread(s)" +
                  (interactive_cut ? " (uncut body: gives the load vector; the augmented run "
                                     "assembles its own stiffness)"
                                   : ""),

@@ -1,6 +1,7 @@
 #include <incise/scene/scene_parser.hpp>
 
 #include <incise/core/error.hpp>
+#include <incise/core/parallel.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/slab2d.hpp>
 
@@ -241,6 +242,13 @@ SolverSpec parse_solver(JsonObject o, bool slab) {
              std::string(to_string(s.method)) + "\"");
   s.tolerance = o.number("tolerance", Range{0.0, 1.0, true, true}, 1e-8);
   s.max_iterations = o.integer("max_iterations", 1, kMaxIterations, 10000);
+  if (slab) {
+    o.forbid("threads",
+             "a needle scene rebuilds its problem at every update with the default thread count "
+             "(3D: INCISE_THREADS, else all cores; plane-stress loops: one thread)");
+  } else {
+    s.threads = o.integer("threads", 1, kMaxThreads, 0);
+  }
   if (slab) {
     o.forbid("time_budget",
              "a needle run has no wall-clock budget (max_iterations caps each solve)");

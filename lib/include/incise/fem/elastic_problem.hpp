@@ -15,6 +15,7 @@
 /// symmetric positive definite whenever the free block is. With kIdentity, solving K x = P r for
 /// a projected right-hand side gives x with zero fixed components.
 
+#include <incise/core/parallel.hpp>
 #include <incise/core/problem.hpp>
 #include <incise/core/simd_scalar.hpp>
 #include <incise/core/types.hpp>
@@ -80,9 +81,21 @@ mesh::CellMatrix boundary_faces_on_plane(const Eigen::Matrix3Xd& points,
 double add_surface_traction(const Eigen::Matrix3Xd& points, const mesh::CellMatrix& faces,
                             const Vec3& traction, VecX& f);
 
+/// Elements per chunk of the element loops (a multiple of 4; a mesh of ≤ 4,096 elements is one
+/// chunk; docs/fem_performance.md "Element loops on T threads"): never depends on the threads.
+inline constexpr Index kElementChunk = 256;
+
 /// Elastic body made of linear tetrahedra of one material. See file comment for conventions.
 /// Element loops visit the elements in an internal order (sorted by smallest node index, for
 /// memory locality) four at a time; element and node numbering seen by callers are the mesh's.
+///
+/// Threads: every element loop (energy, gradient, fused gradient+energy, K·d, the fused
+/// gradient+energy+product, the diagonal, tangent assembly) runs on threads() threads
+/// (core/parallel.hpp). The sweep order is cut into fixed chunks of kElementChunk elements;
+/// chunks sharing a node are coloured apart and run in colour order, so every nodal value and
+/// matrix entry is summed in one fixed order (colour, then sweep order inside the chunk), and the
+/// energy is the sum of per-chunk partial sums in chunk order. Every result is therefore bitwise
+/// the same for every thread count (test fem_threads_test).
 class ElasticProblem : public Problem {
  public:
   /// Takes a 3D tetrahedral mesh (reference configuration). Throws ParameterError when the
@@ -153,6 +166,14 @@ class ElasticProblem : public Problem {
   /// Elastic forces only: f_int = Σ q_τ(u) (N).
   [[nodiscard]] EvalStatus internal_forces(const VecX& u, VecX& f_int);
 
+  // --- threads --------------------------------------------------------------------------
+  /// Threads of the element loops, 1 to kMaxThreads (ParameterError otherwise). Default:
+  /// default_thread_count() (INCISE_THREADS, else all cores). Results do not depend on it.
+  void set_threads(int threads);
+  int threads() const { return threads_; }
+  /// The fixed chunk schedule of the element loops (for tests and reports).
+  const ChunkSchedule& chunk_schedule() const { return schedule_; }
+
   // --- access ---------------------------------------------------------------------------
   Index num_nodes() const { return static_cast<Index>(points_.cols()); }
   Index num_elements() const { return static_cast<Index>(cells_.cols()); }
@@ -175,12 +196,16 @@ class ElasticProblem : public Problem {
     Mat3T<Lanes4> b;
     Lanes4 volume;
   };
-  /// The one element loop behind every evaluation: calls `visit(el)` for each block of four
-  /// elements (el: a Lanes4 view, elastic_problem.cpp `Elements`), and for the elements of a
-  /// block whose visit returned false (some lane inverted; the visit must not have had side
-  /// effects) and for the tail, with a double view. Returns false when a double visit fails.
+  /// The one element loop behind every evaluation: calls `visit(el, w, sum)` for each block of
+  /// four elements (el: a Lanes4 view, elastic_problem.cpp `Elements`; w: work arrays; sum: the
+  /// chunk's partial energy), and for the elements of a block whose visit returned false (some
+  /// lane inverted; the visit must not have had side effects) and for the tail, with a double
+  /// view. Chunks run on threads_ threads by schedule_ when `scatters` (the visit adds into
+  /// shared arrays), else in any order. `total` receives the chunks' partial sums added in chunk
+  /// order. Returns false when a double visit fails.
   template <class Visit>
-  bool sweep(Visit&& visit) const;
+  bool sweep(bool scatters, double& total, Visit&& visit) const;
+  void build_schedule();
   /// The element tangents at u (TetKernel::tangent), each handed to `sink(el, k)` (el: the
   /// element view, k: its 12×12 tangent) — the sweep of assemble_tangent() and
   /// hessian_diagonal(), which differ only in what they keep of each tangent.
@@ -207,6 +232,9 @@ class ElasticProblem : public Problem {
   Eigen::SparseMatrix<double> k_;
   std::vector<int> scatter_;  ///< per element: 16 block value indices, 4 column lengths
   std::vector<int> diag_;     ///< value index of each diagonal entry
+  int threads_ = 1;
+  ChunkSchedule schedule_;       ///< chunks coloured by shared nodes (scattering loops)
+  ChunkSchedule free_schedule_;  ///< the same chunks without conflicts (energy)
 };
 
 }  // namespace incise::fem

@@ -21,11 +21,12 @@ namespace incise::linalg {
 /// objects may share the same factor.
 ///
 /// With `threads` > 1 the full backward substitution (solve_sparse_rhs, solve_dense) runs on
-/// that many threads: the positions near the root of the elimination forest are processed
-/// first, then disjoint subtrees — which need only x on their ancestors — concurrently
-/// (planned once at construction; requires the postordered forest CHOLMOD produces, else the
-/// pass stays serial). The arithmetic of every entry is unchanged, so the result is
-/// bit-identical to the serial pass. The pass is memory-bound (it streams all of L), so the
+/// that many threads of the process's worker pool (core/parallel.hpp run_parallel; on the
+/// calling thread alone while the pool serves another call): the positions near the root of the
+/// elimination forest are processed first, then disjoint subtrees — which need only x on their
+/// ancestors — concurrently (planned once at construction; requires the postordered forest CHOLMOD
+/// produces, else the pass stays serial). The arithmetic of every entry is unchanged, so the result
+/// is bit-identical to the serial pass. The pass is memory-bound (it streams all of L), so the
 /// wall-clock gain is bounded by the memory bandwidth that a second core adds (docs/augmented.md).
 class ClosureLdlSolver {
  public:
@@ -118,9 +119,7 @@ class ClosureLdlSolver {
   // descending), then one list of position ranges [first, last] (whole subtrees) per thread.
   std::vector<int> serial_;
   std::vector<std::vector<std::pair<int, int>>> bins_;
-  std::vector<std::vector<double>> thread_gather_;  // gather buffers of threads 1, 2, …
-  class Workers;
-  std::unique_ptr<Workers> workers_;  // threads 1, 2, … (waiting between passes)
+  std::vector<std::vector<double>> thread_gather_;  // gather buffers of bins 1, 2, …
   double serial_fraction_ = 1.0;
   double max_bin_fraction_ = 1.0;
 };

@@ -160,7 +160,11 @@ struct SolverSpec {
   /// Needle scenes only: ε_round of (6.9), in [0, 1) (scene key `tolerance_round`; §6.8.1).
   double tolerance_round = 1e-8;
   int max_iterations = 10000;  ///< iteration (or time-step) budget, ≥ 1
-  double time_budget = 0.0;    ///< wall-clock budget (s); 0 = unlimited
+  /// Threads of the element loops of the tetrahedral problem (fem::ElasticProblem::set_threads,
+  /// 1 … kMaxThreads; results are bitwise the same for any value); 0 = the default,
+  /// default_thread_count() (INCISE_THREADS, else all cores). Scene key `threads`.
+  int threads = 0;
+  double time_budget = 0.0;  ///< wall-clock budget (s); 0 = unlimited
   /// CG and Newton's inner CG (scene key `preconditioner`).
   solver::Preconditioner preconditioner = solver::Preconditioner::kNone;
   double time_step = 0.0;  ///< dynamic: Δt (s); 0 → 0.9 × critical step 2/√λ_max (§4.1)
