@@ -28,6 +28,7 @@ function(incise_add_gtest name)
   add_executable(${name} ${A_SOURCES})
   target_link_libraries(${name} PRIVATE ${A_LIBS} incise_test_support GTest::gtest GTest::gtest_main
                                         incise_options)
+  target_compile_options(${name} PRIVATE ${INCISE_TEST_DRIVER_FLAGS})
   # gtest_discover_tests (CMake 3.25) flattens PROPERTIES into one list, so a multi-valued
   # LABELS would lose every label after the first. Discover without properties, then apply them
   # from a second ctest include file that runs after the discovered list (<name>_TESTS) is known.

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include <incise/io/write_mesh.hpp>
+
 #include "cli_util.hpp"
 
 namespace CLI {
@@ -32,6 +34,10 @@ struct Command {
   CLI::App* app = nullptr;
   std::function<int(Context&)> run;
 };
+
+/// Adds `--vtu-format binary|ascii` (io::kVtuEncodingNames; default binary: raw appended,
+/// zlib-compressed) to `app`, writing the choice to `*encoding` (main.cpp).
+void add_vtu_format_option(CLI::App* app, io::VtuEncoding* encoding);
 
 /// `incise mesh check FILE [--json] [--vtu OUT] ...` on `mesh` (lib/cli/mesh.cpp).
 Command add_mesh_check_command(CLI::App& mesh);

@@ -28,6 +28,7 @@ namespace {
 struct CutCommandOptions {
   std::string mesh_path, sweep_path, out_path, scale = "1";
   cut::CutOptions options;
+  io::VtuEncoding vtu_format = io::VtuEncoding::kBinaryZlib;
 };
 
 int cut_command(CutCommandOptions& opt, Context& ctx) {
@@ -82,7 +83,7 @@ int cut_command(CutCommandOptions& opt, Context& ctx) {
         << "\n";
     for (const auto& s : v.violations) err << "  " << s << "\n";
     if (!out_path.empty()) {
-      io::write_vtu(out_path, mesh.to_mesh_data(false, true));
+      io::write_vtu(out_path, mesh.to_mesh_data(false, true), {}, {}, opt.vtu_format);
       out << "wrote " << out_path << "\n";
     }
     return exit_code(v.ok() ? Exit::kOk : Exit::kNumericalFailure);
@@ -105,6 +106,7 @@ Command add_cut_command(CLI::App& root) {
       ->required();
   app->add_option("--out", opt->out_path, "write the cut mesh (reference configuration) as VTU")
       ->type_name("OUT.vtu");
+  add_vtu_format_option(app, &opt->vtu_format);
   app->add_option("--scale", opt->scale, "multiply mesh and sweep coordinates by S")
       ->type_name("S");
   app->add_flag_callback(

@@ -56,6 +56,7 @@ struct CheckOptions {
   std::string file, vtu, scale = "1";
   bool json = false;
   io::ReadOptions read;
+  io::VtuEncoding vtu_format = io::VtuEncoding::kBinaryZlib;
 };
 
 nlohmann::json stats_json(const mesh::Stats& s) {
@@ -178,7 +179,7 @@ int check(CheckOptions& opt, Context& ctx) {
   if (!vtu.empty()) {
     const mesh::CellQuality cq = mesh::cell_quality(m, {}, planar);
     const std::vector<io::DataArray> cell_data = io::quality_cell_data(cq);
-    io::write_vtu(vtu, m, {}, cell_data);
+    io::write_vtu(vtu, m, {}, cell_data, opt.vtu_format);
     out << "wrote:       " << vtu << "\n";
     j["wrote"] = vtu;
   }
@@ -241,6 +242,7 @@ Command add_mesh_check_command(CLI::App& mesh) {
                 "validity; docs/cli.md)");
   app->add_option("--vtu", opt->vtu, "write the mesh with quality cell data as VTU (ParaView)")
       ->type_name("OUT");
+  add_vtu_format_option(app, &opt->vtu_format);
   app->add_flag("--reorient", opt->read.reorient,
                 "flip inverted cells instead of rejecting the file");
   app->add_flag("--merge-duplicates", opt->read.merge_duplicate_vertices,

@@ -8,7 +8,7 @@ VTK), and checks array names, component counts, sizes and values against the run
 JSON (the tip probe = the mean of the file's x = l displacements; point and cell counts),
 reactions sum to minus the load, S = σ for the linear model, frame names have 6 digits, the
 .pvd times are iterations, cut steps, or simulated seconds of dynamic relaxation; cell tags
-survive `incise cut`. Exits 77 (ctest SKIP_RETURN_CODE) only when Python's `vtk` module (Debian
+survive `incise cut`; `incise cut` and `incise mesh check --vtu` honour `--vtu-format`. Exits 77 (ctest SKIP_RETURN_CODE) only when Python's `vtk` module (Debian
 python3-vtk9, installed by ci/install-deps.sh) is missing.
 
 usage: vtk_readback.py INCISE SOURCE_DIR WORK_DIR
@@ -158,17 +158,36 @@ check(abs(times[0] - 100.5 * s["final_time_step"]) <= 1e-9 * times[0] or s["rest
 for _, g in frames:
     check_tet_fields("ss22 frame", g, None)
 
-# `incise cut` on the liver keeps its cell tags.
-out = os.path.join(work, "liver_cut.vtu")
-subprocess.run([incise, "cut", os.path.join(source, "reference_data/meshes/liver_coarse.mesh"),
-                os.path.join(source, "property_tests/cut/liver_sweep.txt"), "--out", out],
-               check=True, stdout=subprocess.DEVNULL)
-g = read_vtu(out)
-cd = arrays(g.GetCellData())
-check("tag" in cd, "incise cut: cell tags dropped")
-if "tag" in cd:
-    tags = set(vtk_to_numpy(cd["tag"]).tolist())
-    check(len(tags) >= 2, f"incise cut: tags {tags}")
+# `incise cut` on the liver keeps its cell tags, in both encodings (--vtu-format).
+for fmt in ("binary", "ascii"):
+    out = os.path.join(work, f"liver_cut_{fmt}.vtu")
+    subprocess.run([incise, "cut", os.path.join(source, "reference_data/meshes/liver_coarse.mesh"),
+                    os.path.join(source, "property_tests/cut/liver_sweep.txt"), "--out", out,
+                    "--vtu-format", fmt], check=True, stdout=subprocess.DEVNULL)
+    with open(out, "rb") as f:
+        check((b'format="ascii"' in f.read()) == (fmt == "ascii"), f"incise cut: not {fmt}")
+    g = read_vtu(out)
+    cd = arrays(g.GetCellData())
+    check("tag" in cd, f"incise cut ({fmt}): cell tags dropped")
+    if "tag" in cd:
+        tags = set(vtk_to_numpy(cd["tag"]).tolist())
+        check(len(tags) >= 2, f"incise cut ({fmt}): tags {tags}")
+
+# `incise mesh check --vtu` in both encodings: the same quality arrays and values.
+checked = {}
+for fmt in ("binary", "ascii"):
+    out = os.path.join(work, f"liver_check_{fmt}.vtu")
+    subprocess.run([incise, "mesh", "check", os.path.join(source, "reference_data/meshes/liver_coarse.mesh"),
+                    "--vtu", out, "--vtu-format", fmt], check=True, stdout=subprocess.DEVNULL)
+    g = read_vtu(out)
+    check(g.GetNumberOfCells() > 0, f"mesh check ({fmt}): no cells")
+    checked[fmt] = {k: vtk_to_numpy(v) for k, v in arrays(g.GetCellData()).items()}
+check(len(checked["binary"]) >= 2 and checked["binary"].keys() == checked["ascii"].keys(),
+      f"mesh check: arrays {sorted(checked['binary'])} vs {sorted(checked['ascii'])}")
+for k in checked["binary"]:
+    # ascii doubles are written in the shortest exact form: the values are identical.
+    if k in checked["ascii"]:
+        check((checked["binary"][k] == checked["ascii"][k]).all(), f"mesh check: {k} differs")
 
 if failures:
     print(f"{len(failures)} failures")

@@ -375,7 +375,9 @@ Simplex random_ridge(const Connectivity& c, std::mt19937_64& rng) {
 
 TEST(ConnectivityProperty, RandomEditsKeepInvariants_Eq71to75) {
   INCISE_SEEDED_RNG(rng, 20031107);
-  const int edits_per_mesh = incise::test::scaled(2100);
+  // A quarter in builds with debug checks: paranoid validation after every edit doubles the test's
+  // own and makes the sequence quadratic (50 s under ASan).
+  const int edits_per_mesh = incise::test::scaled_for_checks(2100, 4);
   long total_edits = 0;
   std::map<std::string, long> kinds;
   for (NamedMesh& nm : test_meshes(rng)) {
@@ -491,7 +493,7 @@ TEST(ConnectivityProperty, RandomEditsKeepInvariants_Eq71to75) {
   for (const auto& k : kinds) summary += " " + k.first + "=" + std::to_string(k.second);
   RecordProperty("edits", static_cast<int>(total_edits));
   std::cout << "[ edits    ] " << total_edits << " validated random edits:" << summary << "\n";
-  EXPECT_GE(total_edits, incise::test::scaled(10000));
+  EXPECT_GE(total_edits, incise::test::scaled_for_checks(10000, 4));
 }
 
 // ---------------------------------------------------------------------------------------------

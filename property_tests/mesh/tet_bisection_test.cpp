@@ -290,7 +290,8 @@ TEST(TetBisection, RandomBisectionsOnTheLiver) {
 TEST(TetBisection, ParentsCarryALinearFieldExactly) {
   INCISE_SEEDED_RNG(rng, 2103);
   TetBisectionMesh m(liver());
-  for (int i = 0; i < 400; ++i) m.bisect(random_element(m, rng));
+  // A quarter in builds with debug checks: they validate the whole liver after every edit.
+  for (int i = 0; i < incise::test::scaled_for_checks(400, 4); ++i) m.bisect(random_element(m, rng));
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const Vec3 g(u(rng), u(rng), u(rng));
   const double c = u(rng);
@@ -366,7 +367,8 @@ TEST(TetBisection, LocateAgreesWithBruteForce) {
   INCISE_SEEDED_RNG(rng, 2104);
   const MeshData start = liver();
   TetBisectionMesh m(start);
-  for (int i = 0; i < 300; ++i) m.bisect(random_element(m, rng));
+  // A quarter in builds with debug checks: they validate the whole liver after every edit.
+  for (int i = 0; i < incise::test::scaled_for_checks(300, 4); ++i) m.bisect(random_element(m, rng));
   m.refine_around(start.points.col(0), 1.0);
   const auto box = incise::mesh::bounding_box(start.points);
   std::uniform_real_distribution<double> u(0.0, 1.0);
