@@ -19,7 +19,8 @@ namespace incise::cli {
 
 void add_vtu_format_option(CLI::App* app, io::VtuEncoding* encoding) {
   app->add_option_function<std::string>(
-         "--vtu-format", [encoding](const std::string& s) { *encoding = *io::kVtuEncodingNames.find(s); },
+         "--vtu-format",
+         [encoding](const std::string& s) { *encoding = *io::kVtuEncodingNames.find(s); },
          "VTU encoding: binary (raw appended, zlib-compressed; the default) or ascii (text)")
       ->check(CLI::IsMember(io::kVtuEncodingNames.names()))
       ->type_name("FORMAT");

@@ -143,7 +143,37 @@ for fmt in ("binary", "ascii"):
     check([t for t, _ in frames] == [float(c["step"]) for c in s["cut_steps"]], "cut: pvd steps")
     final = read_vtu(os.path.join(d, "out/cut.vtu"))
     check(final.GetNumberOfPoints() == s["mesh"]["nodes"], "cut: final point count")
-    check_tet_fields("cut.vtu", final, None)
+    fpd, fcd = check_tet_fields("cut.vtu", final, None)
+    # Every frame carries the fields of its cut mesh (scene::cut_session_problem); the last
+    # frame is the final state: the same problem definition and u, so the same values, bit for
+    # bit (tags included: the cut keeps them).
+    for _, g in frames:
+        check_tet_fields("cut frame", g, None)
+    lpd, lcd = arrays(frames[-1][1].GetPointData()), arrays(frames[-1][1].GetCellData())
+    for n in ("displacement", "reaction_force"):
+        check((vtk_to_numpy(lpd[n]) == vtk_to_numpy(fpd[n])).all(), f"cut: last frame {n} != final")
+    for n in ("von_mises_stress", "strain"):
+        check((vtk_to_numpy(lcd[n]) == vtk_to_numpy(fcd[n])).all(), f"cut: last frame {n} != final")
+
+    # A 3D needle insertion (§6.9): every frame of the refined mesh has the elastic fields (no
+    # reactions: evaluating them would add to the run's reported flops), the needle state and
+    # the needle faces.
+    d, s = run("property_tests/scene/data/needle/needle3d_small.json", "needle3d_" + fmt,
+               {"vtu": "out/n", "vtu_every": 4, "vtu_format": fmt})
+    frames = read_pvd(os.path.join(d, "out/n.pvd"))
+    check(len(frames) >= 2, f"needle3d: {len(frames)} frames")
+    for _, g in frames:
+        pd, cd = arrays(g.GetPointData()), arrays(g.GetCellData())
+        for n, k in dict(TET_CELL, needle_faces=1).items():
+            check(n in cd and cd[n].GetNumberOfTuples() == g.GetNumberOfCells(),
+                  f"needle3d frame: cell array {n}")
+        for n in ("displacement", "fixed", "loaded", "needle_state"):
+            check(n in pd and pd[n].GetNumberOfTuples() == g.GetNumberOfPoints(),
+                  f"needle3d frame: point array {n}")
+        check("reaction_force" not in pd, "needle3d frame: unexpected reaction_force")
+    last = arrays(frames[-1][1].GetCellData())
+    if "needle_faces" in last:
+        check(vtk_to_numpy(last["needle_faces"]).max() >= 1, "needle3d: no needle faces")
 
 # A dynamic-ss22 run of the cantilever: pvd times are simulated time (s), strictly increasing;
 # frame k is ū of (2.56) at (k + ½)·Δt when no restart changed Δt.

@@ -287,11 +287,47 @@ TEST(TetBisection, RandomBisectionsOnTheLiver) {
   EXPECT_GT(after.aspect_ratio.min, before.aspect_ratio.min / 3.0);
 }
 
+// Issue 20: cell tags survive refinement. Each cell of to_mesh_data() carries its starting
+// cell's tag, so the volume of every tag is conserved (and the starting mesh comes back
+// unchanged before any bisection).
+TEST(TetBisection, CellTagsFollowTheStartingCells) {
+  INCISE_SEEDED_RNG(rng, 2106);
+  const MeshData start = liver();
+  ASSERT_EQ(start.cell_tags.size(), static_cast<std::size_t>(start.num_cells()));
+  auto tag_volumes = [](const MeshData& m) {
+    std::map<int, double> v;
+    for (Eigen::Index c = 0; c < m.cells.cols(); ++c)
+      v[m.cell_tags[static_cast<std::size_t>(c)]] +=
+          incise::mesh::signed_volume(m.points.col(m.cells(0, c)), m.points.col(m.cells(1, c)),
+                                      m.points.col(m.cells(2, c)), m.points.col(m.cells(3, c)));
+    return v;
+  };
+  TetBisectionMesh m(start);
+  EXPECT_EQ(m.to_mesh_data().cell_tags, start.cell_tags);
+  const auto before = tag_volumes(start);
+  ASSERT_GE(before.size(), 2u);  // the liver has more than one label
+  for (int i = 0; i < incise::test::scaled_for_checks(300, 4); ++i)
+    m.bisect(random_element(m, rng));
+  const MeshData refined = m.to_mesh_data();
+  ASSERT_EQ(refined.cell_tags.size(), static_cast<std::size_t>(refined.num_cells()));
+  EXPECT_GT(refined.num_cells(), start.num_cells());
+  const auto after = tag_volumes(refined);
+  ASSERT_EQ(after.size(), before.size());
+  // A bisection halves a tetrahedron exactly up to rounding of the midpoint: ~1e-15 relative
+  // per level on sums of ~2·10⁴ positive terms.
+  for (const auto& [tag, v] : before) EXPECT_NEAR(after.at(tag), v, 1e-12 * v) << "tag " << tag;
+  // A mesh without tags gives none.
+  MeshData untagged = start;
+  untagged.cell_tags.clear();
+  EXPECT_TRUE(TetBisectionMesh(untagged).to_mesh_data().cell_tags.empty());
+}
+
 TEST(TetBisection, ParentsCarryALinearFieldExactly) {
   INCISE_SEEDED_RNG(rng, 2103);
   TetBisectionMesh m(liver());
   // A quarter in builds with debug checks: they validate the whole liver after every edit.
-  for (int i = 0; i < incise::test::scaled_for_checks(400, 4); ++i) m.bisect(random_element(m, rng));
+  for (int i = 0; i < incise::test::scaled_for_checks(400, 4); ++i)
+    m.bisect(random_element(m, rng));
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const Vec3 g(u(rng), u(rng), u(rng));
   const double c = u(rng);
@@ -368,7 +404,8 @@ TEST(TetBisection, LocateAgreesWithBruteForce) {
   const MeshData start = liver();
   TetBisectionMesh m(start);
   // A quarter in builds with debug checks: they validate the whole liver after every edit.
-  for (int i = 0; i < incise::test::scaled_for_checks(300, 4); ++i) m.bisect(random_element(m, rng));
+  for (int i = 0; i < incise::test::scaled_for_checks(300, 4); ++i)
+    m.bisect(random_element(m, rng));
   m.refine_around(start.points.col(0), 1.0);
   const auto box = incise::mesh::bounding_box(start.points);
   std::uniform_real_distribution<double> u(0.0, 1.0);

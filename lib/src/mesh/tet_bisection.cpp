@@ -94,6 +94,20 @@ TetBisectionMesh::Type TetBisectionMesh::type_of(const Marking& m) {
   return Type::kA;
 }
 
+MeshData TetBisectionMesh::to_mesh_data() const {
+  MeshData m = conn_.to_mesh_data(points_);
+  if (root_tags_.empty()) return m;
+  // Connectivity::cells() and elements() both list live elements in slot order.
+  m.cell_tags.reserve(static_cast<std::size_t>(m.num_cells()));
+  for (const ElementHandle e : conn_.elements()) {
+    int n = node_of(e);
+    while (tree_[static_cast<std::size_t>(n)].parent >= 0)
+      n = tree_[static_cast<std::size_t>(n)].parent;
+    m.cell_tags.push_back(root_tags_[static_cast<std::size_t>(n)]);
+  }
+  return m;
+}
+
 TetBisectionMesh::TetBisectionMesh(const MeshData& tets)
     : conn_(Connectivity::from_mesh_data(checked(tets))), points_(tets.points) {
   const EdgeOrder order{points_};
@@ -121,6 +135,9 @@ TetBisectionMesh::TetBisectionMesh(const MeshData& tets)
     tree_.push_back(n);
   }
   num_roots_ = static_cast<int>(tree_.size());
+  // Roots were made in element order, which is the starting cells' order (from_mesh_data).
+  if (tets.cell_tags.size() == static_cast<std::size_t>(tets.num_cells()))
+    root_tags_ = tets.cell_tags;
   num_start_vertices_ = conn_.num_vertices();
 
   // Uniform grid of the roots' bounding boxes, about one cell per root.

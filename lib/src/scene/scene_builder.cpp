@@ -4,6 +4,7 @@
 #include <incise/core/memory_budget.hpp>
 #include <incise/core/timer.hpp>
 #include <incise/cut/cutter.hpp>
+#include <incise/interactive/augmented_cut_session.hpp>
 #include <incise/io/read_mesh.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
@@ -362,6 +363,22 @@ mesh::MeshData live_mesh_data(const cut::CutMesh& cm) {
     for (Index e = 0; e < cm.element_capacity(); ++e)
       if (cm.alive(e)) m.cell_tags.push_back(cm.tag(e));
   return m;
+}
+
+std::unique_ptr<fem::ElasticProblem> cut_session_problem(
+    const interactive::AugmentedCutSession& session, const material::Material& material,
+    const Eigen::Matrix3Xd& forces) {
+  const cut::CutMesh& cm = session.mesh();
+  auto p = std::make_unique<fem::ElasticProblem>(live_mesh_data(cm), material);
+  std::vector<Index> held;
+  for (Index v = 0; v < cm.num_nodes(); ++v) {
+    const int d = session.dof(v);
+    if (d < 0 || cm.unused(v) || session.system().is_constrained(d)) held.push_back(v);
+  }
+  p->fix_nodes(held);
+  for (Index v = 0; v < forces.cols(); ++v)
+    if (forces.col(v).squaredNorm() > 0) p->add_point_load(fem::PointLoad{v, forces.col(v)});
+  return p;
 }
 
 namespace {

@@ -178,9 +178,15 @@ void FrameWriter::cut_step(const CutStepRow& row, const interactive::AugmentedCu
   if (outs.vtu.empty() || outs.vtu_every <= 0 || row.step % outs.vtu_every != 0 || !d.allFinite())
     return;
   const std::string file = outs.vtu + "_" + padded(row.step, frame_index_width(0)) + ".vtu";
-  write_vtu_atomic(file, live_mesh_data(session.mesh()),
-                   {displacement_array(Eigen::Map<const VecX>(d.data(), d.size()))}, {},
-                   outs.vtu_format);
+  const Eigen::Index n0 = static_cast<Eigen::Index>(scene_.external_force.size() / 3);
+  const auto problem =
+      cut_session_problem(session, make_material(scene_.spec.material),
+                          Eigen::Map<const Eigen::Matrix3Xd>(scene_.external_force.data(), 3, n0));
+  const VecX u = Eigen::Map<const VecX>(d.data(), d.size());
+  VecX g;
+  const bool ok = problem->gradient(u, g) == EvalStatus::kOk;
+  const TetFields f = tet_fields(*problem, u, ok ? &g : nullptr);
+  write_vtu_atomic(file, live_mesh_data(session.mesh()), f.point, f.cell, outs.vtu_format);
   frame(file, static_cast<double>(row.step));
 }
 
@@ -196,16 +202,23 @@ void add_finite(std::vector<io::DataArray>& to, io::DataArray a) {
 }  // namespace
 
 TetFields tet_fields(const BuiltScene& scene, const VecX& u) {
+  if (!scene.problem || scene.problem->size() != u.size()) return {{displacement_array(u)}, {}};
+  VecX g;
+  const bool ok = scene.problem->gradient(u, g) == EvalStatus::kOk;
+  return tet_fields(*scene.problem, u, ok ? &g : nullptr);
+}
+
+TetFields tet_fields(const fem::ElasticProblem& p, const VecX& u, const VecX* g) {
   TetFields out;
   out.point.push_back(displacement_array(u));
-  if (!scene.problem || scene.problem->size() != u.size()) return out;
-  fem::ElasticProblem& p = *scene.problem;
+  if (p.size() != u.size()) return out;
   const std::size_t n = static_cast<std::size_t>(p.num_nodes());
-  VecX g;
-  io::DataArray reaction{"reaction_force", 3, std::vector<double>(3 * n, 0.0)};
-  if (p.gradient(u, g) == EvalStatus::kOk)
+  if (g != nullptr && g->size() == p.size()) {
+    io::DataArray reaction{"reaction_force", 3, std::vector<double>(3 * n, 0.0)};
     for (Eigen::Index i = 0; i < p.size(); ++i)
-      if (p.is_fixed(i)) reaction.values[static_cast<std::size_t>(i)] = g[i];
+      if (p.is_fixed(i)) reaction.values[static_cast<std::size_t>(i)] = (*g)[i];
+    add_finite(out.point, std::move(reaction));
+  }
   io::DataArray fixed{"fixed", 1, std::vector<double>(n, 0.0), io::DataArray::Type::kUInt8};
   io::DataArray loaded{"loaded", 1, std::vector<double>(n, 0.0), io::DataArray::Type::kUInt8};
   const VecX& f = p.external_force();
@@ -215,7 +228,6 @@ TetFields tet_fields(const BuiltScene& scene, const VecX& u) {
       if (p.is_fixed(i)) fixed.values[v] = 1;
       if (f[i] != 0.0) loaded.values[v] = 1;
     }
-  add_finite(out.point, std::move(reaction));
   out.point.push_back(std::move(fixed));
   out.point.push_back(std::move(loaded));
   fem::ElementFields e = fem::element_fields(p, u);
@@ -331,9 +343,11 @@ void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_up
   const std::string file = outs.vtu + "_" + index + ".vtu";
   const std::string surface = outs.vtu + "_needle_" + index + ".vtu";
   const mesh::MeshData m = insertion.mesh().to_mesh_data();
-  const std::vector<io::DataArray> data = needle_point_data(insertion);
-  const io::DataArray cells = needle_cell_data(insertion, m);
-  write_vtu_atomic(file, m, data, {cells}, outs.vtu_format);
+  // The elastic fields (tet_fields) and the needle's state and faces.
+  TetFields f = tet_fields(insertion.problem(), insertion.displacement());
+  f.point.push_back(needle_point_data(insertion)[1]);
+  f.cell.push_back(needle_cell_data(insertion, m));
+  write_vtu_atomic(file, m, f.point, f.cell, outs.vtu_format);
   write_needle_surface_vtu(surface, insertion, outs.vtu_format);
   surface_pvd_.push_back(
       {static_cast<double>(row.update), std::filesystem::path(surface).filename().string()});

@@ -239,12 +239,12 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   t.restart();
   const cut::CutMesh& cm = session->mesh();
   mesh::MeshData final_mesh = live_mesh_data(cm);
-  std::vector<Index> held;
+  auto check = cut_session_problem(*session, mat, forces);
+  std::vector<Index> held;  // the nodes cut_session_problem fixed (all three DOFs)
   Index unused = 0;
   for (Index v = 0; v < cm.num_nodes(); ++v) {
-    const int d = session->dof(v);
     unused += cm.unused(v);
-    if (d < 0 || cm.unused(v) || session->system().is_constrained(d)) held.push_back(v);
+    if (check->is_fixed(3 * static_cast<Eigen::Index>(v))) held.push_back(v);
   }
   scene.record("cut: " + std::to_string(step) + " sweep triangles, " +
                    std::to_string(totals.faces_dissected) + " faces dissected, " +
@@ -254,10 +254,6 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
                    " unused nodes -> " + std::to_string(final_mesh.num_cells()) + " tets, " +
                    std::to_string(final_mesh.num_points()) + " nodes",
                cut_seconds, matrix_bytes_of(final_mesh));
-  auto check = std::make_unique<fem::ElasticProblem>(final_mesh, mat);
-  check->fix_nodes(held);
-  for (Index v = 0; v < n0; ++v)
-    if (forces.col(v).squaredNorm() > 0) check->add_point_load(fem::PointLoad{v, forces.col(v)});
   res.u = displacement_vector(session->displacement());
   VecX g;
   double energy = 0;

@@ -100,8 +100,10 @@ class TetBisectionMesh {
   const Connectivity& connectivity() const { return conn_; }
   /// Reference positions (m), 3 × num_vertices.
   const Eigen::Matrix3Xd& points() const { return points_; }
-  /// The current mesh as arrays (cells in Connectivity slot order, positively oriented).
-  MeshData to_mesh_data() const { return conn_.to_mesh_data(points_); }
+  /// The current mesh as arrays (cells in Connectivity slot order, positively oriented); when
+  /// the starting mesh had cell tags, each cell carries the tag of the starting cell it lies in
+  /// (its tree root). Point tags are not carried (new vertices have none).
+  MeshData to_mesh_data() const;
   /// Simple bisections (edges split) performed so far.
   long num_bisections() const { return bisections_; }
   /// Simple bisections that split an edge out of the AMP order because the closure met a
@@ -186,6 +188,7 @@ class TetBisectionMesh {
   Eigen::Matrix3Xd points_;
   std::vector<TreeNode> tree_;
   int num_roots_ = 0;
+  std::vector<int> root_tags_;                 ///< cell tags of the starting cells (or empty)
   std::vector<int> node_of_slot_;              ///< element slot → tree node of its live element
   std::vector<std::array<Index, 2>> parents_;  ///< per new vertex, from num_start_vertices_ on
   Index num_start_vertices_ = 0;

@@ -97,6 +97,7 @@ class NeedleInsertion3D {
   const mesh::TetBisectionMesh& mesh() const { return *mesh_; }
   /// The current elastic problem (rebuilt after every refinement).
   fem::ElasticProblem& problem() { return *problem_; }
+  const fem::ElasticProblem& problem() const { return *problem_; }
   /// Nodal displacements u (3·vertex + component), m.
   const VecX& displacement() const { return u_; }
   /// Deformed positions (3 × vertices), m.

@@ -23,6 +23,10 @@
 #include <string>
 #include <vector>
 
+namespace incise::interactive {
+class AugmentedCutSession;
+}  // namespace incise::interactive
+
 namespace incise::scene {
 
 /// One constructed part and what it cost.
@@ -125,6 +129,14 @@ std::vector<std::array<Vec3, 3>> sweep_triangles(const ToolSpec& tool);
 /// indices are those of the CutMesh), reference positions (m), cells in element-handle order,
 /// with their cell tags when the cut mesh has them (cut::CutMesh::tag).
 mesh::MeshData live_mesh_data(const cut::CutMesh& cut_mesh);
+
+/// The problem an augmented cut session solves, as a matrix-free fem::ElasticProblem on
+/// live_mesh_data(session.mesh()) of `material`: the nodes the session holds fixed (fixed from
+/// the start, unused, or constrained) fixed, and `forces` (3 × the uncut node count, N) on the
+/// uncut body's nodes. For the final residual check of a cut run and the fields of its frames.
+std::unique_ptr<fem::ElasticProblem> cut_session_problem(
+    const interactive::AugmentedCutSession& session, const material::Material& material,
+    const Eigen::Matrix3Xd& forces);
 
 /// The material a scene names (registry model and its parameters); throws ParameterError for an
 /// unknown model or inadmissible parameters (material::Material's checks).

@@ -69,15 +69,21 @@ struct TetFields {
   std::vector<io::DataArray> point;  ///< see tet_fields()
   std::vector<io::DataArray> cell;   ///< see tet_fields()
 };
-/// The arrays written for displacement `u` of a scene with an elastic problem on its mesh
-/// (static and dynamic runs, and the final state of an augmented cut run): point data
+/// The arrays written for displacement `u` (3 per node, m) of an elastic problem: point data
 /// "displacement" (m), "reaction_force" (N: the residual Σq − f_ext at fixed DOFs, the force
-/// the supports exert; 0 at free DOFs), "fixed" and "loaded" (UInt8 0/1: a DOF of the node is
+/// the supports exert; 0 at free DOFs; only when `gradient`, the problem's gradient at u, is
+/// given), "fixed" and "loaded" (UInt8 0/1: a DOF of the node is
 /// fixed / carries a nonzero external force); cell data fem::element_fields(): "strain",
 /// "second_piola_stress", "cauchy_stress" (6 components xx yy zz xy yz xz; Pa),
 /// "von_mises_stress" (Pa), "strain_energy_density" (J/m³) and "inverted" (UInt8). An array
-/// with a NaN or infinity (a diverged run) is left out. Without a problem matching u (needle
-/// scenes): "displacement" only.
+/// with a NaN or infinity (a diverged run) is left out. "displacement" only when the problem's
+/// size is not u's. Written for static and dynamic runs, every frame and the final state of an
+/// augmented cut run (cut_session_problem) and every 3D needle frame (the insertion's problem,
+/// without reactions: evaluating its gradient would add to the flops the run reports).
+TetFields tet_fields(const fem::ElasticProblem& problem, const VecX& u,
+                     const VecX* gradient = nullptr);
+/// tet_fields() of the scene's problem with its gradient at u (reactions); "displacement" only
+/// for a scene without a problem.
 TetFields tet_fields(const BuiltScene& scene, const VecX& u);
 
 /// The point arrays of a needle insertion's mesh: "displacement" (m, 3 components, z = 0) and
