@@ -37,18 +37,19 @@
 ///     node comes within ε_exit of one: a node on that edge, the edge to it dissected and
 ///     contracted; annihilation (Fig. 5.13) when the active node comes within ε_edge of a node
 ///     next to another active node (not a branch of the same branching): the two incisions join
-///     and end; branching (Fig. 5.14) when the scalpel meets the active triangles twice (a
-///     fold): nodes at the two nearest intersections, the edges to them dissected, two
-///     incisions instead of one, cut over the rest of the movement. An interior edge entry's
-///     node branches the same way once the scalpel meets its triangles on both sides of the
-///     ridge (the path n1–a–n2 dissected: a slit with two tips); met on one side only, it goes
-///     on as a tip entry.
+///     and end; branching (Figs. 5.14, 5.18) when the scalpel meets the active triangles k ≥ 2
+///     times (a fold, a pleated star): nodes at the intersections strictly inside distinct
+///     triangles not next to another active node (the nearest among them, else no branch), the
+///     edges to them dissected one after the other, k incisions — one family, any size, each
+///     with its own active node — instead of one, cut over the rest of the movement. An interior
+///     edge entry's node branches the same way once the scalpel meets its triangles on both
+///     sides of the ridge (the path n1–a–n2 dissected: a slit with two tips, further nodes
+///     dissected from it); met on one side only, it goes on as a tip entry.
 /// All live active nodes are marked on the Surface, which refuses any change that would put two
 /// in one triangle (restriction 3 and "at most one active node per triangle"). A scalpel that no
 /// longer meets the active triangles (lifted off the surface, or a jump past the d_max floor)
 /// ends the incision where it is (status kLost: the slit stays, the mesh is valid). Not built:
-/// a tip or a scalpel side through a node or (tip) an edge exactly, more than two branches at
-/// once (the two nearest intersections are taken). Thresholds
+/// a tip or a scalpel side through a node or (tip) an edge exactly. Thresholds
 /// are fractions of the starting mesh's mean edge length h̄ (Cutter2DOptions, §5.4 defaults).
 /// Entries are found through a uniform 3D grid of cell h̄ over the triangles and boundary edges,
 /// kept current by watching the connectivity, so a movement touches only what is near the
@@ -87,10 +88,13 @@ struct [[nodiscard]] SurfaceMoveReport
   bool tip_entered = false;             ///< the scalpel's tip pierced a triangle (Fig. 5.12)
   /// The scalpel's side hit an exposed interior edge (a ridge; Fig. 5.12, third case).
   bool edge_entered = false;
-  bool fixed_up = false;          ///< the entry fix-up was made
-  bool exited = false;            ///< the incision reached the boundary (exit)
-  bool annihilated = false;       ///< two incisions met and ended (Fig. 5.13)
-  bool branched = false;          ///< an incision branched into two (Fig. 5.14)
+  bool fixed_up = false;     ///< the entry fix-up was made
+  bool exited = false;       ///< the incision reached the boundary (exit)
+  bool annihilated = false;  ///< two incisions met and ended (Fig. 5.13)
+  bool branched = false;     ///< an incision branched (Figs. 5.14, 5.18)
+  /// The most incisions one branching of this movement made (2 in Fig. 5.14, 3 in Fig. 5.18;
+  /// 1 when only the nearest branch could be made; 0 without branching).
+  int branch_ways = 0;
   int submovements = 0;           ///< d_max sub-movements (Fig. 5.11)
   int substeps = 0;               ///< moves of the active node
   long flips = 0;                 ///< edge flips
@@ -191,8 +195,16 @@ class SurfaceCutter {
   bool annihilate(SurfaceMoveReport& r);
   bool branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r);
   bool edge_branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r);
-  std::array<mesh::ElementHandle, 2> branch_triangles(const std::vector<Vec3>& hits) const;
-  void spawn(const std::vector<Index>& tips);
+  /// A branch point: a scalpel intersection strictly inside an active triangle.
+  struct BranchPoint {
+    mesh::ElementHandle triangle;
+    Vec3 point = Vec3::Zero();
+  };
+  std::vector<BranchPoint> branch_points(const std::vector<Vec3>& hits) const;
+  std::vector<Index> branch_nodes(const std::vector<BranchPoint>& at, SurfaceMoveReport& r);
+  void dissect_branches(const std::vector<Index>& nodes, std::vector<Index>& holders,
+                        std::vector<Index>& tips, SurfaceMoveReport& r);
+  void spawn(const std::vector<Index>& tips, SurfaceMoveReport& r);
   bool is_forbidden(Index p, Index q) const;
   void end_incision();
 
