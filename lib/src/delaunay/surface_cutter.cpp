@@ -655,6 +655,13 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
   for (size_t k = incisions_.size() - spawned_.size(); k < incisions_.size(); ++k)
     branches.push_back(k);
   spawned_.clear();
+  // Restriction 1 for an entry that snaps to an existing node: none of its triangles may hold
+  // an active node (at most one per triangle).
+  auto next_to_active = [&](Index v) {
+    for (const Index w : mesh_.neighbours(v))
+      if (is_active(w)) return true;
+    return false;
+  };
   // New incisions (Fig. 5.12, first case): every entering contact of the sweep with a boundary
   // edge, earliest first (ties by vertex numbers), each then cut over the rest of the movement.
   for (const EntryHit& e : find_entries(from, s)) {
@@ -673,6 +680,10 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
     const Index a = detail::boundary_node_at(mesh_, e.p, e.q, x, eps_entry_);
     if (a < 0 || is_active(a)) {
       ++r.refused;
+      continue;
+    }
+    if (next_to_active(a)) {
+      ++r.rejected_entries;  // snapped to an end whose triangles hold an active node
       continue;
     }
     start(a, false, false, e.hit.time, from, s, r);
@@ -713,7 +724,12 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
       continue;
     }
     Index a = (x - pp).norm() <= (x - pq).norm() ? e.p : e.q;
-    if ((mesh_.point(a) - x).norm() > eps_entry_ || !mesh_.is_interior_vertex(a)) {
+    const bool snap = (mesh_.point(a) - x).norm() <= eps_entry_ && mesh_.is_interior_vertex(a);
+    if (snap && next_to_active(a)) {
+      ++r.rejected_entries;  // the end's triangles hold an active node
+      continue;
+    }
+    if (!snap) {
       const mesh::Connectivity& c = mesh_.connectivity();
       const ElementHandle t1 = detail::left_of(c, e.p, e.q), t2 = detail::left_of(c, e.q, e.p);
       const Index r1 = detail::third(c, t1, e.p, e.q), r2 = detail::third(c, t2, e.p, e.q);
