@@ -10,8 +10,9 @@
 ///     crossing of the tip's path with the inside of a triangle (second case) and every contact
 ///     of the scalpel's side with an exposed interior edge — a ridge it comes down on, meeting
 ///     neither triangle of the edge before and both after (third case) — starts an incision,
-///     earliest first, ties by vertex numbers — unless its edge or triangle is active or it is
-///     within ε_entry of an entry of this movement (restriction 1 of §5.3.2; counted). A
+///     earliest first, ties by vertex numbers — unless its edge or triangle is active, the node
+///     it snaps to shares a triangle with an active node, or it is within ε_entry of an entry of
+///     this movement (restriction 1 of §5.3.2; counted). A
 ///     boundary edge entry's active node is the edge's end within ε_entry or a new node on it; a
 ///     tip entry's is a new node inside the triangle; an interior edge entry's is the edge's
 ///     interior end within ε_entry or a new node splitting the edge. The incision is then
@@ -102,12 +103,14 @@ struct [[nodiscard]] SurfaceMoveReport
   int removals = 0;               ///< interior nodes removed
   int splits = 0;                 ///< incision splits (new node pairs)
   int refused = 0;                ///< splits, fix-ups or exits the guards refused
-  int extra_intersections = 0;    ///< further scalpel–star intersections (not followed)
-  int incisions = 0;              ///< live incisions after the movement
+  /// Scalpel–star intersections beyond the first, summed over the sub-movements (not followed,
+  /// except those a branching makes branches at).
+  int extra_intersections = 0;
+  int incisions = 0;    ///< live incisions after the movement
   long restricted = 0;  ///< changes refused: a triangle would get two active nodes (§5.3.2)
   /// Contacts with boundary edges not taken as entries (restriction 1 of §5.3.2: the edge or its
-  /// triangle is active — mostly the scalpel at its own incision — or within ε_entry of an entry
-  /// of this movement).
+  /// triangle is active — mostly the scalpel at its own incision —, the node it would snap to
+  /// shares a triangle with an active node, or it is within ε_entry of an entry of this movement).
   int rejected_entries = 0;
 };
 
