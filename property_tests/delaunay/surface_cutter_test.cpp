@@ -315,17 +315,6 @@ TEST(DelaunaySurfaceCutter, RandomPathsOverASphericalCapReadFromOffKeepItValid) 
   EXPECT_GT(t.exited, 0) << t;
 }
 
-/// Whether some live triangle has two of the cutter's active nodes (§5.3.2 forbids it).
-bool two_active_in_a_triangle(const Surface& s, const SurfaceCutter& cutter) {
-  const std::vector<Index> act = cutter.active_nodes();
-  for (const mesh::ElementHandle e : s.connectivity().elements()) {
-    int n = 0;
-    for (const Index v : s.triangle(e)) n += std::count(act.begin(), act.end(), v) > 0;
-    if (n > 1) return true;
-  }
-  return false;
-}
-
 /// The fold (270° of a unit cylinder, axis y, open below) cut by a horizontal scalpel
 /// x ∈ [−1.5, 1.5] at height z(y) moved along the axis from y = −1.2 to 1.2 in steps of 0.04:
 /// the scalpel meets the fold twice, so the movement that crosses the end y = −1 makes two
@@ -341,7 +330,7 @@ Tally cut_the_fold(Surface& s, SurfaceCutter& cutter, const std::function<double
     ++t.validations;
     most_incisions = std::max(most_incisions, r.incisions);
     EXPECT_TRUE(valid(s, generated(SurfaceShape::kFold))) << "after movement " << k;
-    EXPECT_FALSE(two_active_in_a_triangle(s, cutter)) << "after movement " << k;
+    EXPECT_FALSE(test::two_active_in_a_triangle(s, cutter)) << "after movement " << k;
     if (::testing::Test::HasFailure()) break;
   }
   return t;
@@ -404,7 +393,7 @@ TEST(DelaunaySurfaceCutter, Fig5_14AScalpelTurnedAcrossTheFoldBranchesTheIncisio
     branched += r.branched;
     most = std::max(most, r.incisions);
     EXPECT_TRUE(valid(s, generated(SurfaceShape::kFold))) << "after movement " << k;
-    EXPECT_FALSE(two_active_in_a_triangle(s, cutter)) << "after movement " << k;
+    EXPECT_FALSE(test::two_active_in_a_triangle(s, cutter)) << "after movement " << k;
     if (::testing::Test::HasFailure()) break;
   }
   std::cout << "fold, turned scalpel: " << t << ", " << branched << " branchings\n";
@@ -541,7 +530,7 @@ RidgeCut lower_onto_the_fold(double y0, double slope, double step) {
     c.most = std::max(c.most, r.incisions);
     c.last = r.incisions;
     EXPECT_TRUE(valid(s, generated(SurfaceShape::kFold))) << "after movement " << k;
-    EXPECT_FALSE(two_active_in_a_triangle(s, cutter)) << "after movement " << k;
+    EXPECT_FALSE(test::two_active_in_a_triangle(s, cutter)) << "after movement " << k;
     if (::testing::Test::HasFailure()) break;
   }
   c.pieces = test::components(s);
@@ -598,6 +587,51 @@ TEST(DelaunaySurfaceCutter, Fig5_12RidgeEntriesAtRandomPlacesKeepTheFoldValid) {
   // so it goes on as a tip entry (one piece). Asserted: at least 5 of every 8 for each.
   EXPECT_GE(8 * branched, 5 * n) << all;
   EXPECT_GE(8 * two_pieces, 5 * n) << all;
+}
+
+TEST(DelaunaySurfaceCutter, Fig5_18RandomTurnsOverThePleatedSaddleBranchIntoThreeAndStayValid) {
+  // Seeded variations of Fig. 5.18's trajectory (test::saddle_turn over make_monkey_saddle):
+  // lattice n ∈ {8, 10, 12}, slope ∈ [0.2, 0.4], the scalpel's line x0 ∈ [−0.03, 0.03] (off the
+  // mirror line, so the outer crossings may come in one after the other: two-way branchings,
+  // branches of branches), turn from y_turn ∈ [−0.25, 0] over [0.04, 0.3], towards the direction
+  // ψ ∈ [−0.3, 0.3] rad from the x axis, steps 0.02–0.08. After every movement: valid (ch. 7
+  // invariants, shape floor, no triangle facing down — the saddle is a graph over the xy plane,
+  // and no change turns a triangle over), no node left marked, and at most one active node per
+  // triangle (§5.3.2).
+  INCISE_SEEDED_RNG(rng, 5318);
+  std::uniform_real_distribution<double> U(0, 1);
+  const TestSurface up{nullptr, nullptr, [](const Vec3&) { return Vec3(0, 0, 1); }};
+  const int paths = test::scaled_for_checks(16, 2);  // 8 under the checked (sanitizer) builds
+  Tally all;
+  int ways[4] = {0, 0, 0, 0};  // branchings by the number of branches made (1, 2, 3+)
+  int most = 0;
+  for (int i = 0; i < paths; ++i) {
+    const int n = 8 + 2 * static_cast<int>(3 * U(rng));
+    const double slope = 0.2 + 0.2 * U(rng), x0 = -0.03 + 0.06 * U(rng), y_turn = -0.25 * U(rng),
+                 turn = 0.04 + 0.26 * U(rng), psi = -0.3 + 0.6 * U(rng),
+                 step = 0.02 + 0.06 * U(rng);
+    Surface s(make_monkey_saddle(n, slope));
+    SurfaceCutter cutter(s);
+    int k = 0;
+    for (const ScalpelSegment& at : test::saddle_turn(x0, y_turn, turn, psi, step, 0.35, 2)) {
+      const auto r = cutter.move_to(at);
+      all.add(r);
+      ++all.validations;
+      ++ways[std::min(r.branch_ways, 3)];
+      most = std::max(most, r.incisions);
+      EXPECT_TRUE(valid(s, up)) << "path " << i << ", movement " << k;
+      EXPECT_FALSE(test::two_active_in_a_triangle(s, cutter)) << "path " << i << ", movement " << k;
+      if (::testing::Test::HasFailure()) break;
+      ++k;
+    }
+    if (::testing::Test::HasFailure()) break;
+  }
+  std::cout << "pleated saddle, random turns: " << all << "; movements with branchings into 1, 2, "
+            << "3+: " << ways[1] << ", " << ways[2] << ", " << ways[3] << "; at most " << most
+            << " live incisions\n";
+  // The trajectories do branch into three (else the test would not exercise it): asserted at
+  // least one such movement in every 8 paths.
+  EXPECT_GE(8 * ways[3], paths) << all;
 }
 
 // §5.5's scale-free short-edge rule on surfaces (ShortEdgeRule::kAngle, as in Cutter2D): the

@@ -50,6 +50,31 @@ TEST(DelaunaySurface, GeneratedCylinderAndBellAreValidDiscs) {
   }
 }
 
+TEST(DelaunaySurface, PleatedSaddleIsAValidDiscWithAnAlternatingCentre) {
+  // make_monkey_saddle(10, 0.3) (Fig. 5.18's surface): 11 rows of 11 and 10 nodes, 10 strips of
+  // 19 triangles; the origin's six neighbours at 0°, 60°, … alternately ±0.3 · 0.2 high.
+  Surface s(make_monkey_saddle(10, 0.3));
+  EXPECT_EQ(s.num_triangles(), 190);
+  EXPECT_TRUE(valid(s));
+  EXPECT_EQ(test::components(s), 1);
+  Index centre = -1;
+  for (Index v = 0; v < s.connectivity().num_vertices(); ++v)
+    if (s.point(v).norm() < 1e-12) centre = v;
+  ASSERT_GE(centre, 0);
+  const std::vector<Index> nb = s.neighbours(centre);
+  ASSERT_EQ(nb.size(), 6u);
+  for (const Index w : nb) {
+    const Vec3 p = s.point(w);
+    const double theta = std::atan2(p.y(), p.x());
+    EXPECT_NEAR(p.z(), 0.06 * std::cos(3 * theta), 1e-12) << "neighbour at " << theta;
+    EXPECT_NEAR(std::abs(p.z()), 0.06, 1e-12);
+  }
+  EXPECT_THROW(make_monkey_saddle(5, 0.3), ParameterError);
+  EXPECT_THROW(make_monkey_saddle(2, 0.3), ParameterError);
+  EXPECT_THROW(make_monkey_saddle(10, 0), ParameterError);
+  EXPECT_THROW(make_monkey_saddle(10, 1.5), ParameterError);
+}
+
 TEST(DelaunaySurface, UnfoldedCriterionIsThePlanarOneOnARotatedFlatSheet) {
   // §5.3.1: unfolding two coplanar triangles changes nothing, so on a flat sheet rotated into
   // 3D the unfolded test must give the planar exact incircle's answer for every edge.

@@ -7,8 +7,10 @@
 #include <incise/mesh/validate.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
+#include <vector>
 
 namespace incise::delaunay {
 namespace {
@@ -101,6 +103,56 @@ mesh::MeshData make_surface(SurfaceShape shape, int n, int m) {
       mesh::make_rectangle(n, m > 0 ? m : n, 1.0, 1.0, mesh::GridDiagonal::kAlternating);
   for (Index v = 0; v < g.num_points(); ++v)
     g.points.col(v) = surface_point(shape, g.points(0, v), g.points(1, v));
+  return g;
+}
+
+mesh::MeshData make_monkey_saddle(int n, double slope) {
+  INCISE_CHECK_PARAM(n >= 4 && n % 2 == 0, "make_monkey_saddle: n must be even and >= 4");
+  INCISE_CHECK_PARAM(slope > 0 && slope <= 1, "make_monkey_saddle: slope must be in (0, 1]");
+  const double h = 2.0 / n, dy = h * std::sqrt(3.0) / 2;
+  int rows = static_cast<int>(std::floor(1 / dy + 1e-12));
+  if (rows % 2 == 0) --rows;
+  std::vector<Vec3> points;
+  std::vector<std::vector<Index>> row_nodes;
+  for (int j = -rows; j <= rows; ++j) {
+    std::vector<Index> row;
+    const bool odd = (j % 2) != 0;
+    const int half = odd ? n / 2 - 1 : n / 2;  // x = (i + ½) h up to (n/2 − ½) h, or i h to 1
+    for (int i = -half - (odd ? 1 : 0); i <= half; ++i) {
+      const double x = odd ? (i + 0.5) * h : i * h, y = j * dy;
+      const double r2 = x * x + y * y;
+      // slope · r · cos 3θ = slope · (x³ − 3 x y²) / r², zero at the origin.
+      const double z = r2 > 0 ? slope * (x * x * x - 3 * x * y * y) / r2 : 0.0;
+      row.push_back(static_cast<Index>(points.size()));
+      points.emplace_back(x, y, z);
+    }
+    row_nodes.push_back(row);
+  }
+  std::vector<std::array<Index, 3>> tris;
+  for (size_t j = 0; j + 1 < row_nodes.size(); ++j) {
+    // Zip the lower row A and the upper row B in x order: (a_i, a_i+1, b_k) or (a_i, b_k+1, b_k),
+    // counter-clockwise seen from +z.
+    const std::vector<Index>&A = row_nodes[j], &B = row_nodes[j + 1];
+    size_t i = 0, k = 0;
+    while (i + 1 < A.size() || k + 1 < B.size()) {
+      const bool take_a =
+          k + 1 >= B.size() || (i + 1 < A.size() && points[A[i + 1]].x() < points[B[k + 1]].x());
+      if (take_a) {
+        tris.push_back({A[i], A[i + 1], B[k]});
+        ++i;
+      } else {
+        tris.push_back({A[i], B[k + 1], B[k]});
+        ++k;
+      }
+    }
+  }
+  mesh::MeshData g;
+  g.dimension = 2;
+  g.points.resize(3, static_cast<Index>(points.size()));
+  for (size_t v = 0; v < points.size(); ++v) g.points.col(static_cast<Index>(v)) = points[v];
+  g.cells.resize(3, static_cast<Index>(tris.size()));
+  for (size_t t = 0; t < tris.size(); ++t)
+    for (int c = 0; c < 3; ++c) g.cells(c, static_cast<Index>(t)) = tris[t][c];
   return g;
 }
 

@@ -225,131 +225,6 @@ std::vector<Vec3> SurfaceCutter::star_intersections(const ScalpelSegment& s) con
   return hits;
 }
 
-std::array<ElementHandle, 2> SurfaceCutter::branch_triangles(const std::vector<Vec3>& hits) const {
-  // The triangles of the active node holding the two nearest intersections strictly inside
-  // (barycentrics > 10⁻³, so the new nodes make no sliver), neither next to another active
-  // node; invalid handles when there are none.
-  std::array<ElementHandle, 2> tri;
-  for (size_t k = 0; k < 2; ++k) {
-    for (const ElementHandle e : mesh_.connectivity().star(active_)) {
-      const auto t = mesh_.triangle(e);
-      const Vec3 p = mesh_.point(t[0]), u = mesh_.point(t[1]) - p, w = mesh_.point(t[2]) - p;
-      const Vec3 n = u.cross(w), d = hits[k] - p;
-      const double s1 = d.cross(w).dot(n) / n.squaredNorm(),
-                   s2 = u.cross(d).dot(n) / n.squaredNorm();
-      if (s1 > 1e-3 && s2 > 1e-3 && s1 + s2 < 1 - 1e-3) tri[k] = e;
-    }
-    if (!tri[k].valid()) return {};
-    for (const Index v : mesh_.triangle(tri[k]))
-      for (const Index w : mesh_.neighbours(v))
-        if (w != active_ && mesh_.is_active_node(w)) return {};
-  }
-  if (tri[0] == tri[1]) return {};
-  return tri;
-}
-
-void SurfaceCutter::spawn(const std::vector<Index>& tips) {
-  // New incisions at the slit tips `tips` (boundary nodes), one family (never annihilated
-  // with each other), cut from branch_tau_ on.
-  const int family = next_family_++;
-  for (const Index n : tips) {
-    Incision i{n,     CutPhase::kCutting, mesh_.point(n), IncisionTrack<Vec3>{}, false,
-               false, branch_tau_,        family};
-    for (const ElementHandle e : mesh_.connectivity().star(n)) {
-      const auto t = starting_at(mesh_.triangle(e), n);
-      if (mesh_.is_boundary_edge(n, t[1])) i.track.right = t[1];
-      if (mesh_.is_boundary_edge(t[2], n)) i.track.left = t[2];
-    }
-    i.track.sides = {{i.track.left}, {i.track.right}};
-    i.track.path = {mesh_.point(n)};
-    spawned_.push_back(i);
-  }
-}
-
-bool SurfaceCutter::branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r) {
-  // Fig. 5.14: the scalpel meets the active triangles twice (a fold): a node goes in at each of
-  // the two nearest intersections, the edges from the active node to them are dissected, and
-  // two incisions with these active nodes replace the old one. Only intersections strictly
-  // inside two different triangles, and not next to another active node, are taken (else
-  // refused before the mesh changes); when only the first dissection succeeds, the incision
-  // goes on from the first node alone.
-  const std::array<ElementHandle, 2> tri = branch_triangles(hits);
-  if (!tri[0].valid()) return false;
-  const Index n1 = mesh_.split_triangle(tri[0], hits[0]);
-  const Index n2 = n1 < 0 ? -1 : mesh_.split_triangle(tri[1], hits[1]);
-  if (n2 < 0) {
-    ++r.refused;  // n1, if made, stays an ordinary interior node
-    return false;
-  }
-  const Index c1 = detail::dissect_from_boundary(mesh_, active_, n1);
-  if (c1 < 0) {
-    ++r.refused;  // n1 and n2 stay ordinary interior nodes; the incision goes on
-    return false;
-  }
-  const Index from2 = !mesh_.incident(c1, n2).empty() ? c1 : active_;
-  std::vector<Index> tips{n1};
-  if (detail::dissect_from_boundary(mesh_, from2, n2) >= 0)
-    tips.push_back(n2);
-  else
-    ++r.refused;  // only the branch to n1 is made: the incision goes on from there
-  spawn(tips);
-  r.branched = true;
-  phase_ = CutPhase::kOutside;  // the old incision ends at the branch
-  active_ = -1;
-  return true;
-}
-
-bool SurfaceCutter::edge_branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r) {
-  // Fig. 5.12, third case: the active node a sits on the ridge the scalpel hit, an interior
-  // node; once the scalpel meets a's triangles on both sides of it, nodes n1, n2 go in at the
-  // two nearest intersections and the path n1–a–n2 is dissected in one replace: a's triangles
-  // from a→n2 round to a→n1 (orientation order) take a copy a', so a slit n1–a–n2 / n1–a'–n2
-  // opens with n1 and n2 at its ends, and two incisions with active nodes n1 and n2 go on from
-  // there ("the cut will branch into two incisions"). False with the mesh unchanged (but for
-  // unused or ordinary new nodes, counted refused) when that cannot be done.
-  const std::array<ElementHandle, 2> tri = branch_triangles(hits);
-  if (!tri[0].valid()) return false;
-  const Index n1 = mesh_.split_triangle(tri[0], hits[0]);
-  const Index n2 = n1 < 0 ? -1 : mesh_.split_triangle(tri[1], hits[1]);
-  if (n2 < 0) {
-    ++r.refused;
-    return false;
-  }
-  const mesh::Connectivity& c = mesh_.connectivity();
-  // a's fan from the triangle left of a→n2 round to the one before a→n1.
-  std::vector<ElementHandle> part;
-  const ElementHandle first = detail::left_of(c, active_, n2);
-  for (ElementHandle e = first; e.valid() && part.size() <= c.star(active_).size();) {
-    const auto t = starting_at(mesh_.triangle(e), active_);
-    part.push_back(e);
-    if (t[2] == n1) break;
-    e = detail::left_of(c, active_, t[2]);
-    if (e == first) break;  // round without meeting n1 (checked below)
-  }
-  if (part.empty() || part.size() >= c.star(active_).size() ||
-      starting_at(mesh_.triangle(part.back()), active_)[2] != n1) {
-    ++r.refused;
-    return false;
-  }
-  const Index copy = mesh_.add_vertex(mesh_.point(active_));
-  std::vector<std::array<Index, 3>> add;
-  for (const ElementHandle e : part) {
-    auto t = mesh_.triangle(e);
-    for (Index& v : t)
-      if (v == active_) v = copy;
-    add.push_back(t);
-  }
-  if (!mesh_.replace(part, add)) {
-    ++r.refused;  // copy stays unused; n1 and n2 stay ordinary interior nodes
-    return false;
-  }
-  spawn({n1, n2});
-  r.branched = true;
-  phase_ = CutPhase::kOutside;  // the entry's incision ends at the branch
-  active_ = -1;
-  return true;
-}
-
 double SurfaceCutter::d_max(const ScalpelSegment& s) const {
   // Fig. 5.11: the smallest distance from the scalpel to an edge opposite the active node.
   double d = std::numeric_limits<double>::infinity();
@@ -725,6 +600,7 @@ void SurfaceCutter::merge(SurfaceMoveReport& r, const SurfaceMoveReport& sub) {
   r.edge_entered = r.edge_entered || sub.edge_entered;
   r.annihilated = r.annihilated || sub.annihilated;
   r.branched = r.branched || sub.branched;
+  r.branch_ways = std::max(r.branch_ways, sub.branch_ways);
   r.submovements += sub.submovements;
   r.substeps += sub.substeps;
   r.removals += sub.removals;
@@ -779,6 +655,13 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
   for (size_t k = incisions_.size() - spawned_.size(); k < incisions_.size(); ++k)
     branches.push_back(k);
   spawned_.clear();
+  // Restriction 1 for an entry that snaps to an existing node: none of its triangles may hold
+  // an active node (at most one per triangle).
+  auto next_to_active = [&](Index v) {
+    for (const Index w : mesh_.neighbours(v))
+      if (is_active(w)) return true;
+    return false;
+  };
   // New incisions (Fig. 5.12, first case): every entering contact of the sweep with a boundary
   // edge, earliest first (ties by vertex numbers), each then cut over the rest of the movement.
   for (const EntryHit& e : find_entries(from, s)) {
@@ -797,6 +680,10 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
     const Index a = detail::boundary_node_at(mesh_, e.p, e.q, x, eps_entry_);
     if (a < 0 || is_active(a)) {
       ++r.refused;
+      continue;
+    }
+    if (next_to_active(a)) {
+      ++r.rejected_entries;  // snapped to an end whose triangles hold an active node
       continue;
     }
     start(a, false, false, e.hit.time, from, s, r);
@@ -837,7 +724,12 @@ SurfaceMoveReport SurfaceCutter::move_to(const ScalpelSegment& s) {
       continue;
     }
     Index a = (x - pp).norm() <= (x - pq).norm() ? e.p : e.q;
-    if ((mesh_.point(a) - x).norm() > eps_entry_ || !mesh_.is_interior_vertex(a)) {
+    const bool snap = (mesh_.point(a) - x).norm() <= eps_entry_ && mesh_.is_interior_vertex(a);
+    if (snap && next_to_active(a)) {
+      ++r.rejected_entries;  // the end's triangles hold an active node
+      continue;
+    }
+    if (!snap) {
       const mesh::Connectivity& c = mesh_.connectivity();
       const ElementHandle t1 = detail::left_of(c, e.p, e.q), t2 = detail::left_of(c, e.q, e.p);
       const Index r1 = detail::third(c, t1, e.p, e.q), r2 = detail::third(c, t2, e.p, e.q);
@@ -957,16 +849,6 @@ void SurfaceCutter::tip_fix_up(SurfaceMoveReport& r) {
     return;
   }
   ++r.refused;  // tried again after the next step
-}
-
-bool SurfaceCutter::is_sibling(Index v) const {
-  // v is the active node of a live incision of the working incision's family (the branches of
-  // one branching: their tips start next to each other, and they move apart).
-  if (family_ < 0) return false;
-  for (const std::vector<Incision>* list : {&incisions_, &spawned_})
-    for (const Incision& i : *list)
-      if (i.active == v && i.phase != CutPhase::kOutside && i.family == family_) return true;
-  return false;
 }
 
 bool SurfaceCutter::is_active(Index v) const {

@@ -28,7 +28,8 @@ namespace {
 /// Counts over a sequence of movements.
 struct Tally {
   int moves = 0, entered = 0, tip_entered = 0, edge_entered = 0, exited = 0, branched = 0,
-      annihilated = 0, splits = 0, removals = 0, blocked = 0, lost = 0, most_incisions = 0;
+      three_way = 0, annihilated = 0, splits = 0, removals = 0, blocked = 0, lost = 0,
+      most_incisions = 0;
   long flips = 0, restricted = 0;
   void add(const SurfaceMoveReport& r) {
     ++moves;
@@ -37,6 +38,7 @@ struct Tally {
     edge_entered += r.edge_entered;
     exited += r.exited;
     branched += r.branched;
+    three_way += r.branch_ways >= 3;
     annihilated += r.annihilated;
     splits += r.splits;
     removals += r.removals;
@@ -51,10 +53,10 @@ struct Tally {
 std::ostream& operator<<(std::ostream& o, const Tally& t) {
   return o << t.moves << " movements, " << t.entered << " entries, " << t.tip_entered
            << " tip entries, " << t.edge_entered << " edge entries, " << t.exited << " exits, "
-           << t.branched << " branchings (at most " << t.most_incisions << " live incisions), "
-           << t.annihilated << " annihilations, " << t.splits << " splits, " << t.removals
-           << " removals, " << t.flips << " flips, " << t.restricted << " restrictions, "
-           << t.blocked << " blocked, " << t.lost << " lost";
+           << t.branched << " branchings (" << t.three_way << " three-way; at most "
+           << t.most_incisions << " live incisions), " << t.annihilated << " annihilations, "
+           << t.splits << " splits, " << t.removals << " removals, " << t.flips << " flips, "
+           << t.restricted << " restrictions, " << t.blocked << " blocked, " << t.lost << " lost";
 }
 
 /// Smallest and largest triangle angle (degrees) and the triangles with an angle below 10° or
@@ -166,15 +168,27 @@ Tally cut(Surface& s, SurfaceCutter& cutter, const std::vector<ScalpelSegment>& 
     t.add(r);
     if (std::getenv("INCISE_CH5_TRACE") != nullptr &&
         (r.entered || r.edge_entered || r.tip_entered || r.exited || !r.ok() ||
-         r.rejected_entries > 0))
+         r.rejected_entries > 0 || r.branched || r.extra_intersections > 0))
       std::cout << std::defaultfloat << std::setprecision(4) << "  movement " << k << " at ("
                 << samples[k].head.x() << ", " << samples[k].head.y() << "): entered " << r.entered
-                << " exited " << r.exited << " rejected entries " << r.rejected_entries << " "
-                << to_string(r.status) << (r.ok() ? "" : ": ") << r.message << "\n";
+                << " tip entered " << r.tip_entered << " exited " << r.exited << " branches "
+                << r.branch_ways << " extra intersections " << r.extra_intersections
+                << " incisions " << r.incisions << " at" <<
+          [&] {
+            std::string o;
+            for (const Index v : cutter.active_nodes())
+              o += " (" + std::to_string(s.point(v).x()) + ", " + std::to_string(s.point(v).y()) +
+                   ", " + std::to_string(s.point(v).z()) + ")";
+            return o;
+          }() << " rejected entries "
+                << r.rejected_entries << " " << to_string(r.status) << (r.ok() ? "" : ": ")
+                << r.message << "\n";
     drawn.push_back(0.5 * (samples[k].head + samples[k].tail));
     const auto v = mesh::validate(s.connectivity());
     EXPECT_TRUE(v.ok()) << "after movement " << k << ": " << v.violations.front().message;
-    if (!v.ok()) break;
+    // §5.3.2: at most one active node per triangle.
+    EXPECT_FALSE(test::two_active_in_a_triangle(s, cutter)) << "after movement " << k;
+    if (::testing::Test::HasFailure()) break;
   }
   return t;
 }
@@ -280,33 +294,38 @@ TEST(Chapter5, Fig5_19SelfIntersectingPathOnTheBell) {
   EXPECT_EQ(test::components(s), 3);
 }
 
-TEST(Chapter5, Fig5_18TurnedScalpelBranchesOnACoarseFold) {
+TEST(Chapter5, Fig5_18ThreeWayBranchOnAPleatedSaddle) {
   // Fig. 5.18 ("a cut branching into three cuts"; a mesh with very sharp angles and a limited
-  // resolution) has no trajectory in the text. Stand-in: a coarse, sharply creased surface — the
-  // 270° fold (surface.hpp, axis y) as an 8 × 4 grid, 33.75° between its rows of triangles — cut
-  // along its top by a vertical scalpel that then turns towards the horizontal about a point
-  // 0.01 below the top (the folded case of Fig. 5.14), reaching the horizontal at y = 0.6. The
-  // SurfaceCutter branches into two at a time (the two nearest intersections); a three-way
-  // branch would be a second branching of a branch — not reached here (README).
-  constexpr int kN = 8, kM = 4;  // 64 triangles; 33.75° between rows of triangles
-  constexpr double kL = 0.3;     // scalpel half-length (the Fig. 5.14 test's)
-  Surface s(make_surface(SurfaceShape::kFold, kN, kM));
+  // resolution) is a picture without trajectory or counts. Constructed here: the pleated saddle
+  // (make_monkey_saddle, z = 0.2 r cos 3θ on an equilateral lattice of edge h = 0.2, 190
+  // triangles, six neighbours of the centre alternately 0.04 above and below it) cut along its
+  // zero ray x = 0 by a vertical scalpel (test::saddle_turn: centre (0, y, 0), half-length 0.35)
+  // from the boundary y = −0.87, 0.04 per movement; from y = −0.15 it tilts about its centre
+  // towards the x axis, horizontal from y = 0.05 on, and then grows by 2 per unit of y. The
+  // active node's star is a cone: a line through the node meets it only there, so the branching
+  // comes when the scalpel is ahead of the node and tilted below the pleats' slope (the plane
+  // through the node and the scalpel then separates the four forward neighbours alternately):
+  // the two outer crossings come into the star together (mirror symmetry) and the incision
+  // branches into three (asserted), which follow the zero rays θ = 30°, 90°, 150° to the
+  // boundary: with the first cut, four pieces (asserted; also with lattices n = 8 and 12 and
+  // steps 0.02, tried when the slope was chosen — at slope 0.3 the middle branch was blocked by
+  // a crease ahead and lost, three pieces).
+  constexpr int kN = 10;
+  constexpr double kSlope = 0.2, kTurn = -0.15, kSpan = 0.2, kStep = 0.04, kHalf = 0.35, kGrow = 2;
+  Surface s(make_monkey_saddle(kN, kSlope));
   const Index before = s.num_triangles();
+  const Angles start = angles(s);
   SurfaceCutter cutter(s);
-  std::vector<ScalpelSegment> samples;
-  for (int k = 0; k <= 60; ++k) {
-    const double y = -1.2 + 0.04 * k;
-    const double phi = std::clamp((y + 0.2) / 0.8, 0.0, 1.0) * M_PI / 2;
-    const Vec3 c(0, y, 0.99), d(std::sin(phi), 0, std::cos(phi));
-    samples.push_back({c + kL * d, c - kL * d});
-  }
   std::vector<Vec3> drawn;
-  const Tally t = cut(s, cutter, samples, drawn);
-  write_svg(s, drawn, "fig5_18_fold_branch");
-  std::cout << "Fig. 5.18  fold " << before << " -> " << s.num_triangles()
-            << " triangles (pieces of " << sizes_text(piece_sizes(s)) << "), " << t << "; "
-            << angles(s) << "\n";
-  EXPECT_GE(t.branched, 1) << t;
+  const Tally t = cut(s, cutter, test::saddle_turn(0, kTurn, kSpan, 0, kStep, kHalf, kGrow), drawn);
+  write_svg(s, drawn, "fig5_18_saddle_branch");
+  std::cout << "Fig. 5.18  saddle " << before << " -> " << s.num_triangles()
+            << " triangles (pieces of " << sizes_text(piece_sizes(s)) << "), " << t << "; start "
+            << start << "; after " << angles(s) << "\n";
+  EXPECT_GE(t.three_way, 1) << t;
+  EXPECT_GE(t.most_incisions, 3) << t;
+  EXPECT_EQ(t.blocked + t.lost, 0) << t;
+  EXPECT_EQ(test::components(s), 4) << t;
 }
 
 }  // namespace

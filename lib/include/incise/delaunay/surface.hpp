@@ -73,6 +73,15 @@ Vec3 surface_point(SurfaceShape shape, double u, double v, Vec3* normal = nullpt
 /// Throws ParameterError for n < 2 or 0 < m < 2.
 mesh::MeshData make_surface(SurfaceShape shape, int n, int m = 0);
 
+/// A pleated "monkey saddle" for three-way branching (Fig. 5.18): an equilateral triangle
+/// lattice of edge h = 2/n (rows parallel to x, a node at the origin whose six neighbours lie at
+/// 0°, 60°, …, 300°; rows y = j h √3/2 for |j| ≤ J, the largest odd J with J h √3/2 ≤ 1; rows of
+/// even j hold x = i h, odd j x = (i + ½) h, |x| ≤ 1), lifted to z = slope · r · cos 3θ — zero
+/// along the rays θ = 30°, 90°, 150°, …, so a line y = c > 0, z = 0 meets it three times, and
+/// every node's star around the origin alternates up and down. Mirror symmetric in x with
+/// z(−x, y) = −z(x, y). Throws ParameterError for an odd n < 4 or slope outside (0, 1].
+mesh::MeshData make_monkey_saddle(int n, double slope);
+
 /// Triangle surface in 3D (see file comment).
 class Surface {
  public:

@@ -10,8 +10,9 @@
 ///     crossing of the tip's path with the inside of a triangle (second case) and every contact
 ///     of the scalpel's side with an exposed interior edge — a ridge it comes down on, meeting
 ///     neither triangle of the edge before and both after (third case) — starts an incision,
-///     earliest first, ties by vertex numbers — unless its edge or triangle is active or it is
-///     within ε_entry of an entry of this movement (restriction 1 of §5.3.2; counted). A
+///     earliest first, ties by vertex numbers — unless its edge or triangle is active, the node
+///     it snaps to shares a triangle with an active node, or it is within ε_entry of an entry of
+///     this movement (restriction 1 of §5.3.2; counted). A
 ///     boundary edge entry's active node is the edge's end within ε_entry or a new node on it; a
 ///     tip entry's is a new node inside the triangle; an interior edge entry's is the edge's
 ///     interior end within ε_entry or a new node splitting the edge. The incision is then
@@ -37,18 +38,19 @@
 ///     node comes within ε_exit of one: a node on that edge, the edge to it dissected and
 ///     contracted; annihilation (Fig. 5.13) when the active node comes within ε_edge of a node
 ///     next to another active node (not a branch of the same branching): the two incisions join
-///     and end; branching (Fig. 5.14) when the scalpel meets the active triangles twice (a
-///     fold): nodes at the two nearest intersections, the edges to them dissected, two
-///     incisions instead of one, cut over the rest of the movement. An interior edge entry's
-///     node branches the same way once the scalpel meets its triangles on both sides of the
-///     ridge (the path n1–a–n2 dissected: a slit with two tips); met on one side only, it goes
-///     on as a tip entry.
+///     and end; branching (Figs. 5.14, 5.18) when the scalpel meets the active triangles k ≥ 2
+///     times (a fold, a pleated star): nodes at the intersections strictly inside distinct
+///     triangles not next to another active node (the nearest among them, else no branch), the
+///     edges to them dissected one after the other, k incisions — one family, any size, each
+///     with its own active node — instead of one, cut over the rest of the movement. An interior
+///     edge entry's node branches the same way once the scalpel meets its triangles on both
+///     sides of the ridge (the path n1–a–n2 dissected: a slit with two tips, further nodes
+///     dissected from it); met on one side only, it goes on as a tip entry.
 /// All live active nodes are marked on the Surface, which refuses any change that would put two
 /// in one triangle (restriction 3 and "at most one active node per triangle"). A scalpel that no
 /// longer meets the active triangles (lifted off the surface, or a jump past the d_max floor)
 /// ends the incision where it is (status kLost: the slit stays, the mesh is valid). Not built:
-/// a tip or a scalpel side through a node or (tip) an edge exactly, more than two branches at
-/// once (the two nearest intersections are taken). Thresholds
+/// a tip or a scalpel side through a node or (tip) an edge exactly. Thresholds
 /// are fractions of the starting mesh's mean edge length h̄ (Cutter2DOptions, §5.4 defaults).
 /// Entries are found through a uniform 3D grid of cell h̄ over the triangles and boundary edges,
 /// kept current by watching the connectivity, so a movement touches only what is near the
@@ -87,10 +89,13 @@ struct [[nodiscard]] SurfaceMoveReport
   bool tip_entered = false;             ///< the scalpel's tip pierced a triangle (Fig. 5.12)
   /// The scalpel's side hit an exposed interior edge (a ridge; Fig. 5.12, third case).
   bool edge_entered = false;
-  bool fixed_up = false;          ///< the entry fix-up was made
-  bool exited = false;            ///< the incision reached the boundary (exit)
-  bool annihilated = false;       ///< two incisions met and ended (Fig. 5.13)
-  bool branched = false;          ///< an incision branched into two (Fig. 5.14)
+  bool fixed_up = false;     ///< the entry fix-up was made
+  bool exited = false;       ///< the incision reached the boundary (exit)
+  bool annihilated = false;  ///< two incisions met and ended (Fig. 5.13)
+  bool branched = false;     ///< an incision branched (Figs. 5.14, 5.18)
+  /// The most incisions one branching of this movement made (2 in Fig. 5.14, 3 in Fig. 5.18;
+  /// 1 when only the nearest branch could be made; 0 without branching).
+  int branch_ways = 0;
   int submovements = 0;           ///< d_max sub-movements (Fig. 5.11)
   int substeps = 0;               ///< moves of the active node
   long flips = 0;                 ///< edge flips
@@ -98,12 +103,14 @@ struct [[nodiscard]] SurfaceMoveReport
   int removals = 0;               ///< interior nodes removed
   int splits = 0;                 ///< incision splits (new node pairs)
   int refused = 0;                ///< splits, fix-ups or exits the guards refused
-  int extra_intersections = 0;    ///< further scalpel–star intersections (not followed)
-  int incisions = 0;              ///< live incisions after the movement
+  /// Scalpel–star intersections beyond the first, summed over the sub-movements (not followed,
+  /// except those a branching makes branches at).
+  int extra_intersections = 0;
+  int incisions = 0;    ///< live incisions after the movement
   long restricted = 0;  ///< changes refused: a triangle would get two active nodes (§5.3.2)
   /// Contacts with boundary edges not taken as entries (restriction 1 of §5.3.2: the edge or its
-  /// triangle is active — mostly the scalpel at its own incision — or within ε_entry of an entry
-  /// of this movement).
+  /// triangle is active — mostly the scalpel at its own incision —, the node it would snap to
+  /// shares a triangle with an active node, or it is within ε_entry of an entry of this movement).
   int rejected_entries = 0;
 };
 
@@ -191,8 +198,16 @@ class SurfaceCutter {
   bool annihilate(SurfaceMoveReport& r);
   bool branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r);
   bool edge_branch(const std::vector<Vec3>& hits, SurfaceMoveReport& r);
-  std::array<mesh::ElementHandle, 2> branch_triangles(const std::vector<Vec3>& hits) const;
-  void spawn(const std::vector<Index>& tips);
+  /// A branch point: a scalpel intersection strictly inside an active triangle.
+  struct BranchPoint {
+    mesh::ElementHandle triangle;
+    Vec3 point = Vec3::Zero();
+  };
+  std::vector<BranchPoint> branch_points(const std::vector<Vec3>& hits) const;
+  std::vector<Index> branch_nodes(const std::vector<BranchPoint>& at, SurfaceMoveReport& r);
+  void dissect_branches(const std::vector<Index>& nodes, std::vector<Index>& holders,
+                        std::vector<Index>& tips, SurfaceMoveReport& r);
+  void spawn(const std::vector<Index>& tips, SurfaceMoveReport& r);
   bool is_forbidden(Index p, Index q) const;
   void end_incision();
 
