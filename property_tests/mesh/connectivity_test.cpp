@@ -666,7 +666,7 @@ TEST(ConnectivityProperty, Figure78DuplicateIsCaughtByValidate) {
 // a Figure 7.8 duplicate is still caught. Without INCISE_PARANOID the same local check is run
 // explicitly.
 TEST(ConnectivityProperty, LocalValidationOnLargeMesh) {
-  Connectivity c = Connectivity::from_mesh_data(make_box(15, 15, 15, 1, 1, 1));
+  Connectivity c = Connectivity::from_mesh_data(make_box(9, 9, 9, 1, 1, 1));  // 4,374 tets
   ASSERT_GT(c.num_elements(), kParanoidFullValidationLimit);
   // A legal edit first: remove and re-add one element.
   const ElementHandle e = c.elements()[c.num_elements() / 2];
