@@ -16,10 +16,10 @@
 /// automatic §3.6 policy), capacitance updated (1) or refactored at every solve (0).
 
 #include <benchmark/benchmark.h>
-#include <incise/fixtures/organ_path.hpp>
-#include <incise/interactive/augmented_cut_session.hpp>
 #include <incise/core/problem.hpp>
 #include <incise/core/timer.hpp>
+#include <incise/fixtures/organ_path.hpp>
+#include <incise/interactive/augmented_cut_session.hpp>
 #include <incise/io/read_mesh.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
 #include <incise/linalg/ldl_closure_solver.hpp>
@@ -30,8 +30,8 @@
 #include <incise_bench/context.hpp>
 
 #include <algorithm>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -291,14 +291,12 @@ FrameSystem frame_system(const incise::interactive::AugmentedCutSession& session
 
 bool same_pattern(const incise::linalg::SparseMatrix& a, const incise::linalg::SparseMatrix& b) {
   return a.rows() == b.rows() && a.nonZeros() == b.nonZeros() &&
-         std::equal(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1,
-                    b.outerIndexPtr()) &&
+         std::equal(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1, b.outerIndexPtr()) &&
          std::equal(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros(), b.innerIndexPtr());
 }
 
 /// `a` (n × n) padded to order `size` with `scale`·I.
-incise::linalg::SparseMatrix padded(const incise::linalg::SparseMatrix& a, int size,
-                                    double scale) {
+incise::linalg::SparseMatrix padded(const incise::linalg::SparseMatrix& a, int size, double scale) {
   std::vector<Eigen::Triplet<double>> t;
   t.reserve(static_cast<std::size_t>(a.nonZeros() + size - a.rows()));
   for (int j = 0; j < a.outerSize(); ++j)
@@ -365,8 +363,7 @@ void BM_LiverStrategies(benchmark::State& state) {
     FrameSystem prev = frame_system(session);
     const int n0 = static_cast<int>(prev.k.rows());
     // refactor: the session's factorization options.
-    CholmodFactor refactor(
-        incise::interactive::AugmentedCutOptions::supernodal_defaults().cholmod);
+    CholmodFactor refactor(incise::interactive::AugmentedCutOptions::supernodal_defaults().cholmod);
     std::uint64_t version = 1;
     // updown: simplicial LDLᵀ of K̃ padded to a reserve of DOFs.
     const double pad_scale = prev.k.diagonal().sum() / n0;
@@ -446,10 +443,9 @@ void BM_LiverStrategies(benchmark::State& state) {
       // cholmod_updown of the padded factor.
       {
         const incise::linalg::SparseMatrix delta =
-            n <= reserve ? incise::linalg::SparseMatrix(
-                               (padded(cur.k, reserve, pad_scale) -
-                                padded(prev.k, reserve, pad_scale))
-                                   .pruned())
+            n <= reserve ? incise::linalg::SparseMatrix((padded(cur.k, reserve, pad_scale) -
+                                                         padded(prev.k, reserve, pad_scale))
+                                                            .pruned())
                          : incise::linalg::SparseMatrix();
         const double t0 = incise::thread_cpu_seconds();
         CholmodFactor::ModifyStats stats;

@@ -387,7 +387,8 @@ FactorStatus CholmodFactor::modify(const SparseMatrix& delta, ModifyStats* stats
   const double* lx = static_cast<const double*>(l->x);
   for (int j = 0; j < n_; ++j) {
     if (!(lx[lp[j]] > 0)) {
-      message_ = "modify: pivot " + std::to_string(j) + " not positive after the downdate (the "
+      message_ = "modify: pivot " + std::to_string(j) +
+                 " not positive after the downdate (the "
                  "modified matrix is not positive definite, or round-off: refactor)";
       factorized_ = false;
       minor_ = j;
