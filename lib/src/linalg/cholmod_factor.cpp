@@ -1,4 +1,5 @@
 #include <incise/core/error.hpp>
+#include <incise/core/timer.hpp>
 #include <incise/linalg/blas_threads.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
 
@@ -315,6 +316,7 @@ FactorStatus CholmodFactor::modify(const SparseMatrix& delta, ModifyStats* stats
   const int t = static_cast<int>(touched.size());
   if (stats != nullptr) stats->touched = t;
   if (t == 0) return status_ = FactorStatus::kOk;
+  const double t_split = thread_cpu_seconds();
   Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(t, t);
   for (const int j : touched) {
     for (SparseMatrix::InnerIterator it(delta, j); it; ++it)
@@ -328,6 +330,8 @@ FactorStatus CholmodFactor::modify(const SparseMatrix& delta, ModifyStats* stats
   }
   const Eigen::VectorXd& lambda = eig.eigenvalues();
   const double drop = 1e-14 * lambda.cwiseAbs().maxCoeff();
+  const double t_updown = thread_cpu_seconds();
+  if (stats != nullptr) stats->cpu_seconds_split = t_updown - t_split;
   // Rows of C in the factor's order: position = inverse of L->Perm.
   const int* perm = static_cast<const int*>(l->Perm);
   std::vector<int> position(static_cast<size_t>(n_));
@@ -396,6 +400,7 @@ FactorStatus CholmodFactor::modify(const SparseMatrix& delta, ModifyStats* stats
     }
   }
   rcond_ = cholmod_rcond(l, &c);
+  if (stats != nullptr) stats->cpu_seconds_updown = thread_cpu_seconds() - t_updown;
   if (options_.min_pivot_ratio > 0 && !(rcond_ >= options_.min_pivot_ratio)) {
     message_ = "modify: matrix numerically singular (pivot ratio " + std::to_string(rcond_) + ")";
     factorized_ = false;

@@ -138,12 +138,14 @@ class CholmodFactor {
   /// Solves A x = b with the current factor (dense right-hand side). Returns info().
   [[nodiscard]] FactorStatus solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
 
-  /// What modify() did: |T| rows/columns touched by Δ, and the ranks of the update and the
-  /// downdate (positive and negative eigenvalues of Δ_TT kept).
+  /// What modify() did: |T| rows/columns touched by Δ, the ranks of the update and the
+  /// downdate (positive and negative eigenvalues of Δ_TT kept), and where the time went.
   struct ModifyStats {
     int touched = 0;
     int rank_update = 0;
     int rank_downdate = 0;
+    double cpu_seconds_split = 0;   ///< thread CPU of the eigendecomposition of Δ_TT
+    double cpu_seconds_updown = 0;  ///< thread CPU of the cholmod_updown calls and checks
   };
   /// Low-rank modification of the stored factor, A ← A + Δ, by CHOLMOD's multiple-rank
   /// update/downdate (cholmod_updown, Davis & Hager; the Modify module; new fill in L is added
