@@ -244,8 +244,12 @@ BENCHMARK(BM_NewColumnsOfG)
 // benchmark and not counted; the augmented column replacements are counted in its update). The cut
 // is the same for every strategy (the session's); frame = cut + solver. Every changed frame's
 // solutions are compared with an independent fresh factorization (CHOLMOD simplicial LDLᵀ, AMD):
-// max-norm relative difference. Args: refined (0/1), blade advance per frame (0.1 mm units),
-// frames.
+// max-norm relative difference.
+//   every     — a second session in lockstep with AugmentedCutOptions::refactor_every_step
+//               (scene key refactor_every_step): its own cut and update, i.e. a factorization of
+//               the current K in the frame thread and a solve with m = |𝓓| (its solution is
+//               compared when its DOF count equals the first session's: the same cut).
+// Args: refined (0/1), blade advance per frame (0.1 mm units), frames.
 
 /// K̃ x = b with 𝓓 eliminated symmetrically (see above); x_d = ā_d.
 struct FrameSystem {
@@ -361,6 +365,11 @@ void BM_LiverStrategies(benchmark::State& state) {
       state.SkipWithError(session.initial_report().message.c_str());
       return;
     }
+    // The same path with AugmentedCutOptions::refactor_every_step (scene key), in lockstep.
+    incise::interactive::AugmentedCutOptions every;
+    every.refactor_every_step = true;
+    incise::interactive::AugmentedCutSession session_every(body, material, path.fixed, path.forces,
+                                                           every);
     FrameSystem prev = frame_system(session);
     const int n0 = static_cast<int>(prev.k.rows());
     // refactor: the session's factorization options.
@@ -381,22 +390,28 @@ void BM_LiverStrategies(benchmark::State& state) {
       state.SkipWithError("initial solve failed");
       return;
     }
-    std::vector<double> cut, aug, ref_t, upd_t, cg_t;
+    std::vector<double> cut, aug, ref_t, upd_t, cg_t, every_t;
+    double err_every = 0;
+    int every_mismatch = 0;
     double err_aug = 0, err_ref = 0, err_upd = 0, err_cg = 0, worst_cg_res = 0;
     int changed = 0, updown_refactors = 0, updown_failures = 0, rank_max = 0, touched_max = 0;
     long cg_iterations = 0, cg_iter_max = 0;
     double rank_sum = 0, split_sum = 0, updown_sum = 0;
     bool failed = false;
     for (int f = 0; f < frames && !failed; ++f) {
-      double c = 0, u = 0;
+      double c = 0, u = 0, e = 0;
       for (const auto& tri : path.frame(f, advance)) {
         const incise::interactive::AugmentedCutStepReport r = session.step(tri);
         c += r.cpu_seconds_cut;
         u += r.cpu_seconds_update;
         if (!r.ok()) failed = true;
+        const incise::interactive::AugmentedCutStepReport re = session_every.step(tri);
+        e += re.cpu_seconds_update;
+        if (!re.ok()) failed = true;
       }
       cut.push_back(c);
       aug.push_back(u);
+      every_t.push_back(e);
       FrameSystem cur = frame_system(session);
       const bool pattern = same_pattern(cur.k, prev.k);
       const bool unchanged =
@@ -406,6 +421,7 @@ void BM_LiverStrategies(benchmark::State& state) {
       if (unchanged) {  // statistics over the changed frames only
         cut.pop_back();
         aug.pop_back();
+        every_t.pop_back();
         continue;
       }
       ++changed;
@@ -427,6 +443,17 @@ void BM_LiverStrategies(benchmark::State& state) {
           for (int k = 0; k < 3; ++k) x_aug(d + k) = session.displacement()(k, v);
       }
       err_aug = std::max(err_aug, max_relative(x_aug, x_ref));
+      if (session_every.system().num_dofs() == n) {  // the same cut (solutions agree to 1e-12)
+        Eigen::VectorXd x_every = Eigen::VectorXd::Zero(n);
+        for (Index v = 0; v < session_every.mesh().num_nodes(); ++v) {
+          const int d = session_every.dof(v);
+          if (d >= 0)
+            for (int k = 0; k < 3; ++k) x_every(d + k) = session_every.displacement()(k, v);
+        }
+        err_every = std::max(err_every, max_relative(x_every, x_ref));
+      } else {
+        ++every_mismatch;
+      }
       // Refactor every frame.
       {
         const double t0 = incise::thread_cpu_seconds();
@@ -518,6 +545,9 @@ void BM_LiverStrategies(benchmark::State& state) {
     put("refactor", ref_t);
     put("updown", upd_t);
     put("cg", cg_t);
+    put("every", every_t);
+    state.counters["err_every"] = err_every;
+    state.counters["every_dof_mismatch"] = every_mismatch;
     const auto sc = summarize(cut);
     state.counters["cut_med_ms"] = 1e3 * sc.median;
     state.counters["frames_changed"] = changed;
