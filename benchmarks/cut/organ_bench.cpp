@@ -246,7 +246,7 @@ BENCHMARK(BM_NewColumnsOfG)
 // solutions are compared with an independent fresh factorization (CHOLMOD simplicial LDLᵀ, AMD):
 // max-norm relative difference.
 //   every     — a second session in lockstep with AugmentedCutOptions::refactor_every_step
-//               (scene key refactor_every_step): its own cut and update, i.e. a factorization of
+//               (a library option, no scene key): its own cut and update, i.e. a factorization of
 //               the current K in the frame thread and a solve with m = |𝓓| (its solution is
 //               compared when its DOF count equals the first session's: the same cut).
 // Args: refined (0/1), blade advance per frame (0.1 mm units), frames.
@@ -365,7 +365,7 @@ void BM_LiverStrategies(benchmark::State& state) {
       state.SkipWithError(session.initial_report().message.c_str());
       return;
     }
-    // The same path with AugmentedCutOptions::refactor_every_step (scene key), in lockstep.
+    // The same path with AugmentedCutOptions::refactor_every_step, in lockstep.
     incise::interactive::AugmentedCutOptions every;
     every.refactor_every_step = true;
     incise::interactive::AugmentedCutSession session_every(body, material, path.fixed, path.forces,

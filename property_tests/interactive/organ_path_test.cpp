@@ -82,8 +82,8 @@ TEST(OrganPath, Issue17EveryFrameEqualsAFreshFactorization3mm) {
   run_path(0.003, slow() ? 100 : 4);
 }
 
-// The "refactor every step" strategy (AugmentedCutOptions::refactor_every_step, scene key
-// refactor_every_step) on the same frames.
+// The "refactor every step" strategy (AugmentedCutOptions::refactor_every_step) on the same
+// frames.
 TEST(OrganPath, Issue17RefactorEveryStepEqualsAFreshFactorization3mm) {
   AugmentedCutOptions options;
   options.refactor_every_step = true;

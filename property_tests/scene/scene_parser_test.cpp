@@ -490,23 +490,6 @@ TEST(SceneParser, RefactorAtMParses) {
   EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.refactor_at_m, 300);
 }
 
-// refactor_every_step (docs/scenes.md; the per-frame strategy table of docs/augmented.md).
-TEST(SceneParser, RefactorEveryStepParsesAndIsAugmentedOnly) {
-  Json j = augmented_cut_scene();
-  EXPECT_FALSE(parse_scene(j.dump(), "scene.json", "").solver.refactor_every_step);
-  j["solver"]["refactor_every_step"] = true;
-  EXPECT_TRUE(parse_scene(j.dump(), "scene.json", "").solver.refactor_every_step);
-  j["solver"]["refactor_every_step"] = 1;
-  EXPECT_NE(error_of(j).find("/solver/refactor_every_step"), std::string::npos) << error_of(j);
-  j["solver"]["refactor_every_step"] = true;
-  j["solver"].erase("cut_configuration");
-  j["solver"]["method"] = "cg";
-  const std::string e = error_of(j);
-  EXPECT_NE(e.find("/solver/refactor_every_step: not allowed here: only the \"augmented\""),
-            std::string::npos)
-      << e;
-}
-
 TEST(SceneParserBad, RefactorAtMNegative) {
   Json j = augmented_cut_scene();
   j["solver"]["refactor_at_m"] = -5;

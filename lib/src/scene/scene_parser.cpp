@@ -297,7 +297,6 @@ SolverSpec parse_solver(JsonObject o, bool slab) {
     s.cut_configuration = o.choice("cut_configuration", kCutConfigurationNames,
                                    SolverSpec::CutConfiguration::kDeformed);
     s.refactor_at_m = o.integer("refactor_at_m", 0, std::numeric_limits<int>::max(), 0);
-    s.refactor_every_step = o.boolean("refactor_every_step", false);
     s.solve_threads = o.integer("solve_threads", 1, 64, 1);
     std::vector<std::string> schur_names = {kExplicitSchurName};
     for (const std::string& n : linalg::kSchurPreconditionerNames.names()) schur_names.push_back(n);
@@ -313,8 +312,6 @@ SolverSpec parse_solver(JsonObject o, bool slab) {
     o.forbid("refactor_at_m",
              "only the \"augmented\" method has a factorization to refactor (§3.6 of Yeung et "
              "al. 2016)");
-    o.forbid("refactor_every_step",
-             "only the \"augmented\" method has a factorization to update or refactor");
     o.forbid("solve_threads",
              "only the \"augmented\" method has step-3 triangular solves to split (Yeung et al. "
              "2016 §3.2)");
@@ -689,7 +686,6 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
     const std::pair<const char*, const char*> cut_only_keys[] = {
         {"cut_configuration", ""},
         {"refactor_at_m", ", so the augmented run solves once and never refactors"},
-        {"refactor_every_step", ", so the augmented run solves once and never refactors"},
         {"solve_threads",
          ", so the augmented run is one direct CHOLMOD solve without the augmented steps"},
         {"schur_preconditioner",

@@ -149,7 +149,6 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   options.update_deformed =
       spec.solver.cut_configuration == SolverSpec::CutConfiguration::kDeformed;
   options.refactor_at_m = spec.solver.refactor_at_m;
-  options.refactor_every_step = spec.solver.refactor_every_step;
   // Scenes keep their documented default (refactor_at_m 0 = never): the session's automatic
   // §3.6 policy is not used by scene runs yet (docs/scenes.md).
   options.automatic_refactorization = false;

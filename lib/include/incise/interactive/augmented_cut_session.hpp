@@ -80,9 +80,11 @@ struct AugmentedCutOptions {
   /// docs/augmented.md, organ scale): before each solve that follows a change, the current K is
   /// factored in the calling thread and swapped in (AugmentedSystem::refactor_now(): m drops to
   /// |𝓓|), so the solve is a factorization plus a solve with m = |𝓓|. Its time is part of the
-  /// step's update. Measured faster than the augmented update when a frame changes many
-  /// columns (10 mm per frame on the liver), slower for small changes. Overrides refactor_at_m
-  /// and automatic_refactorization (no background job is started).
+  /// step's update. Measured slower than the augmented update on the liver path at 1 and 3 mm
+  /// per frame, and ≈ 1.7–2.8× a bare CHOLMOD factorization + solve (it also makes the LDLᵀ
+  /// copy and the capacitance data), so no scene key selects it (docs/augmented.md,
+  /// "Per-frame strategies"). Overrides refactor_at_m and automatic_refactorization (no
+  /// background job is started).
   bool refactor_every_step = false;
   /// Cost of one solver update for the automatic policy; empty: its measured wall time
   /// (AugmentedReport::seconds_total). Tests inject a deterministic model.

@@ -185,11 +185,6 @@ struct SolverSpec {
   /// paper's §3.6 background refactorization — started after a solve once m − |𝓓| replaced
   /// columns (a count) have accumulated; 0 = never. Scene key `refactor_at_m`.
   int refactor_at_m = 0;
-  /// Interactive cutting run only: interactive::AugmentedCutOptions::refactor_every_step —
-  /// factor the current K in every step that changes it instead of updating the augmented
-  /// system (measured faster at 10 mm per frame on the liver, slower at 1 and 3 mm:
-  /// docs/augmented.md, "Per-frame strategies"). Scene key `refactor_every_step`.
-  bool refactor_every_step = false;
   /// Interactive cutting run only: linalg::AugmentedOptions::solve_threads, the threads of
   /// step 3's full backward substitution (1 = serial; the result is bit-identical for any
   /// value). Scene key `solve_threads`, 1 … 64.
