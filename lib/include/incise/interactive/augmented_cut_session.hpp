@@ -80,8 +80,8 @@ struct AugmentedCutOptions {
   /// docs/augmented.md, organ scale): before each solve that follows a change, the current K is
   /// factored in the calling thread and swapped in (AugmentedSystem::refactor_now(): m drops to
   /// |𝓓|), so the solve is a factorization plus a solve with m = |𝓓|. Its time is part of the
-  /// step's update. Measured slower than the augmented update on the liver path at 1 and 3 mm
-  /// per frame, and ≈ 1.7–2.8× a bare CHOLMOD factorization + solve (it also makes the LDLᵀ
+  /// step's update. Measured slower than the augmented update on the liver path at 1, 3 and
+  /// 10 mm per frame, and 1.8–3.1× a bare CHOLMOD factorization + solve (it also makes the LDLᵀ
   /// copy and the capacitance data), so no scene key selects it (docs/augmented.md,
   /// "Per-frame strategies"). Overrides refactor_at_m and automatic_refactorization (no
   /// background job is started).
