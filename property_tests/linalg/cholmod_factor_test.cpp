@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <limits>
 #include <random>
 #include <string>
@@ -350,6 +351,83 @@ TEST(CholmodFactor, MisuseIsAStatus) {
   const Eigen::VectorXd b = random_vector(50, rng);
   ASSERT_EQ(h.solve(b, x), FactorStatus::kOk);
   EXPECT_LE((a * x - b).norm(), kSolveTol * b.norm());
+}
+
+// Issue 17 (strategy table): CholmodFactor::modify, A ← A + Δ by cholmod_updown. A random SPD
+// matrix takes 30 changes shaped like a cut's — an "element" (the Laplacian of a random
+// 4-vertex clique, weights in [0.5, 1.5]) removed or added, some between vertices far apart so
+// that L gains fill, and a vertex decoupled to a diagonal entry (a constrained DOF's row and
+// column replaced) — and after every change the modified factor's solve equals a dense solve of
+// the matrix built explicitly (kSolveTol). A supernodal factor, a size mismatch and a downdate
+// that loses definiteness are statuses.
+TEST(CholmodFactor, ModifyByUpdownEqualsAFreshFactorizationOverElementChanges) {
+  INCISE_SEEDED_RNG(rng, 17);
+  const int n = 240;
+  SparseMatrix a = random_sparse_spd(n, 3, 0.5, rng);
+  CholmodFactor f({CholmodKind::kSimplicialLdl, CholmodOrdering::kMetis});
+  ASSERT_EQ(f.compute(a, 1), FactorStatus::kOk);
+  std::uniform_int_distribution<int> vertex(0, n - 1);
+  std::uniform_real_distribution<double> weight(0.5, 1.5);
+  std::vector<SparseMatrix> added;  // elements added so far (removable)
+  int updates = 0, downdates = 0;
+  for (int step = 0; step < 30; ++step) {
+    SparseMatrix delta(n, n);
+    std::vector<Eigen::Triplet<double>> t;
+    if (step % 7 == 6) {  // decouple vertex v: row/column v replaced by its diagonal entry
+      const int v = vertex(rng);
+      for (SparseMatrix::InnerIterator it(a, v); it; ++it) {
+        if (it.row() == v) continue;
+        t.emplace_back(static_cast<int>(it.row()), v, -it.value());
+        t.emplace_back(v, static_cast<int>(it.row()), -it.value());
+      }
+      delta.setFromTriplets(t.begin(), t.end());
+    } else if (step % 3 == 2 && !added.empty()) {  // remove an element added before
+      delta = -added.back();
+      added.pop_back();
+    } else {  // add a 4-clique element (vertices anywhere: new fill)
+      std::array<int, 4> v{};
+      for (int& x : v) x = vertex(rng);
+      for (int p = 0; p < 4; ++p)
+        for (int q = p + 1; q < 4; ++q) {
+          if (v[p] == v[q]) continue;
+          const double w = weight(rng);
+          t.emplace_back(v[p], v[p], w);
+          t.emplace_back(v[q], v[q], w);
+          t.emplace_back(v[p], v[q], -w);
+          t.emplace_back(v[q], v[p], -w);
+        }
+      delta.setFromTriplets(t.begin(), t.end());
+      added.push_back(delta);
+    }
+    a = (a + delta).pruned();
+    a.makeCompressed();
+    CholmodFactor::ModifyStats stats;
+    ASSERT_EQ(f.modify(delta, &stats), FactorStatus::kOk) << "step " << step << ": " << f.message();
+    updates += stats.rank_update;
+    downdates += stats.rank_downdate;
+    EXPECT_LE(stats.rank_update + stats.rank_downdate, stats.touched);
+    const Eigen::VectorXd b = random_vector(n, rng);
+    Eigen::VectorXd x;
+    ASSERT_EQ(f.solve(b, x), FactorStatus::kOk);
+    const Eigen::VectorXd xd = Eigen::MatrixXd(a).ldlt().solve(b);
+    EXPECT_LE((x - xd).norm(), kSolveTol * xd.norm()) << "step " << step;
+  }
+  EXPECT_GT(updates, 0);  // both directions were exercised
+  EXPECT_GT(downdates, 0);
+  // Not positive definite after the change: a status, and the factor is not used after it.
+  SparseMatrix down(n, n);
+  down.insert(5, 5) = -2.0 * a.coeff(5, 5);
+  down.makeCompressed();
+  EXPECT_EQ(f.modify(down), FactorStatus::kNotPositiveDefinite);
+  Eigen::VectorXd x;
+  EXPECT_NE(f.solve(Eigen::VectorXd::Ones(n), x), FactorStatus::kOk);
+  EXPECT_EQ(f.modify(down), FactorStatus::kNotAnalyzed);
+  SparseMatrix small(3, 3);
+  ASSERT_EQ(f.compute(a, 2), FactorStatus::kOk);
+  EXPECT_EQ(f.modify(small), FactorStatus::kInvalidInput);
+  CholmodFactor super({CholmodKind::kSupernodal, CholmodOrdering::kMetis});
+  ASSERT_EQ(super.compute(a, 1), FactorStatus::kOk);
+  EXPECT_EQ(super.modify(down), FactorStatus::kInvalidInput);
 }
 
 }  // namespace

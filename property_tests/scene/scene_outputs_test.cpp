@@ -188,6 +188,17 @@ TEST(SceneOutputs, InteractiveCutRunWritesOneRowAndOneFramePerSolve) {
     EXPECT_GT(f["median"].get<double>(), 0.0);
     EXPECT_EQ(summary["swap_seconds"]["max"], max_swap);
     EXPECT_EQ(summary["cut_steps"][1]["swap_seconds"], res.cut_steps[1].seconds_swap);
+    // The parts are consistent with the frame: per step the swap is a part of the update, so
+    // swap ≤ update ≤ frame and cut ≤ frame step by step, hence for every order statistic.
+    for (std::size_t k = 1; k < solves; ++k)
+      EXPECT_LE(res.cut_steps[k].seconds_swap, res.cut_steps[k].seconds_update) << "step " << k;
+    for (const char* stat : {"median", "p95", "max"}) {
+      for (const char* part : {"cut_seconds", "update_seconds"})
+        EXPECT_LE(summary[part][stat].get<double>(), f[stat].get<double>()) << part << " " << stat;
+      EXPECT_LE(summary["swap_seconds"][stat].get<double>(),
+                summary["update_seconds"][stat].get<double>())
+          << stat;
+    }
   }
   const Json summary = Json::parse(scene::summary_json(built, res, 0.0, written));
   ASSERT_EQ(summary["cut_steps"].size(), solves);

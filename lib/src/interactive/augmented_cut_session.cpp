@@ -278,9 +278,11 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
     }
     system_->set_force(f);
     Eigen::VectorXd a, reaction;
+    if (options_.refactor_every_step && system_->num_replaced() > 0)
+      r.refactorization_swapped = system_->refactor_now();
     r.solve = system_->solve(a, reaction);  // swaps in a finished background factor first
     r.solved = true;
-    r.refactorization_swapped = r.solve.refactorization_swapped;
+    r.refactorization_swapped = r.refactorization_swapped || r.solve.refactorization_swapped;
     r.m_after_solve = system_->num_replaced();
     // §3.6: bound m by refactoring the current K in the background once the columns a
     // refactorization can remove (m − |𝓓|: Dirichlet DOFs stay in 𝓛) reach the threshold; the
@@ -291,7 +293,9 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
                            r.solve.refactorization_status == linalg::FactorStatus::kOk &&
                            !system_->refactorization_pending();
     const int removable = r.m_after_solve - r.solve.dirichlet;
-    if (options_.refactor_at_m > 0) {
+    if (options_.refactor_every_step) {
+      // no background job: every step refactors in refactor_now() above
+    } else if (options_.refactor_at_m > 0) {
       if (may_start && removable >= options_.refactor_at_m)
         r.refactorization_started = system_->start_refactorization();
     } else if (options_.automatic_refactorization &&

@@ -422,6 +422,13 @@ bool AugmentedSystem::wait_for_refactorization() {
   return swap_in(job_.get(), changed_since_snapshot_);
 }
 
+bool AugmentedSystem::refactor_now() {
+  INCISE_CHECK(base_ != nullptr, "refactor_now before initialize");
+  if (job_.valid()) (void)wait_for_refactorization();
+  changed_since_snapshot_.clear();
+  return swap_in(make_base(current_matrix(), nullptr, options_), {});
+}
+
 // ---------------------------------------------------------------------------------------------
 // Solution (§3.1–3.5). solve() runs the steps below in order; each names its equations.
 

@@ -1,8 +1,11 @@
 #include <incise/core/error.hpp>
+#include <incise/core/timer.hpp>
 #include <incise/linalg/blas_threads.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
 
 #include <cholmod.h>
+
+#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cmath>
@@ -275,6 +278,134 @@ FactorStatus CholmodFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) 
   }
   x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(xd->x), n_);
   cholmod_free_dense(&xd, &impl_->common);
+  return status_ = FactorStatus::kOk;
+}
+
+FactorStatus CholmodFactor::modify(const SparseMatrix& delta, ModifyStats* stats) {
+  if (stats != nullptr) *stats = ModifyStats{};
+  if (!factorized_ || status_ != FactorStatus::kOk) {
+    message_ = "modify: no factor (factorize with status ok first)";
+    return status_ = FactorStatus::kNotAnalyzed;
+  }
+  cholmod_factor* l = impl_->factor;
+  if (l->is_super != 0) {
+    message_ = "modify: the factor is supernodal (use CholmodKind::kSimplicialLdl)";
+    return status_ = FactorStatus::kInvalidInput;
+  }
+  if (delta.rows() != n_ || delta.cols() != n_) {
+    message_ = "modify: the change has a different size than the factor";
+    return status_ = FactorStatus::kInvalidInput;
+  }
+  // T: the rows/columns with a nonzero of Δ, and their positions in the factor's order.
+  std::vector<int> local(static_cast<size_t>(n_), -1), touched;
+  for (int j = 0; j < n_; ++j) {
+    for (SparseMatrix::InnerIterator it(delta, j); it; ++it) {
+      if (it.value() == 0.0) continue;
+      if (!std::isfinite(it.value())) {
+        message_ = "modify: the change has non-finite entries";
+        return status_ = FactorStatus::kInvalidInput;
+      }
+      for (const int k : {j, static_cast<int>(it.row())}) {
+        if (local[static_cast<size_t>(k)] < 0) {
+          local[static_cast<size_t>(k)] = static_cast<int>(touched.size());
+          touched.push_back(k);
+        }
+      }
+    }
+  }
+  const int t = static_cast<int>(touched.size());
+  if (stats != nullptr) stats->touched = t;
+  if (t == 0) return status_ = FactorStatus::kOk;
+  const double t_split = thread_cpu_seconds();
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(t, t);
+  for (const int j : touched) {
+    for (SparseMatrix::InnerIterator it(delta, j); it; ++it)
+      dense(local[static_cast<size_t>(it.row())], local[static_cast<size_t>(j)]) += it.value();
+  }
+  dense = 0.5 * (dense + dense.transpose()).eval();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(dense);
+  if (eig.info() != Eigen::Success) {
+    message_ = "modify: eigendecomposition of the change failed";
+    return status_ = FactorStatus::kCholmodError;
+  }
+  const Eigen::VectorXd& lambda = eig.eigenvalues();
+  const double drop = 1e-14 * lambda.cwiseAbs().maxCoeff();
+  const double t_updown = thread_cpu_seconds();
+  if (stats != nullptr) stats->cpu_seconds_split = t_updown - t_split;
+  // Rows of C in the factor's order: position = inverse of L->Perm.
+  const int* perm = static_cast<const int*>(l->Perm);
+  std::vector<int> position(static_cast<size_t>(n_));
+  for (int p = 0; p < n_; ++p) position[static_cast<size_t>(perm != nullptr ? perm[p] : p)] = p;
+  std::vector<int> order(static_cast<size_t>(t));  // local rows sorted by factor position
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return position[static_cast<size_t>(touched[static_cast<size_t>(a)])] <
+           position[static_cast<size_t>(touched[static_cast<size_t>(b)])];
+  });
+  cholmod_common& c = impl_->common;
+  for (const bool update : {true, false}) {
+    std::vector<int> cols;
+    for (int k = 0; k < t; ++k) {
+      if (update ? lambda(k) > drop : lambda(k) < -drop) cols.push_back(k);
+    }
+    if (stats != nullptr) (update ? stats->rank_update : stats->rank_downdate) = int(cols.size());
+    if (cols.empty()) continue;
+    cholmod_sparse* cm = cholmod_allocate_sparse(
+        static_cast<size_t>(n_), cols.size(), cols.size() * static_cast<size_t>(t),
+        /*sorted=*/1, /*packed=*/1, /*stype=*/0, CHOLMOD_REAL, &c);
+    if (cm == nullptr) {
+      status_ = status_from_common(c, message_);
+      if (status_ == FactorStatus::kOk) status_ = FactorStatus::kOutOfMemory;
+      factorized_ = false;
+      return status_;
+    }
+    int* cp = static_cast<int*>(cm->p);
+    int* ci = static_cast<int*>(cm->i);
+    double* cx = static_cast<double*>(cm->x);
+    int nz = 0;
+    for (size_t q = 0; q < cols.size(); ++q) {
+      cp[q] = nz;
+      const int k = cols[q];
+      const double s = std::sqrt(std::abs(lambda(k)));
+      for (const int r : order) {
+        const double v = s * eig.eigenvectors()(r, k);
+        if (v == 0.0) continue;
+        ci[nz] = position[static_cast<size_t>(touched[static_cast<size_t>(r)])];
+        cx[nz] = v;
+        ++nz;
+      }
+    }
+    cp[cols.size()] = nz;
+    const int ok = cholmod_updown(update ? 1 : 0, cm, l, &c);
+    cholmod_free_sparse(&cm, &c);
+    status_ = status_from_common(c, message_);
+    if (!ok && status_ == FactorStatus::kOk) status_ = FactorStatus::kCholmodError;
+    if (status_ != FactorStatus::kOk) {
+      message_ = "modify: cholmod_updown failed: " + message_;
+      factorized_ = false;
+      return status_;
+    }
+  }
+  // Every pivot D_jj (first entry of column j of the LDLᵀ factor) must stay positive.
+  const int* lp = static_cast<const int*>(l->p);
+  const double* lx = static_cast<const double*>(l->x);
+  for (int j = 0; j < n_; ++j) {
+    if (!(lx[lp[j]] > 0)) {
+      message_ = "modify: pivot " + std::to_string(j) +
+                 " not positive after the downdate (the "
+                 "modified matrix is not positive definite, or round-off: refactor)";
+      factorized_ = false;
+      minor_ = j;
+      return status_ = FactorStatus::kNotPositiveDefinite;
+    }
+  }
+  rcond_ = cholmod_rcond(l, &c);
+  if (stats != nullptr) stats->cpu_seconds_updown = thread_cpu_seconds() - t_updown;
+  if (options_.min_pivot_ratio > 0 && !(rcond_ >= options_.min_pivot_ratio)) {
+    message_ = "modify: matrix numerically singular (pivot ratio " + std::to_string(rcond_) + ")";
+    factorized_ = false;
+    return status_ = FactorStatus::kNotPositiveDefinite;
+  }
   return status_ = FactorStatus::kOk;
 }
 

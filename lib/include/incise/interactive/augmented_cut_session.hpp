@@ -76,6 +76,16 @@ struct AugmentedCutOptions {
   /// update cost since the factor in use came in has reached the cost of one factorization.
   /// On by default; false (and refactor_at_m = 0) never refactors.
   bool automatic_refactorization = true;
+  /// Refactor every step instead of updating (the "refactor every step" strategy of
+  /// docs/augmented.md, organ scale): before each solve that follows a change, the current K is
+  /// factored in the calling thread and swapped in (AugmentedSystem::refactor_now(): m drops to
+  /// |𝓓|), so the solve is a factorization plus a solve with m = |𝓓|. Its time is part of the
+  /// step's update. Measured slower than the augmented update on the liver path at 1, 3 and
+  /// 10 mm per frame, and 1.8–3.1× a bare CHOLMOD factorization + solve (it also makes the LDLᵀ
+  /// copy and the capacitance data), so no scene key selects it (docs/augmented.md,
+  /// "Per-frame strategies"). Overrides refactor_at_m and automatic_refactorization (no
+  /// background job is started).
+  bool refactor_every_step = false;
   /// Cost of one solver update for the automatic policy; empty: its measured wall time
   /// (AugmentedReport::seconds_total). Tests inject a deterministic model.
   std::function<double(const linalg::AugmentedReport&)> update_cost;

@@ -267,6 +267,11 @@ class AugmentedSystem {
   bool poll_refactorization();
   /// Blocks until the background job (if any) finishes, then swaps as poll does.
   bool wait_for_refactorization();
+  /// Factors the current K now, in the calling thread (a pending background job is waited for
+  /// and swapped first), and swaps it in: m drops to |𝓓|. The per-frame "refactor every step"
+  /// strategy of docs/augmented.md (organ scale). Returns whether a factor was swapped in (false:
+  /// the factorization failed, the old factor stays; last_refactorization_status() says why).
+  bool refactor_now();
   /// Status of the last finished background factorization.
   FactorStatus last_refactorization_status() const { return last_refactor_status_; }
 

@@ -138,6 +138,31 @@ class CholmodFactor {
   /// Solves A x = b with the current factor (dense right-hand side). Returns info().
   [[nodiscard]] FactorStatus solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
 
+  /// What modify() did: |T| rows/columns touched by Δ, the ranks of the update and the
+  /// downdate (positive and negative eigenvalues of Δ_TT kept), and where the time went.
+  struct ModifyStats {
+    int touched = 0;
+    int rank_update = 0;
+    int rank_downdate = 0;
+    double cpu_seconds_split = 0;   ///< thread CPU of the eigendecomposition of Δ_TT
+    double cpu_seconds_updown = 0;  ///< thread CPU of the cholmod_updown calls and checks
+  };
+  /// Low-rank modification of the stored factor, A ← A + Δ, by CHOLMOD's multiple-rank
+  /// update/downdate (cholmod_updown, Davis & Hager; the Modify module; new fill in L is added
+  /// by CHOLMOD). Δ (same order as A, symmetric, both triangles stored) restricted to the
+  /// rows/columns T it touches is split by a dense symmetric eigendecomposition into
+  /// Δ_TT = V₊Λ₊V₊ᵀ − V₋|Λ₋|V₋ᵀ (|λ| ≤ 1e-14·max|λ| dropped: round-off of the
+  /// eigensolver); the factor is updated by P V₊Λ₊^½ first and then downdated by P V₋|Λ₋|^½,
+  /// so that the intermediate A + Δ₊ is positive definite whenever A is. Cost: the dense
+  /// eigendecomposition O(|T|³) plus CHOLMOD's O(rank · Σ|L_j|) over the etree paths of T.
+  /// Precondition: a simplicial factor (CholmodKind::kSimplicialLdl) from factorize() with kOk
+  /// (kNotAnalyzed otherwise; a supernodal factor gives kInvalidInput, a wrong size
+  /// kInvalidInput). kNotPositiveDefinite when a pivot of the modified factor is ≤ 0 or the
+  /// pivot ratio falls below min_pivot_ratio (the factor is then unusable: refactor).
+  /// rcond() is updated. Round-off of successive modifications accumulates; callers compare
+  /// with a fresh factorization now and then (docs/augmented.md, organ-scale strategies).
+  [[nodiscard]] FactorStatus modify(const SparseMatrix& delta, ModifyStats* stats = nullptr);
+
   /// Status of the last operation.
   FactorStatus info() const { return status_; }
   /// CHOLMOD's message for the last failure (empty when ok).
