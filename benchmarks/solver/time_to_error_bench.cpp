@@ -1,7 +1,8 @@
 /// Time to a relative energy-norm error of 1e-6 (issue 19): process CPU seconds until
 /// ‖u − û‖_{K(û)} / ‖û‖_{K(û)} ≤ 1e-6 for linear CG, nonlinear CG (secant, Polak–Ribière, the
 /// scene default) and SS22 (Δt, η from the automatic estimate, computed outside the timing), on
-/// the 16³×6 box cube of issue 19 (0.1 m, face x = 0 fixed, gravity 9.8 m/s² sideways (−z),
+/// the 16³×6 mirrored cube of issue 19 (mesh::make_kuhn_cube(16, 0.1), the cube of the thesis'
+/// Maubach meshes; 0.1 m, face x = 0 fixed, gravity 9.8 m/s² sideways (−z),
 /// E = 1e4 Pa, ν = 0.3, ρ = 1000 kg/m³; Veronda–Westmann with γ = 8 of Table 4.1).
 /// û: truncated Newton to ‖r‖ ≤ 1e-11‖f‖ (linear: CG to 1e-13). The error is measured by the
 /// iteration observer (its cost is excluded from the solver's time; CostMeter); the time is the
