@@ -4,7 +4,8 @@
 /// deformation of a 4,800-tet box, for every registered material; a whole nonlinear-CG solve
 /// takes identical iterates and iteration counts for every T; the thread-count parser names
 /// INCISE_THREADS in its errors; the chunk schedule never lets two conflicting chunks share a
-/// colour. Labelled `threads`: ci/test.sh runs it under ThreadSanitizer.
+/// colour; the AVX variant of the element loops equals the baseline bitwise (ElasticProblemIsa).
+/// Labelled `threads`: ci/test.sh runs it under ThreadSanitizer.
 
 #include <incise/core/error.hpp>
 #include <incise/core/parallel.hpp>
