@@ -4,7 +4,8 @@
 /// deformation of a 4,800-tet box, for every registered material; a whole nonlinear-CG solve
 /// takes identical iterates and iteration counts for every T; the thread-count parser names
 /// INCISE_THREADS in its errors; the chunk schedule never lets two conflicting chunks share a
-/// colour. Labelled `threads`: ci/test.sh runs it under ThreadSanitizer.
+/// colour; the AVX variant of the element loops equals the baseline bitwise (ElasticProblemIsa).
+/// Labelled `threads`: ci/test.sh runs it under ThreadSanitizer.
 
 #include <incise/core/error.hpp>
 #include <incise/core/parallel.hpp>
@@ -143,6 +144,68 @@ TEST_P(ThreadsProperty, InvertedElementReportedForEveryThreadCount) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllRegistered, ThreadsProperty,
+                         ::testing::ValuesIn(incise::material::registered_material_names()),
+                         [](const auto& info) {
+                           std::string s = info.param;
+                           for (char& ch : s)
+                             if (ch == '-') ch = '_';
+                           return s;
+                         });
+
+/// The AVX variant of the element loops (KernelIsa::kAvx: the same Lanes4 operations on 256-bit
+/// registers, no FMA) gives every result bitwise equal to the baseline (SSE2) variant: energy,
+/// gradients, K·d, the fused sweeps, diagonal and assembled tangent at a random deformation, on
+/// 1 and 2 threads; and the same status and bits where every element is inverted (the per-element
+/// double fallback inside the AVX variant). Skipped on builds or CPUs without the AVX variant.
+class ElasticProblemIsa : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ElasticProblemIsa, AvxEqualsBaselineBitwise) {
+  if (!incise::fem::kernel_isa_available(incise::fem::KernelIsa::kAvx))
+    GTEST_SKIP() << "no AVX element loops in this build or on this CPU";
+  INCISE_SEEDED_RNG(rng, 2019);
+  const incise::mesh::MeshData mesh = test_box();
+  ElasticProblem p(mesh, Material(GetParam(), test_parameters()));
+  p.fix_nodes(incise::fem::nodes_on_plane(mesh, 0, 0.0));
+  p.add_gravity(incise::Vec3(0.0, -9.81, 0.0));
+  Eigen::Matrix3d f;
+  f << 1.12, -0.07, 0.05, 0.09, 0.95, -0.1, 0.04, 0.06, 1.1;
+  VecX u(p.size());
+  for (Index v = 0; v < p.num_nodes(); ++v)
+    u.segment<3>(3 * v) = (f - Eigen::Matrix3d::Identity()) * p.points().col(v);
+  u += incise::fixtures::random_vector(rng, p.size(), 2e-3);
+  const VecX d = incise::fixtures::random_vector(rng, p.size(), 1.0);
+  for (const int t : {1, 2}) {
+    SCOPED_TRACE("threads " + std::to_string(t));
+    p.set_threads(t);
+    p.set_kernel_isa(incise::fem::KernelIsa::kBaseline);
+    const Results ref = evaluate(p, u, d);
+    p.set_kernel_isa(incise::fem::KernelIsa::kAvx);
+    const Results r = evaluate(p, u, d);
+    EXPECT_TRUE(same_bits(r.energy, ref.energy));
+    EXPECT_TRUE(same_bits(r.fused_energy, ref.fused_energy));
+    EXPECT_TRUE(same_bits(r.gep_energy, ref.gep_energy));
+    EXPECT_TRUE(same_bits(r.gradient, ref.gradient));
+    EXPECT_TRUE(same_bits(r.fused_gradient, ref.fused_gradient));
+    EXPECT_TRUE(same_bits(r.product, ref.product));
+    EXPECT_TRUE(same_bits(r.gep_gradient, ref.gep_gradient));
+    EXPECT_TRUE(same_bits(r.gep_product, ref.gep_product));
+    EXPECT_TRUE(same_bits(r.diagonal, ref.diagonal));
+    EXPECT_TRUE(same_bits(r.matrix, ref.matrix));
+  }
+  // Every element inverted: same status and bits.
+  VecX w = VecX::Zero(p.size());
+  for (Index v = 0; v < p.num_nodes(); ++v) w[3 * v] = -2.0 * p.points()(0, v);
+  double e0 = 0.0, e1 = 0.0;
+  VecX g0, g1;
+  p.set_kernel_isa(incise::fem::KernelIsa::kBaseline);
+  const EvalStatus s0 = p.gradient(w, g0, &e0);
+  p.set_kernel_isa(incise::fem::KernelIsa::kAvx);
+  EXPECT_EQ(p.gradient(w, g1, &e1), s0);
+  EXPECT_TRUE(same_bits(e0, e1));
+  EXPECT_TRUE(same_bits(g0, g1));
+}
+
+INSTANTIATE_TEST_SUITE_P(AllRegistered, ElasticProblemIsa,
                          ::testing::ValuesIn(incise::material::registered_material_names()),
                          [](const auto& info) {
                            std::string s = info.param;

@@ -15,6 +15,19 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// The AVX variant of the element loops (sweep_chunk_avx) is built by GCC on x86-64 outside the
+// sanitizer builds: it relies on everything the loop calls with Lanes4 values being inlined into
+// it (INCISE_KERNEL_INLINE, INCISE_LAMBDA_INLINE), so no Lanes4 crosses a call between code
+// compiled for different instruction sets (their vector ABIs differ).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
+    !defined(INCISE_SANITIZED_BUILD)
+#define INCISE_AVX_KERNELS 1
+#define INCISE_LAMBDA_INLINE __attribute__((always_inline))
+#else
+#define INCISE_AVX_KERNELS 0
+#define INCISE_LAMBDA_INLINE
+#endif
+
 using Mat34 = Eigen::Matrix<double, 3, 4>;
 using Mat12 = Eigen::Matrix<double, 12, 12>;
 using L4 = Lanes4;
@@ -468,53 +481,129 @@ double ElasticProblem::volume() const {
   return v;
 }
 
-template <class Visit>
-bool ElasticProblem::sweep(bool scatters, double& total, Visit&& visit) const {
-  const Index* cells = sweep_cells_.data();
-  const int* scatter = scatter_.empty() ? nullptr : scatter_.data();
-  const Index m = num_elements();
-  const int nc = schedule_.num_chunks();
-  const Index chunk_ = chunk_elements(m);
-  std::vector<double> partial(static_cast<std::size_t>(nc), 0.0);
-  std::vector<char> ok(static_cast<std::size_t>(nc), 1);
-  // Chunk c: sweep positions [c·chunk_, min((c+1)·chunk_, m)); whole blocks of
-  // four in SIMD lanes, the tail (m mod 4, last chunk only) one by one.
-  const auto chunk = [&](int c) {
-    Scratch<double> w1;
-    Scratch<L4> w4;
-    double& sum = partial[static_cast<std::size_t>(c)];
-    // Position i in the sweep order (order_) is element order_[i].
-    const auto element = [&](Index pos) {
-      const std::size_t i = static_cast<std::size_t>(pos);
-      return visit(Elements<double>(refs_[static_cast<std::size_t>(order_[i])], cells + 4 * i,
-                                    scatter ? scatter + kScatterStride * i : nullptr),
-                   w1, sum);
-    };
-    const Index begin = c * chunk_;
-    const Index end = std::min(m, begin + chunk_);
-    const Index kb = begin / 4;
-    const Index ke = end / 4;
-    for (Index k = kb; k < ke; ++k) {
-      const std::size_t i = static_cast<std::size_t>(k);
-      const RefBlock& rb = blocks_[i];
-      if (visit(Elements<L4>(rb.z_inv, rb.b, rb.volume, cells + 16 * i,
-                             scatter ? scatter + 4 * kScatterStride * i : nullptr),
-                w4, sum))
-        continue;
-      // Some lane is inverted: the block had no side effects; redo its elements one by one.
-      for (Index e = 4 * k; e < 4 * k + 4; ++e)
-        if (!element(e)) {
-          ok[static_cast<std::size_t>(c)] = 0;
-          return;
-        }
-    }
-    for (Index e = 4 * ke; e < end; ++e)
+namespace {
+
+/// Everything one chunk of a sweep reads and writes (ElasticProblem::sweep).
+struct ChunkArgs {
+  const Index* cells;
+  const int* scatter;
+  const TetReference* refs;
+  const Index* order;
+  const void* blocks;  ///< ElasticProblem::RefBlock array (private type)
+  Index m;
+  Index chunk;
+  double* partial;
+  char* ok;
+};
+
+/// One chunk of a sweep: sweep positions [c·chunk, min((c+1)·chunk, m)); whole blocks of four
+/// in SIMD lanes, the tail (m mod 4, last chunk only) one by one. Forced inline into the
+/// instruction-set variants below (sweep_chunk_baseline, sweep_chunk_avx), together with the
+/// kernels and the visit (INCISE_SWEEP_VISIT), so each variant is compiled whole for its ISA.
+template <class Block, class Visit>
+INCISE_KERNEL_INLINE void sweep_chunk(const ChunkArgs& a, Visit& visit, int c) {
+  Scratch<double> w1;
+  Scratch<L4> w4;
+  double& sum = a.partial[static_cast<std::size_t>(c)];
+  const Block* blocks = static_cast<const Block*>(a.blocks);
+  const Index begin = c * a.chunk;
+  const Index end = std::min(a.m, begin + a.chunk);
+  const Index kb = begin / 4;
+  const Index ke = end / 4;
+  // Position i in the sweep order (order) is element order[i].
+  const auto element = [&](Index pos) INCISE_LAMBDA_INLINE {
+    const std::size_t i = static_cast<std::size_t>(pos);
+    return visit(Elements<double>(a.refs[static_cast<std::size_t>(a.order[i])], a.cells + 4 * i,
+                                  a.scatter ? a.scatter + kScatterStride * i : nullptr),
+                 w1, sum);
+  };
+  for (Index k = kb; k < ke; ++k) {
+    const std::size_t i = static_cast<std::size_t>(k);
+    const Block& rb = blocks[i];
+    if (visit(Elements<L4>(rb.z_inv, rb.b, rb.volume, a.cells + 16 * i,
+                           a.scatter ? a.scatter + 4 * kScatterStride * i : nullptr),
+              w4, sum))
+      continue;
+    // Some lane is inverted: the block had no side effects; redo its elements one by one.
+    for (Index e = 4 * k; e < 4 * k + 4; ++e)
       if (!element(e)) {
-        ok[static_cast<std::size_t>(c)] = 0;
+        a.ok[static_cast<std::size_t>(c)] = 0;
         return;
       }
-  };
-  run_chunks(scatters ? schedule_ : free_schedule_, threads_, chunk);
+  }
+  for (Index e = 4 * ke; e < end; ++e)
+    if (!element(e)) {
+      a.ok[static_cast<std::size_t>(c)] = 0;
+      return;
+    }
+}
+
+template <class Block, class Visit>
+void sweep_chunk_baseline(const ChunkArgs& a, Visit& visit, int c) {
+  sweep_chunk<Block>(a, visit, c);
+}
+
+#if INCISE_AVX_KERNELS
+/// The same chunk compiled for AVX (256-bit Lanes4 operations, no FMA: every operation and its
+/// rounding are those of the baseline variant, so results are bitwise equal; test
+/// ElasticProblemIsa.AvxEqualsBaselineBitwise).
+template <class Block, class Visit>
+__attribute__((target("avx"))) void sweep_chunk_avx(const ChunkArgs& a, Visit& visit, int c) {
+  sweep_chunk<Block>(a, visit, c);
+}
+#endif
+
+}  // namespace
+
+bool kernel_isa_available(KernelIsa isa) {
+  if (isa == KernelIsa::kBaseline) return true;
+#if INCISE_AVX_KERNELS
+  static const bool avx = __builtin_cpu_supports("avx") != 0;
+  return avx;
+#else
+  return false;
+#endif
+}
+
+KernelIsa best_kernel_isa() {
+  return kernel_isa_available(KernelIsa::kAvx) ? KernelIsa::kAvx : KernelIsa::kBaseline;
+}
+
+const char* to_string(KernelIsa isa) {
+  return isa == KernelIsa::kAvx ? "avx" : "baseline";
+}
+
+void ElasticProblem::set_kernel_isa(KernelIsa isa) {
+  INCISE_CHECK_PARAM(kernel_isa_available(isa),
+                     "ElasticProblem::set_kernel_isa: this build or CPU has no such kernels");
+  isa_ = isa;
+}
+
+template <class Visit>
+bool ElasticProblem::sweep(bool scatters, double& total, Visit&& visit) const {
+  const Index m = num_elements();
+  const int nc = schedule_.num_chunks();
+  std::vector<double> partial(static_cast<std::size_t>(nc), 0.0);
+  std::vector<char> ok(static_cast<std::size_t>(nc), 1);
+  const ChunkArgs args{sweep_cells_.data(),
+                       scatter_.empty() ? nullptr : scatter_.data(),
+                       refs_.data(),
+                       order_.data(),
+                       blocks_.data(),
+                       m,
+                       chunk_elements(m),
+                       partial.data(),
+                       ok.data()};
+  const ChunkSchedule& schedule = scatters ? schedule_ : free_schedule_;
+#if INCISE_AVX_KERNELS
+  if (isa_ == KernelIsa::kAvx) {
+    run_chunks(schedule, threads_, [&](int c) { sweep_chunk_avx<RefBlock>(args, visit, c); });
+  } else {
+    run_chunks(schedule, threads_, [&](int c) { sweep_chunk_baseline<RefBlock>(args, visit, c); });
+  }
+#else
+  run_chunks(schedule, threads_, [&](int c) { sweep_chunk_baseline<RefBlock>(args, visit, c); });
+#endif
   total = 0.0;
   bool all_ok = true;
   for (int c = 0; c < nc; ++c) {
@@ -529,7 +618,7 @@ EvalStatus ElasticProblem::energy(const VecX& u, double& energy) {
   const material::Lame p = material_.lame();
   double sum = 0.0;
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep(false, sum, [&](const auto& el, auto& w, double& part) {
+    return sweep(false, sum, [&](const auto& el, auto& w, double& part) INCISE_LAMBDA_INLINE {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       T e(0);
@@ -554,7 +643,7 @@ EvalStatus ElasticProblem::internal_forces(const VecX& u, VecX& f_int) {
   double* out = f_int.data();
   double unused = 0.0;  // no energy in this sweep
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep(true, unused, [&](const auto& el, auto& w, double& /*part*/) {
+    return sweep(true, unused, [&](const auto& el, auto& w, double& /*part*/) INCISE_LAMBDA_INLINE {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       if (!TetKernel<decltype(m), T>::forces(p, el.z_inv(), el.b(), w.x, w.q)) return false;
@@ -584,7 +673,7 @@ EvalStatus ElasticProblem::gradient(const VecX& u, VecX& g, double* energy_out) 
   double* out = g.data();
   double sum = 0.0;
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep(true, sum, [&](const auto& el, auto& w, double& part) {
+    return sweep(true, sum, [&](const auto& el, auto& w, double& part) INCISE_LAMBDA_INLINE {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       T e(0);
@@ -618,7 +707,7 @@ EvalStatus ElasticProblem::gradient_energy_product(const VecX& u, const VecX& d,
   double* dst = out.data();
   double sum = 0.0;
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep(true, sum, [&](const auto& el, auto& w, double& part) {
+    return sweep(true, sum, [&](const auto& el, auto& w, double& part) INCISE_LAMBDA_INLINE {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       el.gather(d.data(), w.d);
@@ -653,7 +742,7 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
   double* dst = out.data();
   double unused = 0.0;  // no energy in this sweep
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep(true, unused, [&](const auto& el, auto& w, double& /*part*/) {
+    return sweep(true, unused, [&](const auto& el, auto& w, double& /*part*/) INCISE_LAMBDA_INLINE {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       el.gather(d.data(), w.d);
@@ -675,7 +764,7 @@ bool ElasticProblem::tangent_sweep(const VecX& u, Sink&& sink) const {
   const material::Lame p = material_.lame();
   double unused = 0.0;  // no energy in this sweep
   return material::visit_model(material_.model_index(), [&](auto m) {
-    return sweep(true, unused, [&](const auto& el, auto& w, double& /*part*/) {
+    return sweep(true, unused, [&](const auto& el, auto& w, double& /*part*/) INCISE_LAMBDA_INLINE {
       using T = typename std::decay_t<decltype(el)>::Scalar;
       el.gather(u.data(), w.x);
       if (!TetKernel<decltype(m), T>::tangent(p, el.z_inv(), el.b(), el.volume(), w.x, w.k))
@@ -690,7 +779,8 @@ bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
   INCISE_CHECK(u.size() == size(), "hessian_diagonal: u has the wrong size");
   diag.setZero(size());
   double* dst = diag.data();
-  const bool ok = tangent_sweep(u, [&](const auto& el, const auto& k) { el.add_diagonal(k, dst); });
+  const bool ok = tangent_sweep(
+      u, [&](const auto& el, const auto& k) INCISE_LAMBDA_INLINE { el.add_diagonal(k, dst); });
   flops_ += (element_flops_.tangent + 12) * static_cast<std::uint64_t>(num_elements());
   if (!ok) return false;
   for (Eigen::Index i = 0; i < diag.size(); ++i)
@@ -760,7 +850,8 @@ EvalStatus ElasticProblem::assemble_tangent(const VecX& u, FixedDofTreatment tre
   if (k_.rows() != size()) build_pattern();
   double* val = k_.valuePtr();
   std::memset(val, 0, sizeof(double) * static_cast<std::size_t>(k_.nonZeros()));  // +0.0
-  const bool ok = tangent_sweep(u, [&](const auto& el, const auto& k) { el.add_matrix(k, val); });
+  const bool ok = tangent_sweep(
+      u, [&](const auto& el, const auto& k) INCISE_LAMBDA_INLINE { el.add_matrix(k, val); });
   flops_ += (element_flops_.tangent + 144) * static_cast<std::uint64_t>(num_elements());
   if (!ok) return EvalStatus::kInverted;
   if (treatment == FixedDofTreatment::kIdentity) {

@@ -21,18 +21,27 @@ struct LineSearchResult {
   int evaluations = 0;
 };
 
+/// Work vectors of the line search, kept across iterations (no allocation per iteration).
+struct LineSearchWork {
+  VecX xt, s, gt;
+};
+
 // §4.4.2: solve g(α) = (∇Π(x+αd), d) = 0 for α, starting at α₀ = 0 where the full gradient g0
-// is known. γ(α) = −g(α) = (r(α), d). On success `g_out`/`e_out` hold ∇Π and Π at x + αd.
+// is known. γ(α) = −g(α) = (r(α), d). On success `g_out`/`e_out` hold ∇Π and Π at x + αd (when
+// no trial point was accepted, α = 0: g0 and e0). The accepted trial's gradient is swapped into
+// g_out, not copied.
 LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, const VecX& g0,
                              double e0, double gamma0, const NonlinearCgOptions& opt,
-                             CostMeter& meter, VecX& g_out, double& e_out) {
+                             CostMeter& meter, LineSearchWork& work, VecX& g_out, double& e_out) {
   const auto nn = static_cast<std::uint64_t>(x.size());
   LineSearchResult res;
-  VecX xt(x.size()), s, gt;
+  VecX& xt = work.xt;
+  VecX& s = work.s;
+  VecX& gt = work.gt;
   double alpha = 0.0, gamma = gamma0;
   double alpha_prev = 0.0, gamma_prev = gamma0;
   double delta0 = 0.0;
-  g_out = g0;
+  bool accepted = false;  // g_out holds the gradient at x + αd (else it is set from g0 below)
   e_out = e0;
   // Newton: each trial point's gradient, energy and K·d come from one evaluation
   // (Problem::gradient_energy_product), so s already holds K(x + α_j d)·d for j ≥ 1.
@@ -56,8 +65,8 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
       }
     }
     if (need_product) {
-      xt = x + alpha * d;
-      const EvalStatus st = problem.hessian_product(xt, d, s);
+      if (alpha != 0.0) xt = x + alpha * d;  // at α = 0 the product is taken at x itself
+      const EvalStatus st = problem.hessian_product(alpha != 0.0 ? xt : x, d, s);
       ++res.evaluations;
       meter.add(4 * nn);
       if (st != EvalStatus::kOk || !s.allFinite()) {
@@ -114,11 +123,13 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
     alpha_prev = alpha;
     gamma_prev = gamma;
     alpha = alpha_new;
-    g_out = gt;
+    g_out.swap(gt);
+    accepted = true;
     e_out = et;
-    gamma = -gt.dot(d);
+    gamma = -g_out.dot(d);
     meter.add(2 * nn);
   }
+  if (!accepted) g_out = g0;
   res.alpha = alpha;
   if (alpha == 0.0) res.status = StopReason::kStagnated;
   return res;
@@ -167,6 +178,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   long k = 0, since_restart = 0;
   StopReason reason = StopReason::kConverged;
   VecX g_new, r_new;
+  LineSearchWork work;
   while (true) {
     if (rnorm <= threshold) {
       reason = StopReason::kConverged;
@@ -183,7 +195,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
     }
     double e_new = energy;
     const LineSearchResult ls =
-        line_search(problem, u, d, g, energy, gamma0, options, meter, g_new, e_new);
+        line_search(problem, u, d, g, energy, gamma0, options, meter, work, g_new, e_new);
     rep.inner_iterations += ls.evaluations;
     if (ls.status != StopReason::kConverged) {
       reason = ls.status;

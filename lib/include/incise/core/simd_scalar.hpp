@@ -20,7 +20,10 @@ namespace incise {
 /// Four doubles in lock step (see file comment).
 class Lanes4 {
  public:
-  using Vec = double __attribute__((vector_size(32)));
+  /// Aligned to 16 bytes, not 32: Eigen stores fixed-size matrices of Lanes4 16-byte aligned
+  /// (GCC), so an AVX build of the kernels (fem, KernelIsa::kAvx) must use unaligned 256-bit
+  /// loads; SSE2 code is the same either way.
+  using Vec = double __attribute__((vector_size(32), aligned(16)));
 
   Lanes4() : v_{0.0, 0.0, 0.0, 0.0} {}
   /// Broadcast.

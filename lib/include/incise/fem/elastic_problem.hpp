@@ -85,6 +85,17 @@ double add_surface_traction(const Eigen::Matrix3Xd& points, const mesh::CellMatr
 /// chunk; docs/fem_performance.md "Element loops on T threads"): never depends on the threads.
 inline constexpr Index kElementChunk = 256;
 
+/// Instruction set of the element loops' four-wide (Lanes4) kernels. kAvx: the same operations
+/// on 256-bit registers (no FMA), so every result is bitwise that of kBaseline (x86-64 SSE2);
+/// built by GCC on x86-64 outside sanitizer builds, used when the CPU has AVX.
+enum class KernelIsa { kBaseline, kAvx };
+/// True when this build has the kernels of `isa` and the CPU runs them.
+bool kernel_isa_available(KernelIsa isa);
+/// kAvx when available, else kBaseline: the default of every ElasticProblem.
+KernelIsa best_kernel_isa();
+/// "baseline" or "avx".
+const char* to_string(KernelIsa isa);
+
 /// Elastic body made of linear tetrahedra of one material. See file comment for conventions.
 /// Element loops visit the elements in an internal order (sorted by smallest node index, for
 /// memory locality) four at a time; element and node numbering seen by callers are the mesh's.
@@ -171,6 +182,10 @@ class ElasticProblem : public Problem {
   /// default_thread_count() (INCISE_THREADS, else all cores). Results do not depend on it.
   void set_threads(int threads);
   int threads() const { return threads_; }
+  /// Instruction set of the element loops (default best_kernel_isa()); results do not depend on
+  /// it (test ElasticProblemIsa.AvxEqualsBaselineBitwise). ParameterError when not available.
+  void set_kernel_isa(KernelIsa isa);
+  KernelIsa kernel_isa() const { return isa_; }
   /// The fixed chunk schedule of the element loops (for tests and reports).
   const ChunkSchedule& chunk_schedule() const { return schedule_; }
 
@@ -233,6 +248,7 @@ class ElasticProblem : public Problem {
   std::vector<int> scatter_;  ///< per element: 16 block value indices, 4 column lengths
   std::vector<int> diag_;     ///< value index of each diagonal entry
   int threads_ = 1;
+  KernelIsa isa_ = best_kernel_isa();
   ChunkSchedule schedule_;       ///< chunks coloured by shared nodes (scattering loops)
   ChunkSchedule free_schedule_;  ///< the same chunks without conflicts (energy)
 };

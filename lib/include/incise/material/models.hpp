@@ -225,16 +225,19 @@ constexpr double kExpm1SeriesLimit = 0.5;
 /// (|s| ≤ 1/7, nine terms reach 1e-17 relative; 24 flops). Otherwise x − log1p(x) (51 flops;
 /// ≈ 4ε/|x| relative, 16 ulps at the switch). The flops executed depend on the branch.
 template <class T>
+INCISE_KERNEL_INLINE T x_minus_log1p_series(const T& x) {
+  const T s = x / (T(2) + x);
+  const T z = s * s;
+  T sum = T(1.0 / 19.0);
+  for (int k = 7; k >= 0; --k) sum = T(1.0 / (2 * k + 3)) + z * sum;
+  return s * x - T(2) * (s * z) * sum;
+}
+
+template <class T>
 INCISE_KERNEL_INLINE T x_minus_log1p(const T& x) {
   using std::abs;
   using std::log1p;
-  if (abs(x) < T(kLog1pSeriesLimit)) {
-    const T s = x / (T(2) + x);
-    const T z = s * s;
-    T sum = T(1.0 / 19.0);
-    for (int k = 7; k >= 0; --k) sum = T(1.0 / (2 * k + 3)) + z * sum;
-    return s * x - T(2) * (s * z) * sum;
-  }
+  if (abs(x) < T(kLog1pSeriesLimit)) return x_minus_log1p_series(x);
   return x - log1p(x);
 }
 
@@ -243,32 +246,39 @@ INCISE_KERNEL_INLINE T x_minus_log1p(const T& x) {
 /// (expm1(x) − x)/x² (53 flops; ≈ 8 ulps at the switch). The flops executed depend on the
 /// branch.
 template <class T>
+INCISE_KERNEL_INLINE T expm1_remainder_series(const T& x) {
+  // 1/(k + 2)! for k = 0..13, Horner from the highest power.
+  constexpr double kInvFactorial[14] = {
+      1.0 / 2,         1.0 / 6,          1.0 / 24,          1.0 / 120,          1.0 / 720,
+      1.0 / 5040,      1.0 / 40320,      1.0 / 362880,      1.0 / 3628800,      1.0 / 39916800,
+      1.0 / 479001600, 1.0 / 6227020800, 1.0 / 87178291200, 1.0 / 1307674368000};
+  T sum = T(kInvFactorial[13]);
+  for (int k = 12; k >= 0; --k) sum = T(kInvFactorial[k]) + x * sum;
+  return sum;
+}
+
+template <class T>
 INCISE_KERNEL_INLINE T expm1_remainder(const T& x) {
   using std::abs;
   using std::expm1;
-  if (abs(x) < T(kExpm1SeriesLimit)) {
-    // 1/(k + 2)! for k = 0..13, Horner from the highest power.
-    constexpr double kInvFactorial[14] = {
-        1.0 / 2,         1.0 / 6,          1.0 / 24,          1.0 / 120,          1.0 / 720,
-        1.0 / 5040,      1.0 / 40320,      1.0 / 362880,      1.0 / 3628800,      1.0 / 39916800,
-        1.0 / 479001600, 1.0 / 6227020800, 1.0 / 87178291200, 1.0 / 1307674368000};
-    T sum = T(kInvFactorial[13]);
-    for (int k = 12; k >= 0; --k) sum = T(kInvFactorial[k]) + x * sum;
-    return sum;
-  }
+  if (abs(x) < T(kExpm1SeriesLimit)) return expm1_remainder_series(x);
   return (expm1(x) - x) / (x * x);
 }
 
 /// Lane-wise x_minus_log1p: each lane takes its own branch (Lanes4 comparisons hold only when
 /// they hold in every lane, so the generic branch would send mixed blocks the inaccurate way).
-inline Lanes4 x_minus_log1p(const Lanes4& x) {
+/// When every lane takes the series (the common case), the series runs on all four lanes at
+/// once: the same operations per lane, so the same bits as lane by lane.
+INCISE_KERNEL_INLINE Lanes4 x_minus_log1p(const Lanes4& x) {
+  if (abs(x) < Lanes4(kLog1pSeriesLimit)) return x_minus_log1p_series(x);
   Lanes4 r;
   for (int l = 0; l < 4; ++l) r.set(l, x_minus_log1p(x[l]));
   return r;
 }
 
 /// Lane-wise expm1_remainder (see x_minus_log1p(Lanes4)).
-inline Lanes4 expm1_remainder(const Lanes4& x) {
+INCISE_KERNEL_INLINE Lanes4 expm1_remainder(const Lanes4& x) {
+  if (abs(x) < Lanes4(kExpm1SeriesLimit)) return expm1_remainder_series(x);
   Lanes4 r;
   for (int l = 0; l < 4; ++l) r.set(l, expm1_remainder(x[l]));
   return r;
