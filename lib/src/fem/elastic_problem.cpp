@@ -4,6 +4,7 @@
 #include <incise/mesh/tet_faces.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -646,8 +647,57 @@ EvalStatus ElasticProblem::gradient_energy_product(const VecX& u, const VecX& d,
   return g.allFinite() && out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
 }
 
+void ElasticProblem::set_assembled_product(bool on) {
+  INCISE_CHECK(!on || material_.linear_geometry(),
+               "set_assembled_product: the tangent of material '" + material_.name() +
+                   "' depends on u; only a linear-geometry material has one K to assemble");
+  assembled_product_ = on;
+}
+
 EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& out) {
   INCISE_CHECK(u.size() == size() && d.size() == size(), "hessian_product: wrong sizes");
+  if (assembled_product_) {
+    if (product_k_.rows() != size()) {
+      const EvalStatus s = assemble_tangent(u, FixedDofTreatment::kKeep);
+      if (s != EvalStatus::kOk) return s;
+      product_k_ = k_;
+    }
+    // K is symmetric and stored column-major with both triangles: (K·d)_c = column c · d, a
+    // gather per column. build_pattern() lays out the three columns of a node with one row
+    // pattern of whole node triples, so each node's three columns share one pass over its
+    // neighbours' d. Each entry is summed in one fixed order whatever the thread count.
+    out.resize(size());
+    const int* outer = product_k_.outerIndexPtr();
+    const int* inner = product_k_.innerIndexPtr();
+    const double* val = product_k_.valuePtr();
+    const double* src = d.data();
+    double* dst = out.data();
+    constexpr Index kNodes = 512;
+    const Index nodes = num_nodes(), chunks = (nodes + kNodes - 1) / kNodes;
+    std::atomic<Index> next{0};
+    run_parallel(threads_, [&] {
+      for (Index k = next++; k < chunks; k = next++)
+        for (Index b = k * kNodes, end = std::min(nodes, b + kNodes); b < end; ++b) {
+          const int c = 3 * b, len = outer[c + 1] - outer[c];
+          const double* v0 = val + outer[c];
+          const double* v1 = val + outer[c + 1];
+          const double* v2 = val + outer[c + 2];
+          const int* rows = inner + outer[c];
+          double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+          for (int t = 0; t < len; t += 3) {
+            const double* x = src + rows[t];
+            s0 += v0[t] * x[0] + v0[t + 1] * x[1] + v0[t + 2] * x[2];
+            s1 += v1[t] * x[0] + v1[t + 1] * x[1] + v1[t + 2] * x[2];
+            s2 += v2[t] * x[0] + v2[t + 1] * x[1] + v2[t + 2] * x[2];
+          }
+          dst[c] = s0;
+          dst[c + 1] = s1;
+          dst[c + 2] = s2;
+        }
+    });
+    flops_ += 2 * static_cast<std::uint64_t>(product_k_.nonZeros());
+    return out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
+  }
   const material::Lame p = material_.lame();
   out.setZero(size());
   double* dst = out.data();
@@ -700,19 +750,23 @@ bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
 
 void ElasticProblem::build_pattern() {
   const Eigen::Index n = size();
-  // Column-wise sorted row lists from the element DOF pairs.
-  std::vector<std::vector<int>> cols(static_cast<std::size_t>(n));
+  // Node adjacency (sorted, the node itself included): every element couples all three DOFs of
+  // its nodes, so column 3·b + j holds rows 3·a + i for every neighbour a of b and i = 0, 1, 2.
+  std::vector<std::vector<int>> nbr(static_cast<std::size_t>(num_nodes()));
+  for (Index b = 0; b < num_nodes(); ++b) nbr[static_cast<std::size_t>(b)].push_back(b);
   for (Index e = 0; e < num_elements(); ++e)
     for (int a = 0; a < 4; ++a)
       for (int b = 0; b < 4; ++b)
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j)
-            cols[static_cast<std::size_t>(3 * cells_(b, e) + j)].push_back(3 * cells_(a, e) + i);
-  for (Eigen::Index c = 0; c < n; ++c) {
-    auto& v = cols[static_cast<std::size_t>(c)];
-    v.push_back(static_cast<int>(c));  // the diagonal always exists
+        if (a != b) nbr[static_cast<std::size_t>(cells_(b, e))].push_back(cells_(a, e));
+  for (auto& v : nbr) {
     std::sort(v.begin(), v.end());
     v.erase(std::unique(v.begin(), v.end()), v.end());
+  }
+  std::vector<std::vector<int>> cols(static_cast<std::size_t>(n));
+  for (Eigen::Index c = 0; c < n; ++c) {
+    auto& v = cols[static_cast<std::size_t>(c)];
+    for (const int a : nbr[static_cast<std::size_t>(c / 3)])
+      for (int i = 0; i < 3; ++i) v.push_back(3 * a + i);
   }
   k_.resize(n, n);
   Eigen::VectorXi nnz_per_col(n);

@@ -72,6 +72,8 @@ void NeedleInsertion3D::rebuild_problem() {
   for (Index v = 0; v < problem_->num_nodes(); ++v)
     if (is_fixed_vertex(v)) fixed.push_back(v);
   problem_->fix_nodes(fixed);
+  if (options_.assembled_product && material_.linear_geometry())
+    problem_->set_assembled_product(true);
 }
 
 Eigen::Matrix3Xd NeedleInsertion3D::deformed() const {

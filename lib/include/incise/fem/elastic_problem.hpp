@@ -163,6 +163,14 @@ class ElasticProblem : public Problem {
   /// Convenience: assemble and copy into `k`.
   [[nodiscard]] EvalStatus tangent(const VecX& u, Eigen::SparseMatrix<double>& k,
                                    FixedDofTreatment treatment = FixedDofTreatment::kIdentity);
+  /// For a material with linear geometry (Material::linear_geometry(): K does not depend on u),
+  /// `on` makes hessian_product() multiply by the raw tangent (kKeep) assembled once, at the
+  /// first product after the call (a problem's mesh and material never change), instead of the
+  /// matrix-free element products: the same K·d up to rounding, fewer flops (2 per stored entry)
+  /// — worth it when many products follow (docs/needle.md "Fig. 6.14 and speed"). Throws
+  /// UsageError for any other material. Default off (matrix-free, §3.1).
+  void set_assembled_product(bool on);
+  bool assembled_product() const { return assembled_product_; }
   /// Elastic forces only: f_int = Σ q_τ(u) (N).
   [[nodiscard]] EvalStatus internal_forces(const VecX& u, VecX& f_int);
 
@@ -230,6 +238,8 @@ class ElasticProblem : public Problem {
   ElementFlops element_flops_;
   std::uint64_t flops_ = 0;
   Eigen::SparseMatrix<double> k_;
+  bool assembled_product_ = false;
+  Eigen::SparseMatrix<double> product_k_;  ///< K for the assembled product (empty until used)
   std::vector<int> scatter_;  ///< per element: 16 block value indices, 4 column lengths
   std::vector<int> diag_;     ///< value index of each diagonal entry
   int threads_ = 1;

@@ -63,6 +63,10 @@ struct InsertionOptions3D : InsertionOptions {
   double h_shaft = 2e-3;
   /// Refinement budget: no step refines a mesh with this many tetrahedra (kRefinementBudget).
   Index max_elements = 2000000;
+  /// Linear-geometry material: K·d from the stiffness assembled once per refinement
+  /// (fem::ElasticProblem::set_assembled_product) instead of element products — the same
+  /// solves up to rounding, faster (docs/needle.md "Fig. 6.14 and speed"). Ignored otherwise.
+  bool assembled_product = true;
 };
 
 /// Report of one 3D step (insertion.hpp StepReportT).
