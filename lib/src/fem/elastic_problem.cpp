@@ -654,14 +654,18 @@ void ElasticProblem::set_assembled_product(bool on) {
   assembled_product_ = on;
 }
 
+EvalStatus ElasticProblem::assemble_product_matrix(const VecX& u) {
+  if (product_k_.rows() == size()) return EvalStatus::kOk;
+  const EvalStatus s = assemble_tangent(u, FixedDofTreatment::kKeep);
+  if (s == EvalStatus::kOk) product_k_ = k_;
+  return s;
+}
+
 EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& out) {
   INCISE_CHECK(u.size() == size() && d.size() == size(), "hessian_product: wrong sizes");
   if (assembled_product_) {
-    if (product_k_.rows() != size()) {
-      const EvalStatus s = assemble_tangent(u, FixedDofTreatment::kKeep);
-      if (s != EvalStatus::kOk) return s;
-      product_k_ = k_;
-    }
+    const EvalStatus s = assemble_product_matrix(u);
+    if (s != EvalStatus::kOk) return s;
     // K is symmetric and stored column-major with both triangles: (K·d)_c = column c · d, a
     // gather per column. build_pattern() lays out the three columns of a node with one row
     // pattern of whole node triples, so each node's three columns share one pass over its
@@ -739,6 +743,14 @@ bool ElasticProblem::tangent_sweep(const VecX& u, Sink&& sink) const {
 bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
   INCISE_CHECK(u.size() == size(), "hessian_diagonal: u has the wrong size");
   diag.setZero(size());
+  if (assembled_product_) {  // K's diagonal entries, stored by build_pattern() at diag_
+    if (assemble_product_matrix(u) != EvalStatus::kOk) return false;
+    for (Eigen::Index i = 0; i < diag.size(); ++i)
+      diag[i] = fixed_[static_cast<std::size_t>(i)]
+                    ? 1.0
+                    : product_k_.valuePtr()[diag_[static_cast<std::size_t>(i)]];
+    return diag.allFinite();
+  }
   double* dst = diag.data();
   const bool ok = tangent_sweep(u, [&](const auto& el, const auto& k) { el.add_diagonal(k, dst); });
   flops_ += (element_flops_.tangent + 12) * static_cast<std::uint64_t>(num_elements());
@@ -750,38 +762,55 @@ bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
 
 void ElasticProblem::build_pattern() {
   const Eigen::Index n = size();
-  // Node adjacency (sorted, the node itself included): every element couples all three DOFs of
-  // its nodes, so column 3·b + j holds rows 3·a + i for every neighbour a of b and i = 0, 1, 2.
-  std::vector<std::vector<int>> nbr(static_cast<std::size_t>(num_nodes()));
-  for (Index b = 0; b < num_nodes(); ++b) nbr[static_cast<std::size_t>(b)].push_back(b);
+  const auto nodes = static_cast<std::size_t>(num_nodes());
+  // Node adjacency in flat arrays (counting sort by node, then each short list sorted and made
+  // unique; the node itself included): every element couples all three DOFs of its nodes, so
+  // column 3·b + j holds rows 3·a + i for every neighbour a of b and i = 0, 1, 2.
+  std::vector<int> start(nodes + 1, 0);
+  for (std::size_t b = 0; b < nodes; ++b) start[b + 1] = 1;
   for (Index e = 0; e < num_elements(); ++e)
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b)
-        if (a != b) nbr[static_cast<std::size_t>(cells_(b, e))].push_back(cells_(a, e));
-  for (auto& v : nbr) {
-    std::sort(v.begin(), v.end());
-    v.erase(std::unique(v.begin(), v.end()), v.end());
+    for (int b = 0; b < 4; ++b) start[static_cast<std::size_t>(cells_(b, e)) + 1] += 3;
+  for (std::size_t b = 0; b < nodes; ++b) start[b + 1] += start[b];
+  std::vector<int> adj(static_cast<std::size_t>(start[nodes]));
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (std::size_t b = 0; b < nodes; ++b)
+    adj[static_cast<std::size_t>(fill[b]++)] = static_cast<int>(b);
+  for (Index e = 0; e < num_elements(); ++e)
+    for (int b = 0; b < 4; ++b)
+      for (int a = 0; a < 4; ++a)
+        if (a != b)
+          adj[static_cast<std::size_t>(fill[static_cast<std::size_t>(cells_(b, e))]++)] =
+              cells_(a, e);
+  std::vector<int> degree(nodes);
+  for (std::size_t b = 0; b < nodes; ++b) {
+    int* lo = adj.data() + start[b];
+    int* hi = adj.data() + start[b + 1];
+    std::sort(lo, hi);
+    degree[b] = static_cast<int>(std::unique(lo, hi) - lo);
   }
-  std::vector<std::vector<int>> cols(static_cast<std::size_t>(n));
-  for (Eigen::Index c = 0; c < n; ++c) {
-    auto& v = cols[static_cast<std::size_t>(c)];
-    for (const int a : nbr[static_cast<std::size_t>(c / 3)])
-      for (int i = 0; i < 3; ++i) v.push_back(3 * a + i);
-  }
+  // The compressed column arrays, written directly.
   k_.resize(n, n);
-  Eigen::VectorXi nnz_per_col(n);
-  for (Eigen::Index c = 0; c < n; ++c)
-    nnz_per_col[c] = static_cast<int>(cols[static_cast<std::size_t>(c)].size());
-  k_.reserve(nnz_per_col);
-  for (Eigen::Index c = 0; c < n; ++c)
-    for (int r : cols[static_cast<std::size_t>(c)]) k_.insert(r, c) = 0.0;
-  k_.makeCompressed();
+  Eigen::Index nnz = 0;
+  for (std::size_t b = 0; b < nodes; ++b) nnz += 9 * static_cast<Eigen::Index>(degree[b]);
+  k_.resizeNonZeros(nnz);
+  int* outer_w = k_.outerIndexPtr();
+  int* inner_w = k_.innerIndexPtr();
+  int t = 0;
+  for (std::size_t b = 0; b < nodes; ++b)
+    for (int j = 0; j < 3; ++j) {
+      outer_w[3 * b + static_cast<std::size_t>(j)] = t;
+      for (int k = 0; k < degree[b]; ++k)
+        for (int i = 0; i < 3; ++i)
+          inner_w[t++] = 3 * adj[static_cast<std::size_t>(start[b] + k)] + i;
+    }
+  outer_w[n] = t;
+  std::fill(k_.valuePtr(), k_.valuePtr() + nnz, 0.0);
   const int* outer = k_.outerIndexPtr();
-  const int* inner = k_.innerIndexPtr();
-  auto find = [&](int r, int c) {
-    const int* lo = inner + outer[c];
-    const int* hi = inner + outer[c + 1];
-    return static_cast<int>(std::lower_bound(lo, hi, r) - inner);
+  // Index of node a in node b's sorted neighbour list; entry (3a, 3b) is at outer[3b] + 3·that.
+  auto find = [&](Index a, Index b) {
+    const int* lo = adj.data() + start[static_cast<std::size_t>(b)];
+    const int* hi = lo + degree[static_cast<std::size_t>(b)];
+    return static_cast<int>(std::lower_bound(lo, hi, static_cast<int>(a)) - lo);
   };
   // Scatter map, kScatterStride = 20 ints per element: s[4b + a] = value index of entry
   // (3·node_a, 3·node_b), s[16 + b] = number of stored entries in column 3·node_b. Columns
@@ -796,16 +825,14 @@ void ElasticProblem::build_pattern() {
     for (int b = 0; b < 4; ++b) {
       const int c = 3 * cell[b];
       s[16 + b] = outer[c + 1] - outer[c];
-      for (int a = 0; a < 4; ++a) {
-        s[4 * b + a] = find(3 * cell[a], c);
-        INCISE_ASSERT(find(3 * cell[a] + 2, c + 2) == s[4 * b + a] + 2 * s[16 + b] + 2,
-                      "scatter map: 3x3 node blocks not laid out as assumed");
-      }
+      for (int a = 0; a < 4; ++a) s[4 * b + a] = outer[c] + 3 * find(cell[a], cell[b]);
     }
   }
   diag_.resize(static_cast<std::size_t>(n));
   for (Eigen::Index c = 0; c < n; ++c)
-    diag_[static_cast<std::size_t>(c)] = find(static_cast<int>(c), static_cast<int>(c));
+    diag_[static_cast<std::size_t>(c)] =
+        outer[c] + 3 * find(static_cast<Index>(c / 3), static_cast<Index>(c / 3)) +
+        static_cast<int>(c % 3);
 }
 
 EvalStatus ElasticProblem::assemble_tangent(const VecX& u, FixedDofTreatment treatment) {

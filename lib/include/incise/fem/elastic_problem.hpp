@@ -141,7 +141,8 @@ class ElasticProblem : public Problem {
   /// hessian_product() evaluated separately.
   [[nodiscard]] EvalStatus gradient_energy_product(const VecX& u, const VecX& d, VecX& g,
                                                    double& energy, VecX& out) override;
-  /// Diagonal of K(u) (from element tangents). Fixed DOFs get 1. Returns false if inverted.
+  /// Diagonal of K(u) (from element tangents; with set_assembled_product, from the assembled
+  /// K). Fixed DOFs get 1. Returns false if inverted.
   bool hessian_diagonal(const VecX& u, VecX& diag) override;
   void project(VecX& v) const override;
   bool is_fixed(Eigen::Index i) const override { return fixed_[static_cast<std::size_t>(i)] != 0; }
@@ -221,6 +222,8 @@ class ElasticProblem : public Problem {
   bool tangent_sweep(const VecX& u, Sink&& sink) const;
   Index num_full_blocks() const { return num_elements() / 4; }
   void build_pattern();
+  /// Assembles product_k_ (kKeep) unless it is there already.
+  EvalStatus assemble_product_matrix(const VecX& u);
   void rebuild_mass();
 
   Eigen::Matrix3Xd points_;

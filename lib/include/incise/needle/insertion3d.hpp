@@ -67,6 +67,11 @@ struct InsertionOptions3D : InsertionOptions {
   /// (fem::ElasticProblem::set_assembled_product) instead of element products — the same
   /// solves up to rounding, faster (docs/needle.md "Fig. 6.14 and speed"). Ignored otherwise.
   bool assembled_product = true;
+  /// Warm start: before the step's first solve, the displacement of every vertex that is
+  /// neither a needle node nor fixed is advanced by its change over the previous step (carried
+  /// to new vertices by the parents' mean, as u). Done after interception and thresholds, so
+  /// only the solver's start changes (docs/needle.md "Fig. 6.14 and speed").
+  bool extrapolate = true;
 };
 
 /// Report of one 3D step (insertion.hpp StepReportT).
@@ -131,6 +136,7 @@ class NeedleInsertion3D {
   void place_needle_nodes();
   void update_thresholds();
   void update_surface(StepReport3D& rep);
+  void extrapolate();
   StepReport3D run(StepReport3D rep);
 
   std::unique_ptr<mesh::TetBisectionMesh> mesh_;
@@ -149,6 +155,9 @@ class NeedleInsertion3D {
   std::vector<double> thresholds_;
   mesh::CellMatrix surface_ = mesh::CellMatrix(3, 0);
   VecX last_gradient_;
+  bool extrapolate_now_ = false;  ///< step() sets it for run()
+  VecX u_end_;      ///< u at the end of the previous step (carried through refinement)
+  VecX increment_;  ///< u_end_ minus u at the end of the step before (carried likewise)
 };
 
 }  // namespace incise::needle
