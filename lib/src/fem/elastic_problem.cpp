@@ -655,9 +655,30 @@ void ElasticProblem::set_assembled_product(bool on) {
 }
 
 EvalStatus ElasticProblem::assemble_product_matrix(const VecX& u) {
-  if (product_k_.rows() == size()) return EvalStatus::kOk;
+  if (!block_start_.empty()) return EvalStatus::kOk;
   const EvalStatus s = assemble_tangent(u, FixedDofTreatment::kKeep);
-  if (s == EvalStatus::kOk) product_k_ = k_;
+  if (s != EvalStatus::kOk) return s;
+  // Copy K into 3×3 node blocks: build_pattern() gives the three columns of node b one row
+  // pattern of whole node triples, so block k of node b (neighbour a = inner[outer[3b] + 3k] / 3)
+  // holds K(3a + i, 3b + j) at value index outer[3b + j] + 3k + i; stored at 9k' + 3j + i.
+  const int* outer = k_.outerIndexPtr();
+  const int* inner = k_.innerIndexPtr();
+  const double* val = k_.valuePtr();
+  const auto nodes = static_cast<std::size_t>(num_nodes());
+  block_start_.assign(nodes + 1, 0);
+  for (std::size_t b = 0; b < nodes; ++b)
+    block_start_[b + 1] = block_start_[b] + (outer[3 * b + 1] - outer[3 * b]) / 3;
+  block_node_.resize(static_cast<std::size_t>(block_start_[nodes]));
+  block_value_.resize(9 * block_node_.size());
+  for (std::size_t b = 0; b < nodes; ++b)
+    for (int k = 0; k < block_start_[b + 1] - block_start_[b]; ++k) {
+      const auto blk = static_cast<std::size_t>(block_start_[b] + k);
+      block_node_[blk] = inner[outer[3 * b] + 3 * k] / 3;
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i)
+          block_value_[9 * blk + static_cast<std::size_t>(3 * j + i)] =
+              val[outer[3 * b + static_cast<std::size_t>(j)] + 3 * k + i];
+    }
   return s;
 }
 
@@ -666,14 +687,12 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
   if (assembled_product_) {
     const EvalStatus s = assemble_product_matrix(u);
     if (s != EvalStatus::kOk) return s;
-    // K is symmetric and stored column-major with both triangles: (K·d)_c = column c · d, a
-    // gather per column. build_pattern() lays out the three columns of a node with one row
-    // pattern of whole node triples, so each node's three columns share one pass over its
-    // neighbours' d. Each entry is summed in one fixed order whatever the thread count.
+    // K is symmetric: (K·d)_(3b+j) = Σ over the blocks of node b of Σ_i K(3a + i, 3b + j) d_(3a+i),
+    // a gather per node, each entry summed in one fixed order whatever the thread count.
     out.resize(size());
-    const int* outer = product_k_.outerIndexPtr();
-    const int* inner = product_k_.innerIndexPtr();
-    const double* val = product_k_.valuePtr();
+    const int* start = block_start_.data();
+    const int* node = block_node_.data();
+    const double* val = block_value_.data();
     const double* src = d.data();
     double* dst = out.data();
     constexpr Index kNodes = 512;
@@ -682,24 +701,20 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
     run_parallel(threads_, [&] {
       for (Index k = next++; k < chunks; k = next++)
         for (Index b = k * kNodes, end = std::min(nodes, b + kNodes); b < end; ++b) {
-          const int c = 3 * b, len = outer[c + 1] - outer[c];
-          const double* v0 = val + outer[c];
-          const double* v1 = val + outer[c + 1];
-          const double* v2 = val + outer[c + 2];
-          const int* rows = inner + outer[c];
           double s0 = 0.0, s1 = 0.0, s2 = 0.0;
-          for (int t = 0; t < len; t += 3) {
-            const double* x = src + rows[t];
-            s0 += v0[t] * x[0] + v0[t + 1] * x[1] + v0[t + 2] * x[2];
-            s1 += v1[t] * x[0] + v1[t + 1] * x[1] + v1[t + 2] * x[2];
-            s2 += v2[t] * x[0] + v2[t + 1] * x[1] + v2[t + 2] * x[2];
+          for (int t = start[b]; t < start[b + 1]; ++t) {
+            const double* x = src + 3 * node[t];
+            const double* v = val + 9 * t;
+            s0 += v[0] * x[0] + v[1] * x[1] + v[2] * x[2];
+            s1 += v[3] * x[0] + v[4] * x[1] + v[5] * x[2];
+            s2 += v[6] * x[0] + v[7] * x[1] + v[8] * x[2];
           }
-          dst[c] = s0;
-          dst[c + 1] = s1;
-          dst[c + 2] = s2;
+          dst[3 * b] = s0;
+          dst[3 * b + 1] = s1;
+          dst[3 * b + 2] = s2;
         }
     });
-    flops_ += 2 * static_cast<std::uint64_t>(product_k_.nonZeros());
+    flops_ += 18 * static_cast<std::uint64_t>(block_node_.size());
     return out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
   }
   const material::Lame p = material_.lame();
@@ -743,12 +758,16 @@ bool ElasticProblem::tangent_sweep(const VecX& u, Sink&& sink) const {
 bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
   INCISE_CHECK(u.size() == size(), "hessian_diagonal: u has the wrong size");
   diag.setZero(size());
-  if (assembled_product_) {  // K's diagonal entries, stored by build_pattern() at diag_
+  if (assembled_product_) {  // from the node blocks (b, b)
     if (assemble_product_matrix(u) != EvalStatus::kOk) return false;
+    for (Index b = 0; b < num_nodes(); ++b)
+      for (int t = block_start_[static_cast<std::size_t>(b)];
+           t < block_start_[static_cast<std::size_t>(b) + 1]; ++t)
+        if (block_node_[static_cast<std::size_t>(t)] == b)
+          for (int j = 0; j < 3; ++j)
+            diag[3 * b + j] = block_value_[9 * static_cast<std::size_t>(t) + 4 * j];
     for (Eigen::Index i = 0; i < diag.size(); ++i)
-      diag[i] = fixed_[static_cast<std::size_t>(i)]
-                    ? 1.0
-                    : product_k_.valuePtr()[diag_[static_cast<std::size_t>(i)]];
+      if (fixed_[static_cast<std::size_t>(i)]) diag[i] = 1.0;
     return diag.allFinite();
   }
   double* dst = diag.data();

@@ -222,7 +222,7 @@ class ElasticProblem : public Problem {
   bool tangent_sweep(const VecX& u, Sink&& sink) const;
   Index num_full_blocks() const { return num_elements() / 4; }
   void build_pattern();
-  /// Assembles product_k_ (kKeep) unless it is there already.
+  /// Assembles K (kKeep) into the node blocks of the assembled product unless they exist.
   EvalStatus assemble_product_matrix(const VecX& u);
   void rebuild_mass();
 
@@ -242,7 +242,11 @@ class ElasticProblem : public Problem {
   std::uint64_t flops_ = 0;
   Eigen::SparseMatrix<double> k_;
   bool assembled_product_ = false;
-  Eigen::SparseMatrix<double> product_k_;  ///< K for the assembled product (empty until used)
+  // K for the assembled product in 3×3 node blocks (empty until used): node b's blocks are
+  // block_start_[b] .. block_start_[b + 1] − 1, block t couples node block_node_[t], its values
+  // block_value_[9t + 3j + i] = K(3·block_node_[t] + i, 3b + j).
+  std::vector<int> block_start_, block_node_;
+  std::vector<double> block_value_;
   std::vector<int> scatter_;  ///< per element: 16 block value indices, 4 column lengths
   std::vector<int> diag_;     ///< value index of each diagonal entry
   int threads_ = 1;
