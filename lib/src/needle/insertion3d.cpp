@@ -300,7 +300,7 @@ StepReport3D NeedleInsertion3D::step(const NeedlePose3D& pose) {
   timer.restart();
   rep.intercepted = intercept();
   rep.rearrange_seconds = timer.seconds();
-  extrapolate_now_ = options_.extrapolate;
+  extrapolate_now_ = options_.extrapolate && options_.relaxation == Relaxation::kLinearCg;
   rep = run(rep);
   extrapolate_now_ = false;
   increment_ = u_ - u_end_;

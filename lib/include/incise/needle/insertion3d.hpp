@@ -30,7 +30,8 @@
 ///  4. friction thresholds (once per step, as in 2D): the needle surface of the current needle
 ///     nodes (needle3d.hpp), each node's third of its faces' deformed area A_k and
 ///     F_d,k = f(s_k)·A_k/(2πr) (FrictionProfile::surface_thresholds), F_s = static_factor·F_d;
-///  5. solve (6.7) on NeedleProblem3D by linear or nonlinear CG from the current state, stopped
+///  5. solve (6.7) on NeedleProblem3D by linear or nonlinear CG from the current state (linear
+///     CG: advanced by the previous step's increment, InsertionOptions3D::extrapolate), stopped
 ///     by (6.9) with force scale E·H² (H = diagonal of the reference bounding box; §6.6: "for
 ///     3D, the term dH should be changed, for example to H²");
 ///  6. rearrange and release exactly as in 2D (insertion.hpp items 5 and 6).
@@ -67,10 +68,12 @@ struct InsertionOptions3D : InsertionOptions {
   /// (fem::ElasticProblem::set_assembled_product) instead of element products — the same
   /// solves up to rounding, faster (docs/needle.md "Fig. 6.14 and speed"). Ignored otherwise.
   bool assembled_product = true;
-  /// Warm start: before the step's first solve, the displacement of every vertex that is
+  /// Linear CG only: before step()'s first solve, the displacement of every vertex that is
   /// neither a needle node nor fixed is advanced by its change over the previous step (carried
-  /// to new vertices by the parents' mean, as u). Done after interception and thresholds, so
-  /// only the solver's start changes (docs/needle.md "Fig. 6.14 and speed").
+  /// to new vertices by the parents' mean, as u) — the warm start extrapolated. Done after
+  /// interception and thresholds, so only the solver's start changes (docs/needle.md "Fig. 6.14
+  /// and speed"). Nonlinear CG starts from the previous solution (an extrapolated start can
+  /// invert a neo-Hookean element).
   bool extrapolate = true;
 };
 
