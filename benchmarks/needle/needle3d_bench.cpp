@@ -9,7 +9,12 @@
 ///  - BM_NeedleLiver: the shipped liver scene's insertion (reference_data/scenes/needle_liver.json:
 ///    linear, r = 1 mm, refined to 1 mm at the tip and 2 mm along the trace, 91 updates).
 ///    Counters: updates per CPU second (target ≥ 30), median and worst update, and the median
-///    and worst of its refinement, solve and rearrangement parts (wall, core Timer).
+///    and worst of its refinement, solve and rearrangement parts (wall, core Timer); solves per
+///    update, CG iterations per solve, the final needle force (x) and force_dev_rel, the largest
+///    deviation of the needle force history from the first run's (the plain path) over that
+///    run's largest force. Arguments: assembled (InsertionOptions3D::assembled_product),
+///    extrapolate (InsertionOptions3D::extrapolate), jacobi (Preconditioner::kJacobi). Run it
+///    with INCISE_THREADS=1: thread-CPU time counts the calling thread only.
 /// No number is asserted (docs/needle.md reports them).
 #include <benchmark/benchmark.h>
 #include <incise/core/timer.hpp>
@@ -93,9 +98,14 @@ void BM_NeedleLiver(benchmark::State& state) {
   incise::needle::FrictionProfile f;
   f.shaft_density = 5;
   f.tip_density = 15;
+  o.assembled_product = state.range(0) != 0;
+  o.extrapolate = state.range(1) != 0;
+  if (state.range(2) != 0) o.preconditioner = incise::solver::Preconditioner::kJacobi;
   std::vector<double> total, refine, solve, rearrange;
   double cpu = 0.0;
-  long updates = 0;
+  long updates = 0, solves = 0, cg = 0;
+  Vec3 force = Vec3::Zero();
+  std::vector<double> force_x;
   bool ok = true;
   for (auto _ : state) {
     NeedleInsertion3D sim(mesh, mat, {{Vec3(-kInf, -kInf, -kInf), Vec3(0.06, kInf, kInf)}}, f, o);
@@ -110,12 +120,28 @@ void BM_NeedleLiver(benchmark::State& state) {
       rearrange.push_back(rep.rearrange_seconds);
       ok = ok && rep.ok();
       ++updates;
+      solves += rep.solves;
+      cg += rep.cg_iterations;
+      force = rep.needle_force;
+      force_x.push_back(rep.needle_force.x());
     }
     cpu += incise::thread_cpu_seconds() - t0;
   }
   if (!ok) state.SkipWithError("an update did not converge");
   state.counters["updates_per_cpu_s"] = static_cast<double>(updates) / cpu;
   state.counters["target_hz"] = 30.0;
+  state.counters["solves_per_update"] = static_cast<double>(solves) / static_cast<double>(updates);
+  state.counters["cg_per_solve"] = static_cast<double>(cg) / static_cast<double>(solves);
+  state.counters["final_force_x"] = force.x();
+  // Deviation of the force history from the first run of this process (the reference).
+  static std::vector<double> reference;
+  if (reference.empty()) reference = force_x;
+  double dev = 0.0, fmax = 0.0;
+  for (std::size_t k = 0; k < force_x.size() && k < reference.size(); ++k) {
+    dev = std::max(dev, std::abs(force_x[k] - reference[k]));
+    fmax = std::max(fmax, std::abs(reference[k]));
+  }
+  state.counters["force_dev_rel"] = fmax > 0.0 ? dev / fmax : 0.0;
   state.counters["update_median_s"] = median(total);
   state.counters["update_worst_s"] = *std::max_element(total.begin(), total.end());
   state.counters["refine_median_s"] = median(refine);
@@ -129,6 +155,14 @@ void BM_NeedleLiver(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_NeedleFig6_14Linear)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_NeedleLiver)->Unit(benchmark::kSecond)->Iterations(1);
+// The plain path first: force_dev_rel of the others is measured against it.
+BENCHMARK(BM_NeedleLiver)
+    ->ArgNames({"assembled", "extrapolate", "jacobi"})
+    ->Args({0, 0, 0})
+    ->Args({1, 0, 0})
+    ->Args({1, 1, 0})
+    ->Args({1, 1, 1})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
 
 INCISE_BENCHMARK_MAIN();

@@ -375,6 +375,42 @@ TEST(ElasticProblem, RejectsBadMeshes) {
   EXPECT_THROW(ElasticProblem(mesh2, m), incise::ParameterError);
 }
 
+TEST(ElasticProblem, AssembledProductEqualsMatrixFreeForLinearMaterial) {
+  INCISE_SEEDED_RNG(rng, 611);
+  const Material linear("linear", test_parameters());
+  for (int threads : {1, 3}) {
+    SCOPED_TRACE("threads " + std::to_string(threads));
+    ElasticProblem p(small_box(incise::mesh::CubeSplit::kFive), linear);
+    p.set_threads(threads);
+    p.fix_nodes({0, 5});
+    const VecX u = deformed_state(p, rng, 0.01);
+    const VecX d = random_vector(rng, p.size(), 1.0);
+    VecX kd, diag;
+    ASSERT_EQ(p.hessian_product(u, d, kd), EvalStatus::kOk);
+    ASSERT_TRUE(p.hessian_diagonal(u, diag));
+    p.set_assembled_product(true);
+    EXPECT_TRUE(p.assembled_product());
+    VecX kd_assembled, diag_assembled, again;
+    ASSERT_EQ(p.hessian_product(u, d, kd_assembled), EvalStatus::kOk);
+    ASSERT_TRUE(p.hessian_diagonal(u, diag_assembled));
+    // The same element matrices summed in another order: round-off of the matrix scale. The
+    // product is not projected (reactions at the fixed DOFs stay), as the matrix-free one.
+    ASSERT_EQ(p.assemble_tangent(u, FixedDofTreatment::kKeep), EvalStatus::kOk);
+    const double scale = p.tangent_matrix().norm() * d.norm();
+    EXPECT_LE((kd - kd_assembled).norm(), 1e-13 * scale);
+    EXPECT_LE((diag - diag_assembled).norm(), 1e-13 * diag.norm());
+    // A linear K does not depend on u: the matrix assembled at the first product is reused.
+    ASSERT_EQ(p.hessian_product(VecX(VecX::Zero(p.size())), d, again), EvalStatus::kOk);
+    EXPECT_EQ(again, kd_assembled);
+    p.set_assembled_product(false);
+    ASSERT_EQ(p.hessian_product(u, d, again), EvalStatus::kOk);
+    EXPECT_EQ(again, kd);
+  }
+  // Only a linear-geometry material has one K.
+  ElasticProblem nh(small_box(), Material("neohookean", test_parameters()));
+  EXPECT_THROW(nh.set_assembled_product(true), incise::UsageError);
+}
+
 TEST(NodeSelection, PlaneAndBox) {
   const auto mesh = incise::mesh::make_box(2, 2, 2, 1.0, 1.0, 1.0);
   EXPECT_EQ(incise::fem::nodes_on_plane(mesh, 0, 1.0).size(), 9u);

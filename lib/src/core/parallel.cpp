@@ -164,17 +164,22 @@ ChunkSchedule make_chunk_schedule(const std::vector<Index>& chunk_start,
       }
   }
   // Neighbours of each chunk (sorted, unique).
+  // A chunk meets each neighbour through many resources: `seen` keeps each once before sorting.
   std::vector<std::vector<int>> nbr(static_cast<std::size_t>(nc));
+  std::vector<int> seen(static_cast<std::size_t>(nc), -1);
   for (int c = 0; c < nc; ++c) {
     std::vector<int>& n = nbr[static_cast<std::size_t>(c)];
     for (Index t = chunk_start[static_cast<std::size_t>(c)]; t < chunk_start[c + 1UL]; ++t) {
       const auto r = static_cast<std::size_t>(resources[static_cast<std::size_t>(t)]);
-      for (Index k = rstart[r]; k < rstart[r + 1]; ++k)
-        if (rchunks[static_cast<std::size_t>(k)] != c)
-          n.push_back(rchunks[static_cast<std::size_t>(k)]);
+      for (Index k = rstart[r]; k < rstart[r + 1]; ++k) {
+        const int o = rchunks[static_cast<std::size_t>(k)];
+        if (o != c && seen[static_cast<std::size_t>(o)] != c) {
+          seen[static_cast<std::size_t>(o)] = c;
+          n.push_back(o);
+        }
+      }
     }
     std::sort(n.begin(), n.end());
-    n.erase(std::unique(n.begin(), n.end()), n.end());
   }
   ChunkSchedule s;
   s.colour.assign(static_cast<std::size_t>(nc), -1);

@@ -4,6 +4,7 @@
 #include <incise/mesh/tet_faces.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -735,8 +736,76 @@ EvalStatus ElasticProblem::gradient_energy_product(const VecX& u, const VecX& d,
   return g.allFinite() && out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
 }
 
+void ElasticProblem::set_assembled_product(bool on) {
+  INCISE_CHECK(!on || material_.linear_geometry(),
+               "set_assembled_product: the tangent of material '" + material_.name() +
+                   "' depends on u; only a linear-geometry material has one K to assemble");
+  assembled_product_ = on;
+}
+
+EvalStatus ElasticProblem::assemble_product_matrix(const VecX& u) {
+  if (!block_start_.empty()) return EvalStatus::kOk;
+  const EvalStatus s = assemble_tangent(u, FixedDofTreatment::kKeep);
+  if (s != EvalStatus::kOk) return s;
+  // Copy K into 3×3 node blocks: build_pattern() gives the three columns of node b one row
+  // pattern of whole node triples, so block k of node b (neighbour a = inner[outer[3b] + 3k] / 3)
+  // holds K(3a + i, 3b + j) at value index outer[3b + j] + 3k + i; stored at 9k' + 3j + i.
+  const int* outer = k_.outerIndexPtr();
+  const int* inner = k_.innerIndexPtr();
+  const double* val = k_.valuePtr();
+  const auto nodes = static_cast<std::size_t>(num_nodes());
+  block_start_.assign(nodes + 1, 0);
+  for (std::size_t b = 0; b < nodes; ++b)
+    block_start_[b + 1] = block_start_[b] + (outer[3 * b + 1] - outer[3 * b]) / 3;
+  block_node_.resize(static_cast<std::size_t>(block_start_[nodes]));
+  block_value_.resize(9 * block_node_.size());
+  for (std::size_t b = 0; b < nodes; ++b)
+    for (int k = 0; k < block_start_[b + 1] - block_start_[b]; ++k) {
+      const auto blk = static_cast<std::size_t>(block_start_[b] + k);
+      block_node_[blk] = inner[outer[3 * b] + 3 * k] / 3;
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i)
+          block_value_[9 * blk + static_cast<std::size_t>(3 * j + i)] =
+              val[outer[3 * b + static_cast<std::size_t>(j)] + 3 * k + i];
+    }
+  return s;
+}
+
 EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& out) {
   INCISE_CHECK(u.size() == size() && d.size() == size(), "hessian_product: wrong sizes");
+  if (assembled_product_) {
+    const EvalStatus s = assemble_product_matrix(u);
+    if (s != EvalStatus::kOk) return s;
+    // K is symmetric: (K·d)_(3b+j) = Σ over the blocks of node b of Σ_i K(3a + i, 3b + j) d_(3a+i),
+    // a gather per node, each entry summed in one fixed order whatever the thread count.
+    out.resize(size());
+    const int* start = block_start_.data();
+    const int* node = block_node_.data();
+    const double* val = block_value_.data();
+    const double* src = d.data();
+    double* dst = out.data();
+    constexpr Index kNodes = 512;
+    const Index nodes = num_nodes(), chunks = (nodes + kNodes - 1) / kNodes;
+    std::atomic<Index> next{0};
+    run_parallel(threads_, [&] {
+      for (Index k = next++; k < chunks; k = next++)
+        for (Index b = k * kNodes, end = std::min(nodes, b + kNodes); b < end; ++b) {
+          double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+          for (int t = start[b]; t < start[b + 1]; ++t) {
+            const double* x = src + 3 * node[t];
+            const double* v = val + 9 * t;
+            s0 += v[0] * x[0] + v[1] * x[1] + v[2] * x[2];
+            s1 += v[3] * x[0] + v[4] * x[1] + v[5] * x[2];
+            s2 += v[6] * x[0] + v[7] * x[1] + v[8] * x[2];
+          }
+          dst[3 * b] = s0;
+          dst[3 * b + 1] = s1;
+          dst[3 * b + 2] = s2;
+        }
+    });
+    flops_ += 18 * static_cast<std::uint64_t>(block_node_.size());
+    return out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
+  }
   const material::Lame p = material_.lame();
   out.setZero(size());
   double* dst = out.data();
@@ -778,6 +847,18 @@ bool ElasticProblem::tangent_sweep(const VecX& u, Sink&& sink) const {
 bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
   INCISE_CHECK(u.size() == size(), "hessian_diagonal: u has the wrong size");
   diag.setZero(size());
+  if (assembled_product_) {  // from the node blocks (b, b)
+    if (assemble_product_matrix(u) != EvalStatus::kOk) return false;
+    for (Index b = 0; b < num_nodes(); ++b)
+      for (int t = block_start_[static_cast<std::size_t>(b)];
+           t < block_start_[static_cast<std::size_t>(b) + 1]; ++t)
+        if (block_node_[static_cast<std::size_t>(t)] == b)
+          for (int j = 0; j < 3; ++j)
+            diag[3 * b + j] = block_value_[9 * static_cast<std::size_t>(t) + 4 * j];
+    for (Eigen::Index i = 0; i < diag.size(); ++i)
+      if (fixed_[static_cast<std::size_t>(i)]) diag[i] = 1.0;
+    return diag.allFinite();
+  }
   double* dst = diag.data();
   const bool ok = tangent_sweep(
       u, [&](const auto& el, const auto& k) INCISE_LAMBDA_INLINE { el.add_diagonal(k, dst); });
@@ -790,34 +871,55 @@ bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
 
 void ElasticProblem::build_pattern() {
   const Eigen::Index n = size();
-  // Column-wise sorted row lists from the element DOF pairs.
-  std::vector<std::vector<int>> cols(static_cast<std::size_t>(n));
+  const auto nodes = static_cast<std::size_t>(num_nodes());
+  // Node adjacency in flat arrays (counting sort by node, then each short list sorted and made
+  // unique; the node itself included): every element couples all three DOFs of its nodes, so
+  // column 3·b + j holds rows 3·a + i for every neighbour a of b and i = 0, 1, 2.
+  std::vector<int> start(nodes + 1, 0);
+  for (std::size_t b = 0; b < nodes; ++b) start[b + 1] = 1;
   for (Index e = 0; e < num_elements(); ++e)
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b)
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j)
-            cols[static_cast<std::size_t>(3 * cells_(b, e) + j)].push_back(3 * cells_(a, e) + i);
-  for (Eigen::Index c = 0; c < n; ++c) {
-    auto& v = cols[static_cast<std::size_t>(c)];
-    v.push_back(static_cast<int>(c));  // the diagonal always exists
-    std::sort(v.begin(), v.end());
-    v.erase(std::unique(v.begin(), v.end()), v.end());
+    for (int b = 0; b < 4; ++b) start[static_cast<std::size_t>(cells_(b, e)) + 1] += 3;
+  for (std::size_t b = 0; b < nodes; ++b) start[b + 1] += start[b];
+  std::vector<int> adj(static_cast<std::size_t>(start[nodes]));
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (std::size_t b = 0; b < nodes; ++b)
+    adj[static_cast<std::size_t>(fill[b]++)] = static_cast<int>(b);
+  for (Index e = 0; e < num_elements(); ++e)
+    for (int b = 0; b < 4; ++b)
+      for (int a = 0; a < 4; ++a)
+        if (a != b)
+          adj[static_cast<std::size_t>(fill[static_cast<std::size_t>(cells_(b, e))]++)] =
+              cells_(a, e);
+  std::vector<int> degree(nodes);
+  for (std::size_t b = 0; b < nodes; ++b) {
+    int* lo = adj.data() + start[b];
+    int* hi = adj.data() + start[b + 1];
+    std::sort(lo, hi);
+    degree[b] = static_cast<int>(std::unique(lo, hi) - lo);
   }
+  // The compressed column arrays, written directly.
   k_.resize(n, n);
-  Eigen::VectorXi nnz_per_col(n);
-  for (Eigen::Index c = 0; c < n; ++c)
-    nnz_per_col[c] = static_cast<int>(cols[static_cast<std::size_t>(c)].size());
-  k_.reserve(nnz_per_col);
-  for (Eigen::Index c = 0; c < n; ++c)
-    for (int r : cols[static_cast<std::size_t>(c)]) k_.insert(r, c) = 0.0;
-  k_.makeCompressed();
+  Eigen::Index nnz = 0;
+  for (std::size_t b = 0; b < nodes; ++b) nnz += 9 * static_cast<Eigen::Index>(degree[b]);
+  k_.resizeNonZeros(nnz);
+  int* outer_w = k_.outerIndexPtr();
+  int* inner_w = k_.innerIndexPtr();
+  int t = 0;
+  for (std::size_t b = 0; b < nodes; ++b)
+    for (int j = 0; j < 3; ++j) {
+      outer_w[3 * b + static_cast<std::size_t>(j)] = t;
+      for (int k = 0; k < degree[b]; ++k)
+        for (int i = 0; i < 3; ++i)
+          inner_w[t++] = 3 * adj[static_cast<std::size_t>(start[b] + k)] + i;
+    }
+  outer_w[n] = t;
+  std::fill(k_.valuePtr(), k_.valuePtr() + nnz, 0.0);
   const int* outer = k_.outerIndexPtr();
-  const int* inner = k_.innerIndexPtr();
-  auto find = [&](int r, int c) {
-    const int* lo = inner + outer[c];
-    const int* hi = inner + outer[c + 1];
-    return static_cast<int>(std::lower_bound(lo, hi, r) - inner);
+  // Index of node a in node b's sorted neighbour list; entry (3a, 3b) is at outer[3b] + 3·that.
+  auto find = [&](Index a, Index b) {
+    const int* lo = adj.data() + start[static_cast<std::size_t>(b)];
+    const int* hi = lo + degree[static_cast<std::size_t>(b)];
+    return static_cast<int>(std::lower_bound(lo, hi, static_cast<int>(a)) - lo);
   };
   // Scatter map, kScatterStride = 20 ints per element: s[4b + a] = value index of entry
   // (3·node_a, 3·node_b), s[16 + b] = number of stored entries in column 3·node_b. Columns
@@ -832,16 +934,14 @@ void ElasticProblem::build_pattern() {
     for (int b = 0; b < 4; ++b) {
       const int c = 3 * cell[b];
       s[16 + b] = outer[c + 1] - outer[c];
-      for (int a = 0; a < 4; ++a) {
-        s[4 * b + a] = find(3 * cell[a], c);
-        INCISE_ASSERT(find(3 * cell[a] + 2, c + 2) == s[4 * b + a] + 2 * s[16 + b] + 2,
-                      "scatter map: 3x3 node blocks not laid out as assumed");
-      }
+      for (int a = 0; a < 4; ++a) s[4 * b + a] = outer[c] + 3 * find(cell[a], cell[b]);
     }
   }
   diag_.resize(static_cast<std::size_t>(n));
   for (Eigen::Index c = 0; c < n; ++c)
-    diag_[static_cast<std::size_t>(c)] = find(static_cast<int>(c), static_cast<int>(c));
+    diag_[static_cast<std::size_t>(c)] =
+        outer[c] + 3 * find(static_cast<Index>(c / 3), static_cast<Index>(c / 3)) +
+        static_cast<int>(c % 3);
 }
 
 EvalStatus ElasticProblem::assemble_tangent(const VecX& u, FixedDofTreatment treatment) {

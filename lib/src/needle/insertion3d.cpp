@@ -53,6 +53,8 @@ NeedleInsertion3D::NeedleInsertion3D(const mesh::MeshData& start,
   stop_.force_scale = material_.parameters().youngs_modulus * diameter * diameter;  // E·H²
   rebuild_problem();
   u_ = VecX::Zero(problem_->size());
+  u_end_ = u_;
+  increment_ = u_;
 }
 
 NeedleInsertion3D::~NeedleInsertion3D() = default;
@@ -72,6 +74,8 @@ void NeedleInsertion3D::rebuild_problem() {
   for (Index v = 0; v < problem_->num_nodes(); ++v)
     if (is_fixed_vertex(v)) fixed.push_back(v);
   problem_->fix_nodes(fixed);
+  if (options_.assembled_product && material_.linear_geometry())
+    problem_->set_assembled_product(true);
 }
 
 Eigen::Matrix3Xd NeedleInsertion3D::deformed() const {
@@ -129,15 +133,18 @@ void NeedleInsertion3D::refine_at_tip(StepReport3D& rep) {
 int NeedleInsertion3D::carry_field(Index before) {
   const Index after = mesh_->connectivity().num_vertices();
   if (after == before) return 0;
-  u_.conservativeResize(3 * static_cast<Eigen::Index>(after));
-  // Parents precede their midpoint (p, q < v): increasing order sees parents' values first.
-  for (Index v = before; v < after; ++v) {
-    const auto p = mesh_->parents(v);
-    u_.segment<3>(3 * v) = 0.5 * (u_.segment<3>(3 * p[0]) + u_.segment<3>(3 * p[1]));
+  for (VecX* f : {&u_, &u_end_, &increment_}) {
+    f->conservativeResize(3 * static_cast<Eigen::Index>(after));
+    // Parents precede their midpoint (p, q < v): increasing order sees parents' values first.
+    for (Index v = before; v < after; ++v) {
+      const auto p = mesh_->parents(v);
+      f->segment<3>(3 * v) = 0.5 * (f->segment<3>(3 * p[0]) + f->segment<3>(3 * p[1]));
+    }
   }
   rebuild_problem();
   for (Index v = before; v < after; ++v)
-    if (is_fixed_vertex(v)) u_.segment<3>(3 * v).setZero();
+    if (is_fixed_vertex(v))
+      for (VecX* f : {&u_, &u_end_, &increment_}) f->segment<3>(3 * v).setZero();
   return after - before;
 }
 
@@ -241,6 +248,7 @@ StepReport3D NeedleInsertion3D::run(StepReport3D rep) {
   Timer timer;
   for (NeedleNode3D& n : nodes_) n.anchor = n.coords.s;
   update_thresholds();
+  if (extrapolate_now_) extrapolate();
   rep.rearrange_seconds += timer.seconds();
   rep = detail::stick_slip_loop(
       rep, options_.max_rearrangements,
@@ -292,12 +300,27 @@ StepReport3D NeedleInsertion3D::step(const NeedlePose3D& pose) {
   timer.restart();
   rep.intercepted = intercept();
   rep.rearrange_seconds = timer.seconds();
-  return run(rep);
+  extrapolate_now_ = options_.extrapolate && options_.relaxation == Relaxation::kLinearCg;
+  rep = run(rep);
+  extrapolate_now_ = false;
+  increment_ = u_ - u_end_;
+  u_end_ = u_;
+  return rep;
+}
+
+void NeedleInsertion3D::extrapolate() {
+  std::vector<char> is_needle(static_cast<std::size_t>(problem_->num_nodes()), 0);
+  for (const NeedleNode3D& n : nodes_) is_needle[static_cast<std::size_t>(n.vertex)] = 1;
+  for (Index v = 0; v < problem_->num_nodes(); ++v)
+    if (!is_needle[static_cast<std::size_t>(v)] && !problem_->is_fixed(3 * v))
+      u_.segment<3>(3 * v) += increment_.segment<3>(3 * v);
 }
 
 StepReport3D NeedleInsertion3D::settle() {
   INCISE_CHECK(has_pose_, "settle: no step has been taken");
-  return run(StepReport3D{});
+  StepReport3D rep = run(StepReport3D{});
+  u_end_ = u_;
+  return rep;
 }
 
 }  // namespace incise::needle

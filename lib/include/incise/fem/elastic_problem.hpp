@@ -152,7 +152,8 @@ class ElasticProblem : public Problem {
   /// hessian_product() evaluated separately.
   [[nodiscard]] EvalStatus gradient_energy_product(const VecX& u, const VecX& d, VecX& g,
                                                    double& energy, VecX& out) override;
-  /// Diagonal of K(u) (from element tangents). Fixed DOFs get 1. Returns false if inverted.
+  /// Diagonal of K(u) (from element tangents; with set_assembled_product, from the assembled
+  /// K). Fixed DOFs get 1. Returns false if inverted.
   bool hessian_diagonal(const VecX& u, VecX& diag) override;
   void project(VecX& v) const override;
   bool is_fixed(Eigen::Index i) const override { return fixed_[static_cast<std::size_t>(i)] != 0; }
@@ -174,6 +175,14 @@ class ElasticProblem : public Problem {
   /// Convenience: assemble and copy into `k`.
   [[nodiscard]] EvalStatus tangent(const VecX& u, Eigen::SparseMatrix<double>& k,
                                    FixedDofTreatment treatment = FixedDofTreatment::kIdentity);
+  /// For a material with linear geometry (Material::linear_geometry(): K does not depend on u),
+  /// `on` makes hessian_product() multiply by the raw tangent (kKeep) assembled once, at the
+  /// first product after the call (a problem's mesh and material never change), instead of the
+  /// matrix-free element products: the same K·d up to rounding, fewer flops (2 per stored entry)
+  /// — worth it when many products follow (docs/needle.md "Fig. 6.14 and speed"). Throws
+  /// UsageError for any other material. Default off (matrix-free, §3.1).
+  void set_assembled_product(bool on);
+  bool assembled_product() const { return assembled_product_; }
   /// Elastic forces only: f_int = Σ q_τ(u) (N).
   [[nodiscard]] EvalStatus internal_forces(const VecX& u, VecX& f_int);
 
@@ -228,6 +237,8 @@ class ElasticProblem : public Problem {
   bool tangent_sweep(const VecX& u, Sink&& sink) const;
   Index num_full_blocks() const { return num_elements() / 4; }
   void build_pattern();
+  /// Assembles K (kKeep) into the node blocks of the assembled product unless they exist.
+  EvalStatus assemble_product_matrix(const VecX& u);
   void rebuild_mass();
 
   Eigen::Matrix3Xd points_;
@@ -245,6 +256,12 @@ class ElasticProblem : public Problem {
   ElementFlops element_flops_;
   std::uint64_t flops_ = 0;
   Eigen::SparseMatrix<double> k_;
+  bool assembled_product_ = false;
+  // K for the assembled product in 3×3 node blocks (empty until used): node b's blocks are
+  // block_start_[b] .. block_start_[b + 1] − 1, block t couples node block_node_[t], its values
+  // block_value_[9t + 3j + i] = K(3·block_node_[t] + i, 3b + j).
+  std::vector<int> block_start_, block_node_;
+  std::vector<double> block_value_;
   std::vector<int> scatter_;  ///< per element: 16 block value indices, 4 column lengths
   std::vector<int> diag_;     ///< value index of each diagonal entry
   int threads_ = 1;

@@ -30,7 +30,8 @@
 ///  4. friction thresholds (once per step, as in 2D): the needle surface of the current needle
 ///     nodes (needle3d.hpp), each node's third of its faces' deformed area A_k and
 ///     F_d,k = f(s_k)·A_k/(2πr) (FrictionProfile::surface_thresholds), F_s = static_factor·F_d;
-///  5. solve (6.7) on NeedleProblem3D by linear or nonlinear CG from the current state, stopped
+///  5. solve (6.7) on NeedleProblem3D by linear or nonlinear CG from the current state (linear
+///     CG: advanced by the previous step's increment, InsertionOptions3D::extrapolate), stopped
 ///     by (6.9) with force scale E·H² (H = diagonal of the reference bounding box; §6.6: "for
 ///     3D, the term dH should be changed, for example to H²");
 ///  6. rearrange and release exactly as in 2D (insertion.hpp items 5 and 6).
@@ -63,6 +64,19 @@ struct InsertionOptions3D : InsertionOptions {
   double h_shaft = 2e-3;
   /// Refinement budget: no step refines a mesh with this many tetrahedra (kRefinementBudget).
   Index max_elements = 2000000;
+  /// Linear-geometry material: K·d from the stiffness assembled once per refinement
+  /// (fem::ElasticProblem::set_assembled_product) instead of element products — the same
+  /// solves up to rounding, faster (docs/needle.md "Fig. 6.14 and speed"). Ignored otherwise.
+  /// Off by default (docs/needle.md: a rounding-sensitive rearrangement cycle in one test run).
+  bool assembled_product = false;
+  /// Linear CG only: before step()'s first solve, the displacement of every vertex that is
+  /// neither a needle node nor fixed is advanced by its change over the previous step (carried
+  /// to new vertices by the parents' mean, as u) — the warm start extrapolated. Done after
+  /// interception and thresholds, so only the solver's start changes (docs/needle.md "Fig. 6.14
+  /// and speed"). Nonlinear CG starts from the previous solution (an extrapolated start can
+  /// invert a neo-Hookean element). Off by default: it saves 10 % of the liver insertion's CG
+  /// iterations but costs 8 % on the Fig. 6.14 linear cube.
+  bool extrapolate = false;
 };
 
 /// Report of one 3D step (insertion.hpp StepReportT).
@@ -128,6 +142,7 @@ class NeedleInsertion3D {
   void place_needle_nodes();
   void update_thresholds();
   void update_surface(StepReport3D& rep);
+  void extrapolate();
   StepReport3D run(StepReport3D rep);
 
   std::unique_ptr<mesh::TetBisectionMesh> mesh_;
@@ -146,6 +161,9 @@ class NeedleInsertion3D {
   std::vector<double> thresholds_;
   mesh::CellMatrix surface_ = mesh::CellMatrix(3, 0);
   VecX last_gradient_;
+  bool extrapolate_now_ = false;  ///< step() sets it for run()
+  VecX u_end_;      ///< u at the end of the previous step (carried through refinement)
+  VecX increment_;  ///< u_end_ minus u at the end of the step before (carried likewise)
 };
 
 }  // namespace incise::needle
