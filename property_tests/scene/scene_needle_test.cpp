@@ -587,6 +587,37 @@ TEST(SceneNeedle3D, SmallInsertionRunsAndWritesCsvVtuSeriesAndNeedleSurface) {
   EXPECT_NEAR(area, last.surface_area, 1e-12 * last.surface_area);
 }
 
+// The two speed options of the 3D insertion (docs/needle.md) as tool keys: passed through, and
+// refused where they do not apply.
+TEST(SceneNeedle3D, AssembledProductAndExtrapolateKeys) {
+  Json j = small_needle3d_scene();
+  {
+    const scene::BuiltScene b = scene::build_scene(parse_scene(j.dump(), "scene.json", ""));
+    EXPECT_FALSE(b.needle3d->options().assembled_product);
+    EXPECT_FALSE(b.needle3d->options().extrapolate);
+  }
+  j["tools"][0]["assembled_product"] = true;
+  j["tools"][0]["extrapolate"] = true;
+  {
+    const scene::BuiltScene b = scene::build_scene(parse_scene(j.dump(), "scene.json", ""));
+    EXPECT_TRUE(b.needle3d->options().assembled_product);
+    EXPECT_TRUE(b.needle3d->options().extrapolate);
+  }
+  Json n = j;
+  n["material"]["model"] = "neohookean";
+  n["tools"][0].erase("extrapolate");
+  expect_error(n, "/tools/0/assembled_product", "needs the \"linear\" material");
+  Json c = j;
+  c["solver"]["method"] = "nonlinear-cg";
+  c["tools"][0].erase("assembled_product");
+  expect_error(c, "/tools/0/extrapolate", "for solver \"cg\" only");
+  Json s = small_needle_scene();
+  s["tools"][0]["assembled_product"] = true;
+  expect_error(s, "/tools/0/assembled_product", "not allowed here: a needle in a slab2d scene");
+  j["tools"][0]["extrapolate"] = "yes";
+  expect_error(j, "/tools/0/extrapolate", "");
+}
+
 TEST(SceneNeedle3DBad, PathRadiusFixedAndKeys) {
   // A path that never enters the body.
   Json j = small_needle3d_scene();

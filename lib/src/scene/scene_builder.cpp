@@ -447,6 +447,8 @@ BuiltScene build_needle3d_scene(const SceneSpec& spec) {
   o.max_rearrangements = tool.max_rearrangements;
   o.relocate = tool.relocate;
   o.preconditioner = spec.solver.preconditioner;
+  o.assembled_product = tool.assembled_product;
+  o.extrapolate = tool.extrapolate;
   b.needle3d = std::make_unique<needle::NeedleInsertion3D>(b.mesh, make_material(spec.material),
                                                            boxes, tool.friction, o);
   b.needle_plan = needle_updates(tool, true);

@@ -361,10 +361,14 @@ void parse_needle(JsonObject& o, ToolSpec& t, bool slab) {
     o.forbid("radius", why);
     o.forbid("h_shaft", why);
     o.forbid("max_elements", why);
+    o.forbid("assembled_product", why);
+    o.forbid("extrapolate", why);
   } else {
     t.radius = o.number("radius", detail::positive());
     t.h_shaft = o.number("h_shaft", detail::positive(), 2.0 * t.radius);
     t.max_elements = o.integer("max_elements", 1, std::numeric_limits<Index>::max(), 1000000);
+    t.assembled_product = o.boolean("assembled_product", false);
+    t.extrapolate = o.boolean("extrapolate", false);
   }
   if (o.has("friction")) {
     JsonObject f = o.object("friction",
@@ -600,6 +604,15 @@ void check_needle3d(const SceneSpec& s, const std::string& file) {
          "got " +
              std::to_string(s.tools.size()) + " tools");
   const ToolSpec& t = s.tools[0];
+  if (t.assembled_product && s.material.model != "linear")
+    fail(file, t.path_json + "/assembled_product",
+         "the assembled product needs the \"linear\" material (its stiffness does not change "
+         "with u), got \"" +
+             s.material.model + "\"");
+  if (t.extrapolate && s.solver.method != SolverSpec::Method::kCG)
+    fail(file, t.path_json + "/extrapolate",
+         "the extrapolated warm start is for solver \"cg\" only (nonlinear CG starts from the "
+         "previous solution)");
   double total = 0.0;
   for (std::size_t i = 0; i + 1 < t.path.size(); ++i)
     total += (t.path[i + 1] - t.path[i]).stableNorm();

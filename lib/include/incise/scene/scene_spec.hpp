@@ -251,6 +251,12 @@ struct ToolSpec {
   double h_shaft = 0;
   /// 3D needle only: refinement budget in tetrahedra (InsertionOptions3D::max_elements).
   Index max_elements = 1000000;
+  /// 3D needle, linear material only: K·d from the stiffness assembled once per refinement
+  /// (InsertionOptions3D::assembled_product; key `assembled_product`, default false).
+  bool assembled_product = false;
+  /// 3D needle, solver "cg" only: warm start advanced by the previous update's increment
+  /// (InsertionOptions3D::extrapolate; key `extrapolate`, default false).
+  bool extrapolate = false;
 };
 
 /// Names of ToolSpec::Kind (scene key `type` of a tool).
