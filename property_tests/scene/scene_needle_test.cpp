@@ -551,7 +551,8 @@ TEST(SceneNeedle3D, SmallInsertionRunsAndWritesCsvVtuSeriesAndNeedleSurface) {
   const auto csv = lines_of(read(dir / "updates.csv"));
   ASSERT_EQ(csv.size(), 15u);
   EXPECT_NE(csv[0].find(",nodes,tetrahedra,flops,tip_z,needle_force_z,surface_faces,"
-                        "surface_area,refine_seconds,solve_seconds,rearrange_seconds"),
+                        "surface_area,refine_seconds,solve_seconds,rearrange_seconds,"
+                        "factorizations,replaced_columns"),
             std::string::npos)
       << csv[0];
   for (const char* k : {"0000", "0004", "0008", "0012", "0013"}) {
@@ -649,5 +650,57 @@ TEST(SceneNeedle3DBad, PathRadiusFixedAndKeys) {
   expect_error(j, "/tools/1", "a needle scene has exactly one tool");
   j = small_needle3d_scene();
   j["solver"]["method"] = "newton";
-  expect_error(j, "/solver/method", "a needle scene is solved by \"cg\" or");
+  expect_error(j, "/solver/method", "a 3D needle scene is solved by \"cg\", \"nonlinear-cg\" or");
+  Json s2 = small_needle_scene();
+  s2["solver"] = Json::parse(R"({"method": "augmented"})");
+  expect_error(s2, "/solver/method", "a slab2d needle scene is solved by \"cg\" or");
+}
+
+// "augmented" in a 3D needle scene: needle::SolvePath3D::kAugmented (Yeung et al. 2016 §3.1).
+TEST(SceneNeedle3D, AugmentedSolverKeyRunsTheInsertionAndMatchesCg) {
+  Json j = small_needle3d_scene();
+  j["solver"] = Json::parse(R"({"method": "augmented", "refactor_at_m": 50})");
+  scene::BuiltScene b = scene::build_scene(parse_scene(j.dump(), "scene.json", ""));
+  EXPECT_EQ(b.needle3d->options().solve_path, needle::SolvePath3D::kAugmented);
+  EXPECT_EQ(b.needle3d->options().refactor_at_m, 50);
+  const scene::SceneRunResult res = scene::run_scene(b);
+  ASSERT_TRUE(res.report.ok()) << res.report.brief();
+  int factorizations = 0;
+  for (const auto& r : res.needle_updates) {
+    EXPECT_EQ(r.status, "ok");
+    EXPECT_EQ(r.cg_iterations, 0);
+    factorizations += r.factorizations;
+  }
+  EXPECT_GT(factorizations, 1);
+  EXPECT_GT(res.needle_updates.back().replaced_columns, 0);
+  // The same insertion by CG at ε = 1e-9: the same needle force to 1e-6 of its largest value
+  // (insertion3d_test's EveryStepEqualsADirectFactorizationAndTightCg bounds the same).
+  Json c = small_needle3d_scene();
+  c["solver"]["tolerance"] = 1e-9;
+  scene::BuiltScene bc = scene::build_scene(parse_scene(c.dump(), "scene.json", ""));
+  const scene::SceneRunResult rc = scene::run_scene(bc);
+  ASSERT_EQ(rc.needle_updates.size(), res.needle_updates.size());
+  double fmax = 0.0, dev = 0.0;
+  for (std::size_t k = 0; k < rc.needle_updates.size(); ++k) {
+    fmax = std::max(fmax, rc.needle_updates[k].needle_force.norm());
+    dev = std::max(dev,
+                   (rc.needle_updates[k].needle_force - res.needle_updates[k].needle_force).norm());
+  }
+  ASSERT_GT(fmax, 0.0);
+  EXPECT_LE(dev, 1e-6 * fmax) << dev << " N of " << fmax;
+  // Keys: the (6.9) ones and the cutting run's are refused, refactor_at_m >= 1.
+  for (const char* key : {"tolerance", "tolerance_round", "max_iterations", "cut_configuration"}) {
+    Json k = j;
+    k["solver"][key] = key == std::string("cut_configuration") ? Json("deformed") : Json(1e-3);
+    expect_error(k, std::string("/solver/") + key, "not allowed here");
+  }
+  Json m = j;
+  m["solver"]["refactor_at_m"] = 0;
+  expect_error(m, "/solver/refactor_at_m", "");
+  Json n = j;
+  n["material"]["model"] = "neohookean";
+  expect_error(n, "/solver/method", "\"augmented\" factorizes the constant linear stiffness");
+  Json a = j;
+  a["tools"][0]["assembled_product"] = true;
+  expect_error(a, "/tools/0/assembled_product", "the \"augmented\" solver factors K instead");
 }

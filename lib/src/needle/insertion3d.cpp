@@ -4,6 +4,7 @@
 #include <incise/needle/insertion3d.hpp>
 #include <incise/needle/needle_problem.hpp>
 
+#include "augmented_path.hpp"
 #include "stick_slip.hpp"
 
 #include <algorithm>
@@ -41,6 +42,12 @@ NeedleInsertion3D::NeedleInsertion3D(const mesh::MeshData& start,
   INCISE_CHECK_PARAM(options_.max_rearrangements >= 0, "max_rearrangements must be >= 0");
   INCISE_CHECK_PARAM(options_.max_iterations > 0, "max_iterations must be > 0");
   INCISE_CHECK_PARAM(options_.max_elements > 0, "max_elements must be > 0");
+  INCISE_CHECK_PARAM(options_.solve_path != SolvePath3D::kAugmented || material_.name() == "linear",
+                     "the augmented solve path needs the \"linear\" material (it solves the "
+                     "linear static problem K a = f), got \"" +
+                         material_.name() + "\"");
+  INCISE_CHECK_PARAM(options_.refactor_at_m >= 1,
+                     "refactor_at_m must be >= 1, got " + std::to_string(options_.refactor_at_m));
   for (const FixedBox& b : fixed_)
     INCISE_CHECK_PARAM(!b.lo.hasNaN() && !b.hi.hasNaN() && (b.lo.array() <= b.hi.array()).all(),
                        "a fixed box needs corners lo <= hi (no NaN)");
@@ -52,6 +59,8 @@ NeedleInsertion3D::NeedleInsertion3D(const mesh::MeshData& start,
   stop_.epsilon_round = options_.epsilon_round;
   stop_.force_scale = material_.parameters().youngs_modulus * diameter * diameter;  // E·H²
   rebuild_problem();
+  if (options_.solve_path == SolvePath3D::kAugmented)
+    augmented_ = std::make_unique<detail::AugmentedNeedlePath>(material_);
   u_ = VecX::Zero(problem_->size());
   u_end_ = u_;
   increment_ = u_;
@@ -244,15 +253,40 @@ void NeedleInsertion3D::update_surface(StepReport3D& rep) {
                                   .norm();
 }
 
+bool NeedleInsertion3D::prepare_augmented(StepReport3D& rep) {
+  Timer timer;
+  const int before = augmented_->factorizations();
+  std::string message;
+  bool ok = true;
+  if (!augmented_->matches(pose_.frame())) {
+    ok = augmented_->reset(*problem_, pose_.frame(), message);
+  } else {
+    augmented_->follow(*problem_);
+    // A failed refactorization keeps the old factor, which still serves (no failure).
+    if (augmented_->changed_columns() > options_.refactor_at_m) (void)augmented_->refactor();
+  }
+  rep.factorizations += augmented_->factorizations() - before;
+  rep.solve_seconds += timer.seconds();
+  if (!ok) {
+    rep.status = StepStatus::kSolverFailed;
+    rep.message = message;
+  }
+  return ok;
+}
+
 StepReport3D NeedleInsertion3D::run(StepReport3D rep) {
   Timer timer;
   for (NeedleNode3D& n : nodes_) n.anchor = n.coords.s;
   update_thresholds();
   if (extrapolate_now_) extrapolate();
   rep.rearrange_seconds += timer.seconds();
+  if (augmented_ && !prepare_augmented(rep)) return rep;
   rep = detail::stick_slip_loop(
       rep, options_.max_rearrangements,
       [&](StepReport3D& r) {
+        if (augmented_)
+          return augmented_->solve(*problem_, pose_, nodes_, thresholds_, mesh_->points(), u_,
+                                   last_gradient_, r);
         return detail::solve<3>(*problem_, pose_, nodes_, thresholds_, options_, stop_,
                                 mesh_->points(), u_, last_gradient_, r);
       },
@@ -300,7 +334,8 @@ StepReport3D NeedleInsertion3D::step(const NeedlePose3D& pose) {
   timer.restart();
   rep.intercepted = intercept();
   rep.rearrange_seconds = timer.seconds();
-  extrapolate_now_ = options_.extrapolate && options_.relaxation == Relaxation::kLinearCg;
+  extrapolate_now_ =
+      options_.extrapolate && options_.relaxation == Relaxation::kLinearCg && !augmented_;
   rep = run(rep);
   extrapolate_now_ = false;
   increment_ = u_ - u_end_;

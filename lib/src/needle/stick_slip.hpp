@@ -99,6 +99,27 @@ Report stick_slip_loop(Report rep, int max_rearrangements, Solve&& solve, Rearra
   return rep;
 }
 
+// The end of every solve of (6.7), whichever solver produced the solution `ur` (rotated
+// unknowns of `np`): u = R·ũ (original frame), the needle nodes' coordinates from the deformed
+// positions (`points`: 3 × n reference positions) and the rotated gradient at the solution in
+// `gradient`. False (status kSolverFailed) when the gradient cannot be evaluated.
+template <int D, class Report>
+bool conclude_solve(NeedleProblemT<D>& np, const typename NeedleSpace<D>::Pose& pose,
+                    std::vector<typename NeedleSpace<D>::Node>& nodes,
+                    const Eigen::Matrix3Xd& points, const VecX& ur, VecX& u, VecX& gradient,
+                    Report& rep) {
+  u = np.to_original(ur);
+  for (auto& n : nodes)
+    n.coords = pose.coordinates(points.col(n.vertex).template head<D>() +
+                                u.template segment<D>(D * n.vertex));
+  if (np.gradient(ur, gradient) != EvalStatus::kOk) {
+    rep.status = StepStatus::kSolverFailed;
+    rep.message = "gradient at the solution could not be evaluated";
+    return false;
+  }
+  return true;
+}
+
 // One solve of (6.7) from the current state (item 4): builds the projected problem on `base`,
 // runs the relaxation of `options` stopped by `stop` from u (original frame, updated on
 // success), then refreshes the needle nodes' coordinates from the deformed positions
@@ -134,16 +155,7 @@ bool solve(typename NeedleSpace<D>::Base& base, const typename NeedleSpace<D>::P
     rep.message = "solve " + std::to_string(rep.solves) + ": " + sr.brief();
     return false;
   }
-  u = np.to_original(ur);
-  for (auto& n : nodes)
-    n.coords = pose.coordinates(points.col(n.vertex).template head<D>() +
-                                u.template segment<D>(D * n.vertex));
-  if (np.gradient(ur, gradient) != EvalStatus::kOk) {
-    rep.status = StepStatus::kSolverFailed;
-    rep.message = "gradient at the solution could not be evaluated";
-    return false;
-  }
-  return true;
+  return conclude_solve<D>(np, pose, nodes, points, ur, u, gradient, rep);
 }
 
 // Node counts and StepReport::needle_force (item 6 of the report): from the last solve's

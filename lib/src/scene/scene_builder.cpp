@@ -449,6 +449,10 @@ BuiltScene build_needle3d_scene(const SceneSpec& spec) {
   o.preconditioner = spec.solver.preconditioner;
   o.assembled_product = tool.assembled_product;
   o.extrapolate = tool.extrapolate;
+  if (spec.solver.method == SolverSpec::Method::kAugmented) {
+    o.solve_path = needle::SolvePath3D::kAugmented;
+    o.refactor_at_m = spec.solver.refactor_at_m;
+  }
   b.needle3d = std::make_unique<needle::NeedleInsertion3D>(b.mesh, make_material(spec.material),
                                                            boxes, tool.friction, o);
   b.needle_plan = needle_updates(tool, true);

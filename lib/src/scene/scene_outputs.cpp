@@ -93,7 +93,7 @@ std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
            "bisections,intercepted,released,nodes,"
         << (three_d ? "tetrahedra" : "triangles") << ",flops"
         << (three_d ? ",tip_z,needle_force_z,surface_faces,surface_area,refine_seconds,"
-                      "solve_seconds,rearrange_seconds"
+                      "solve_seconds,rearrange_seconds,factorizations,replaced_columns"
                     : "")
         << "\n";
     for (const auto& r : res.needle_updates) {
@@ -106,7 +106,7 @@ std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
       if (three_d)
         csv << "," << Field{r.tip.z()} << "," << Field{r.needle_force.z()} << "," << r.surface_faces
             << "," << Field{r.surface_area} << "," << r.seconds_refine << "," << r.seconds_solve
-            << "," << r.seconds_rearrange;
+            << "," << r.seconds_rearrange << "," << r.factorizations << "," << r.replaced_columns;
       csv << "\n";
     }
     return csv.str();

@@ -4,6 +4,7 @@
 #include <incise/core/parallel.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/slab2d.hpp>
+#include <incise/needle/insertion3d.hpp>
 
 #include <filesystem>
 #include <fstream>
@@ -231,15 +232,38 @@ LoadSpec parse_load(const Json& j, const std::string& path, const std::string& f
 
 // `slab`: a needle scene (thesis ch. 6: a slab2d mesh, or a tetrahedral mesh with a needle):
 // linear or nonlinear CG on the projected problem (6.7) of §6.6, stopped by (6.9) with ε_round,
-// plain CG.
-SolverSpec parse_solver(JsonObject o, bool slab) {
+// plain CG; `needle3d` (a tetrahedral needle scene) also the augmented solver
+// (needle::SolvePath3D::kAugmented), whose only key is refactor_at_m.
+SolverSpec parse_solver(JsonObject o, bool slab, bool needle3d) {
   SolverSpec s;
   s.method = o.choice("method", kMethodNames);
-  if (slab && s.method != SolverSpec::Method::kCG && s.method != SolverSpec::Method::kNonlinearCG)
+  const bool needle_augmented = needle3d && s.method == SolverSpec::Method::kAugmented;
+  if (slab && !needle_augmented && s.method != SolverSpec::Method::kCG &&
+      s.method != SolverSpec::Method::kNonlinearCG)
     fail(o.file(), detail::child_path(o.path(), "method"),
-         "a needle scene is solved by \"cg\" or \"nonlinear-cg\" on the projected "
-         "problem (6.7) of thesis §6.6, got \"" +
-             std::string(to_string(s.method)) + "\"");
+         std::string(needle3d ? "a 3D needle scene is solved by \"cg\", \"nonlinear-cg\" or "
+                                "\"augmented\""
+                              : "a slab2d needle scene is solved by \"cg\" or \"nonlinear-cg\"") +
+             " on the projected problem (6.7) of thesis §6.6, got \"" + to_string(s.method) + "\"");
+  if (needle_augmented) {
+    const std::string why =
+        "the augmented needle solve is exact (GMRES on eq. 17 of Yeung et al. 2016 to 1e-12), "
+        "not stopped by (6.9)";
+    o.forbid("tolerance", why);
+    o.forbid("tolerance_round", why);
+    o.forbid("max_iterations", why);
+    o.forbid("preconditioner", why);
+    o.forbid("threads",
+             "a needle scene rebuilds its problem at every update with the default thread count");
+    const std::string cut = "it belongs to the interactive cutting run's augmented solver";
+    o.forbid("cut_configuration", cut);
+    o.forbid("solve_threads", cut);
+    o.forbid("schur_preconditioner", cut);
+    s.refactor_at_m = o.integer("refactor_at_m", 1, std::numeric_limits<int>::max(),
+                                needle::InsertionOptions3D{}.refactor_at_m);
+    o.finish();
+    return s;
+  }
   s.tolerance = o.number("tolerance", Range{0.0, 1.0, true, true}, 1e-8);
   s.max_iterations = o.integer("max_iterations", 1, kMaxIterations, 10000);
   if (slab) {
@@ -609,6 +633,9 @@ void check_needle3d(const SceneSpec& s, const std::string& file) {
          "the assembled product needs the \"linear\" material (its stiffness does not change "
          "with u), got \"" +
              s.material.model + "\"");
+  if (t.assembled_product && s.solver.method == SolverSpec::Method::kAugmented)
+    fail(file, t.path_json + "/assembled_product",
+         "the assembled product speeds up CG's K·d; the \"augmented\" solver factors K instead");
   if (t.extrapolate && s.solver.method != SolverSpec::Method::kCG)
     fail(file, t.path_json + "/extrapolate",
          "the extrapolated warm start is for solver \"cg\" only (nonlinear CG starts from the "
@@ -639,7 +666,8 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
   // A tetrahedral mesh with a needle tool is a 3D needle scene (thesis §6.9).
   const bool needle3d = !slab && names_needle(root_json);
   const bool needle_scene = slab || needle3d;
-  s.solver = parse_solver(root.object("solver", "a solver object {\"method\": ...}"), needle_scene);
+  s.solver = parse_solver(root.object("solver", "a solver object {\"method\": ...}"), needle_scene,
+                          needle3d);
   const bool dynamic = s.solver.method == SolverSpec::Method::kDynamicSS22;
   const Json* solver_json = root.get("solver");
 

@@ -357,6 +357,8 @@ void run_needle(BuiltScene& scene, Insertion& sim, SceneRunResult& res, const Ob
     row.seconds_rearrange = r.rearrange_seconds;
     row.surface_faces = r.surface_faces;
     row.surface_area = r.surface_area;
+    row.factorizations = r.factorizations;
+    row.replaced_columns = r.replaced_columns;
     update_seconds += row.seconds;
     cg += r.cg_iterations;
     rearrangements += r.rearrangements;

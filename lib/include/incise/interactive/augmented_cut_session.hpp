@@ -37,14 +37,8 @@ namespace incise::interactive {
 /// Options of an AugmentedCutSession.
 struct AugmentedCutOptions {
   /// AugmentedOptions with a supernodal CHOLMOD factor and eq. 17 preconditioned by the
-  /// explicit H R⁻¹ J (SchurSolver::kDirectCached; see `augmented`).
-  static linalg::AugmentedOptions supernodal_defaults() {
-    linalg::AugmentedOptions o;
-    o.cholmod.kind = linalg::CholmodKind::kSupernodal;
-    o.schur_solver = linalg::SchurSolver::kDirectCached;
-    o.update_capacitance = true;  // issue 17: updated, not refactored (docs/augmented.md)
-    return o;
-  }
+  /// explicit H R⁻¹ J (linalg::interactive_options(); see `augmented`).
+  static linalg::AugmentedOptions supernodal_defaults() { return linalg::interactive_options(); }
   cut::CutOptions cut;  ///< the cutter's options (thesis defaults)
   /// The augmented solver's options: K⁰ factored supernodally (METIS ordering kept), eq. 17
   /// preconditioned by the explicit H R⁻¹ J in capacitance form (why, and the measurements

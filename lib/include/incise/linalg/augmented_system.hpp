@@ -113,6 +113,19 @@ struct AugmentedOptions {
   int solve_threads = 1;
 };
 
+/// The options of the interactive sessions at organ scale (interactive::AugmentedCutSession,
+/// the 3D needle's augmented path): a supernodal CHOLMOD factor (METIS kept), eq. 17
+/// preconditioned by the explicit H R⁻¹ J in capacitance form (SchurSolver::kDirectCached), its
+/// factorization updated between solves. Why, with the measurements: docs/cutting.md,
+/// docs/augmented.md.
+inline AugmentedOptions interactive_options() {
+  AugmentedOptions o;
+  o.cholmod.kind = CholmodKind::kSupernodal;
+  o.schur_solver = SchurSolver::kDirectCached;
+  o.update_capacitance = true;  // issue 17: updated, not refactored (docs/augmented.md)
+  return o;
+}
+
 /// Outcome of AugmentedSystem::solve().
 enum class AugmentedStatus {
   kOk,

@@ -117,6 +117,10 @@ struct StepReportT : Outcome<StepStatus, StepStatus::kOk, StepStatus::kNotRun> {
   /// 3D only (0 in 2D): needle-surface faces and their total area (m², deformed) at the end.
   int surface_faces = 0;
   double surface_area = 0.0;  ///< see surface_faces
+  /// 3D augmented path only (insertion3d.hpp SolvePath3D::kAugmented): fresh factorizations of
+  /// the needle-frame stiffness in this step, and the replaced columns m of its last solve.
+  int factorizations = 0;
+  int replaced_columns = 0;  ///< see factorizations
 };
 
 /// Report of one 2D step().

@@ -49,12 +49,30 @@
 
 namespace incise::needle {
 
+namespace detail {
+class AugmentedNeedlePath;
+}  // namespace detail
+
 /// A fixed region of a 3D body: the reference vertices in the closed box [lo, hi] (widened by
 /// 1e-9 m) are held at zero displacement, also those refinement creates there. A plane
 /// x[axis] = value is the box with lo = hi = value on that axis and ±∞ on the others.
 struct FixedBox {
   Vec3 lo = Vec3::Zero();  ///< lower corner (m)
   Vec3 hi = Vec3::Zero();  ///< upper corner (m)
+};
+
+/// How step item 5 solves (6.7).
+enum class SolvePath3D {
+  kRelaxation,  ///< linear or nonlinear CG (InsertionOptions::relaxation), as the thesis does
+  /// "linear" material only: the augmented system of Yeung et al. 2016 (§3.1) in the needle
+  /// frame — K̃ = PᵀKP, P = blockdiag(Q) with Q the pose's frame (t, n1, n2), factored once;
+  /// sticking nodes' three DOFs and slipping nodes' n1, n2 DOFs imposed and released as
+  /// Dirichlet constraints without refactoring, a refinement's removed and new cells as element
+  /// changes and its new vertices as new DOFs. Each solve is exact (GMRES on eq. 17 to 1e-12),
+  /// so the (6.9) rule is not needed. A fresh factorization when the needle turns (Q changes by
+  /// more than 1e-12) and when more than refactor_at_m replaced columns (not counting the
+  /// Dirichlet DOFs) have accumulated at the start of a step (docs/needle.md).
+  kAugmented
 };
 
 /// Options of NeedleInsertion3D: those of the 2D loop (h_ref: longest edge (m) of the
@@ -77,6 +95,14 @@ struct InsertionOptions3D : InsertionOptions {
   /// invert a neo-Hookean element). Off by default: it saves 10 % of the liver insertion's CG
   /// iterations but costs 8 % on the Fig. 6.14 linear cube.
   bool extrapolate = false;
+  /// Step item 5's solver (SolvePath3D). kAugmented needs the "linear" material (ParameterError
+  /// otherwise); relaxation, preconditioner, ε, assembled_product and extrapolate then do not
+  /// apply.
+  SolvePath3D solve_path = SolvePath3D::kRelaxation;
+  /// kAugmented: a step that starts with more replaced columns than this (changed columns, not
+  /// Dirichlet DOFs) factors the current K̃ first, in the calling thread — a deterministic
+  /// point, so that runs repeat bitwise (docs/needle.md: the measured choice). ≥ 1.
+  int refactor_at_m = 600;
 };
 
 /// Report of one 3D step (insertion.hpp StepReportT).
@@ -144,6 +170,7 @@ class NeedleInsertion3D {
   void update_surface(StepReport3D& rep);
   void extrapolate();
   StepReport3D run(StepReport3D rep);
+  bool prepare_augmented(StepReport3D& rep);
 
   std::unique_ptr<mesh::TetBisectionMesh> mesh_;
   material::Material material_;
@@ -164,6 +191,7 @@ class NeedleInsertion3D {
   bool extrapolate_now_ = false;  ///< step() sets it for run()
   VecX u_end_;      ///< u at the end of the previous step (carried through refinement)
   VecX increment_;  ///< u_end_ minus u at the end of the step before (carried likewise)
+  std::unique_ptr<detail::AugmentedNeedlePath> augmented_;  ///< SolvePath3D::kAugmented
 };
 
 }  // namespace incise::needle

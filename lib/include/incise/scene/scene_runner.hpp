@@ -124,6 +124,10 @@ struct NeedleUpdateRow {
   /// 3D only: needle-surface faces and their area (m²) after the update (needle3d.hpp).
   int surface_faces = 0;
   double surface_area = 0;  ///< see surface_faces
+  /// 3D "augmented" only (needle::SolvePath3D::kAugmented): fresh factorizations in the update
+  /// and the replaced columns m of its last solve (0 otherwise).
+  int factorizations = 0;
+  int replaced_columns = 0;  ///< see factorizations
 };
 
 /// Outcome of run_scene().

@@ -181,9 +181,10 @@ struct SolverSpec {
   double line_search_tolerance = 0.1;
   /// Interactive cutting run ("augmented" with tools) only. Scene key `cut_configuration`.
   CutConfiguration cut_configuration = CutConfiguration::kDeformed;
-  /// Interactive cutting run only: interactive::AugmentedCutOptions::refactor_at_m, the augmented
-  /// paper's §3.6 background refactorization — started after a solve once m − |𝓓| replaced
-  /// columns (a count) have accumulated; 0 = never. Scene key `refactor_at_m`.
+  /// 3D needle scene with "augmented": needle::InsertionOptions3D::refactor_at_m (≥ 1, default
+  /// 600). Otherwise interactive cutting run only: interactive::AugmentedCutOptions::refactor_at_m,
+  /// the augmented paper's §3.6 background refactorization — started after a solve once m − |𝓓|
+  /// replaced columns (a count) have accumulated; 0 = never. Scene key `refactor_at_m`.
   int refactor_at_m = 0;
   /// Interactive cutting run only: linalg::AugmentedOptions::solve_threads, the threads of
   /// step 3's full backward substitution (1 = serial; the result is bit-identical for any
