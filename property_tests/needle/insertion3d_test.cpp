@@ -92,12 +92,15 @@ std::pair<int, int> expect_friction_inequalities(NeedleInsertion3D& sim, const S
     needle += g.segment<3>(3 * n.vertex);
     const double r = g.segment<3>(3 * n.vertex).dot(t);  // tangential force needle → material
     const double fs = sim.friction().static_factor * fd[k];
+    const auto& margin = sim.rearrange_margins();
     if (n.state == NodeState::kStick) {
       // The rearrangement tested the same quantity; the recomputed gradient differs by rounding.
-      EXPECT_LE(std::abs(r), fs * (1 + 1e-9) + 1e-12) << "sticking vertex " << n.vertex;
+      EXPECT_LE(std::abs(r), fs * (1 + 1e-9) + margin.force + 1e-12)
+          << "sticking vertex " << n.vertex;
       ++counts.first;
     } else {
-      EXPECT_GE(n.friction_sign * (n.coords.s - n.anchor), 0.0) << "slipping vertex " << n.vertex;
+      EXPECT_GE(n.friction_sign * (n.coords.s - n.anchor), -margin.slide)
+          << "slipping vertex " << n.vertex;
       EXPECT_LE(std::abs(r - n.friction_sign * fd[k]), threshold) << "slipping vertex " << n.vertex;
       ++counts.second;
     }
@@ -148,6 +151,16 @@ void random_insertions_keep_the_invariants(std::mt19937_64& rng, const Insertion
 TEST(NeedleInsertion3D, RandomInsertionsKeepMeshValidAndFrictionInequalities) {
   INCISE_SEEDED_RNG(rng, 6921);
   random_insertions_keep_the_invariants(rng, {}, 3);
+}
+
+// The assembled product (InsertionOptions3D::assembled_product): K·d rounded differently. With
+// seed 6921 one of these insertions ended in a rearrangement cycle before the rearrangement
+// tests had their rounding margins (insertion.hpp item 5).
+TEST(NeedleInsertion3D, AssembledProductRandomInsertionsKeepTheInvariants) {
+  INCISE_SEEDED_RNG(rng, 6921);
+  InsertionOptions3D o;
+  o.assembled_product = true;
+  random_insertions_keep_the_invariants(rng, o, 3);
 }
 
 // The augmented solve path (SolvePath3D::kAugmented, Yeung et al. 2016 §3.1): the same

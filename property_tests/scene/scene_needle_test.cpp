@@ -341,7 +341,7 @@ TEST(SceneNeedleBad, SlabSceneRefusesTetrahedralParts) {
   expect_error(j, "/loads", "not allowed here: a needle scene is loaded by its needle only");
   j = small_needle_scene();
   j["solver"]["method"] = "newton";
-  expect_error(j, "/solver/method", "a needle scene is solved by \"cg\" or");
+  expect_error(j, "/solver/method", "a slab2d needle scene is solved by \"cg\" or");
   j = small_needle_scene();
   j["solver"]["method"] = "nonlinear-cg";
   j["solver"]["preconditioner"] = "jacobi";

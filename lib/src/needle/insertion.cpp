@@ -63,6 +63,7 @@ NeedleInsertion::NeedleInsertion(const mesh::MeshData& start, const material::Ma
   stop_.epsilon = options_.epsilon;
   stop_.epsilon_round = options_.epsilon_round;
   stop_.force_scale = material_.parameters().youngs_modulus * thickness_ * diameter;  // E·d·H
+  margins_ = {stop_.epsilon_round * stop_.force_scale, stop_.epsilon_round * diameter};
   rebuild_problem();
   u_ = VecX::Zero(problem_->size());
 }
@@ -203,7 +204,8 @@ bool NeedleInsertion::solve(StepReport& rep) {
 }
 
 int NeedleInsertion::rearrange() {
-  return detail::rearrange<2>(nodes_, thresholds_, friction_.static_factor, last_gradient_);
+  return detail::rearrange<2>(nodes_, thresholds_, friction_.static_factor, last_gradient_,
+                              margins_);
 }
 
 int NeedleInsertion::release() {

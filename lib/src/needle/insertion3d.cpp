@@ -58,6 +58,7 @@ NeedleInsertion3D::NeedleInsertion3D(const mesh::MeshData& start,
   stop_.epsilon = options_.epsilon;
   stop_.epsilon_round = options_.epsilon_round;
   stop_.force_scale = material_.parameters().youngs_modulus * diameter * diameter;  // E·H²
+  margins_ = {stop_.epsilon_round * stop_.force_scale, stop_.epsilon_round * diameter};
   rebuild_problem();
   if (options_.solve_path == SolvePath3D::kAugmented)
     augmented_ = std::make_unique<detail::AugmentedNeedlePath>(material_);
@@ -291,7 +292,8 @@ StepReport3D NeedleInsertion3D::run(StepReport3D rep) {
                                 mesh_->points(), u_, last_gradient_, r);
       },
       [&] {
-        return detail::rearrange<3>(nodes_, thresholds_, friction_.static_factor, last_gradient_);
+        return detail::rearrange<3>(nodes_, thresholds_, friction_.static_factor, last_gradient_,
+                                    margins_);
       },
       [&](StepReport3D& r, bool converged) {
         detail::fill_counts<3>(*problem_, pose_.frame(), nodes_, thresholds_, last_gradient_, u_,

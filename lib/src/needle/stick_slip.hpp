@@ -24,19 +24,19 @@ namespace incise::needle::detail {
 // thresholds. Returns the number of state changes.
 template <int D, class Node>
 int rearrange(std::vector<Node>& nodes, const std::vector<double>& fd, double static_factor,
-              const VecX& g) {
+              const VecX& g, const RearrangeMargins& margins) {
   int changes = 0;
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     Node& n = nodes[k];
     if (n.state == NodeState::kStick) {
       const double r = g[D * n.vertex];  // tangential reaction g̃_t
-      if (std::abs(r) > static_factor * fd[k]) {
+      if (std::abs(r) > static_factor * fd[k] + margins.force) {
         n.state = NodeState::kSlip;
         n.friction_sign = r > 0.0 ? 1 : -1;
         n.anchor = n.coords.s;
         ++changes;
       }
-    } else if (n.friction_sign * (n.coords.s - n.anchor) < 0.0) {
+    } else if (n.friction_sign * (n.coords.s - n.anchor) < -margins.slide) {
       n.state = NodeState::kStick;
       n.friction_sign = 0;
       n.anchor = n.coords.s;

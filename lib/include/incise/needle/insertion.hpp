@@ -28,7 +28,12 @@
 ///     tangential elastic force equals F_d at equilibrium, so the thesis' "elastic force below
 ///     the dynamic threshold" is decided by this kinematic form); thresholds are computed
 ///     from the profile once per step (dynamic_thresholds()); each change is followed by another
-///     solve, at most max_rearrangements times (then kRearrangementCycle);
+///     solve, at most max_rearrangements times (then kRearrangementCycle). Both tests are
+///     decided beyond rounding: a reaction slips only when |g̃_t| > F_s + ε_round·(force
+///     scale), a slide re-sticks only when sign·(s − anchor) < −ε_round·H (§6.8.1's rounding
+///     term; at first contact the thresholds are 0 — no needle face yet — and the reactions
+///     of the solve are rounding noise of either sign, which otherwise decided the states:
+///     docs/needle.md "Decisions beyond rounding");
 ///  6. release: needle nodes with s < 0 or s > L (slid off the tip or the base) become free.
 /// Anchors are reset to the current s at the start of every step.
 
@@ -75,6 +80,13 @@ struct InsertionOptions {
   /// Linear CG only: kJacobi preconditions with NeedleProblemT::hessian_diagonal (the thesis
   /// runs plain CG, the default); nonlinear CG ignores it.
   solver::Preconditioner preconditioner = solver::Preconditioner::kNone;
+};
+
+/// The rounding margins of the two rearrangement tests (file comment, item 5): ε_round times
+/// the (6.9) force scale and times the body's diameter H.
+struct RearrangeMargins {
+  double force = 0.0;  ///< N: a sticking node slips when |g̃_t| > F_s + force
+  double slide = 0.0;  ///< m: a slipping node re-sticks when sign·(s − anchor) < −slide
 };
 
 /// Status of one step.
@@ -164,6 +176,8 @@ class NeedleInsertion {
   const InsertionOptions& options() const { return options_; }
   /// The stopping rule used for every solve ((6.9), force scale E·d·H).
   const solver::StoppingRule& stopping_rule() const { return stop_; }
+  /// The rounding margins of the rearrangement tests (insertion.hpp item 5).
+  const RearrangeMargins& rearrange_margins() const { return margins_; }
   /// Dynamic friction thresholds F_d (N) of this step, entry k for needle_nodes()[k]: computed
   /// from the profile at the nodes' s at the start of the step (after moving and intercepting)
   /// and held through its rearrangements, so the solves and the tests of one step use the same
@@ -191,6 +205,7 @@ class NeedleInsertion {
   FrictionProfile friction_;
   InsertionOptions options_;
   solver::StoppingRule stop_;
+  RearrangeMargins margins_;  ///< item 5
   std::unique_ptr<fem::PlaneStressProblem> problem_;
   VecX u_;
   std::vector<NeedleNode> nodes_;

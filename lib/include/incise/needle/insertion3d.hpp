@@ -154,6 +154,8 @@ class NeedleInsertion3D {
   const InsertionOptions3D& options() const { return options_; }
   /// The stopping rule used for every solve ((6.9), force scale E·H²).
   const solver::StoppingRule& stopping_rule() const { return stop_; }
+  /// The rounding margins of the rearrangement tests (insertion.hpp item 5).
+  const RearrangeMargins& rearrange_margins() const { return margins_; }
   /// Dynamic friction thresholds F_d (N) of this step, entry k for needle_nodes()[k] (step
   /// item 4), held through the step's rearrangements.
   const std::vector<double>& dynamic_thresholds() const { return thresholds_; }
@@ -178,6 +180,7 @@ class NeedleInsertion3D {
   FrictionProfile friction_;
   InsertionOptions3D options_;
   solver::StoppingRule stop_;
+  RearrangeMargins margins_;  ///< insertion.hpp item 5
   std::unique_ptr<fem::ElasticProblem> problem_;
   VecX u_;
   std::vector<NeedleNode3D> nodes_;
