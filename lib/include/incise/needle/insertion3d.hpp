@@ -85,7 +85,8 @@ struct InsertionOptions3D : InsertionOptions {
   /// Linear-geometry material: K·d from the stiffness assembled once per refinement
   /// (fem::ElasticProblem::set_assembled_product) instead of element products — the same
   /// solves up to rounding, faster (docs/needle.md "Fig. 6.14 and speed"). Ignored otherwise.
-  /// Off by default (docs/needle.md: a rounding-sensitive rearrangement cycle in one test run).
+  /// Off by default: the default decides the shipped scenes' recorded histories (docs/needle.md;
+  /// the rearrangement cycle it once showed was rounding-decided, fixed by RearrangeMargins).
   bool assembled_product = false;
   /// Linear CG only: before step()'s first solve, the displacement of every vertex that is
   /// neither a needle node nor fixed is advanced by its change over the previous step (carried
