@@ -249,16 +249,12 @@ SolverSpec parse_solver(JsonObject o, bool slab, bool needle3d) {
     const std::string why =
         "the augmented needle solve is exact (GMRES on eq. 17 of Yeung et al. 2016 to 1e-12), "
         "not stopped by (6.9)";
-    o.forbid("tolerance", why);
-    o.forbid("tolerance_round", why);
-    o.forbid("max_iterations", why);
-    o.forbid("preconditioner", why);
+    for (const char* key : {"tolerance", "tolerance_round", "max_iterations", "preconditioner"})
+      o.forbid(key, why);
     o.forbid("threads",
              "a needle scene rebuilds its problem at every update with the default thread count");
-    const std::string cut = "it belongs to the interactive cutting run's augmented solver";
-    o.forbid("cut_configuration", cut);
-    o.forbid("solve_threads", cut);
-    o.forbid("schur_preconditioner", cut);
+    for (const char* key : {"cut_configuration", "solve_threads", "schur_preconditioner"})
+      o.forbid(key, "it belongs to the interactive cutting run's augmented solver");
     s.refactor_at_m = o.integer("refactor_at_m", 1, std::numeric_limits<int>::max(),
                                 needle::InsertionOptions3D{}.refactor_at_m);
     o.finish();
