@@ -63,7 +63,8 @@ struct AugmentedSystem::Base {
   Eigen::VectorXd spai_lower, spai_diag, spai_upper;  // S(j+1,j), S(j,j), S(j,j+1)
   FactorStatus status = FactorStatus::kNotAnalyzed;
   std::string message;
-  double seconds = 0;  // wall time of make_base (factorization, LDLᵀ copy, S)
+  double seconds = 0;      // wall time of make_base (factorization, LDLᵀ copy, S)
+  double cpu_seconds = 0;  // CPU time of the thread that ran make_base
 };
 
 namespace {
@@ -141,6 +142,7 @@ void tridiagonal_spai(const SparseMatrix& r, Eigen::VectorXd& lower, Eigen::Vect
 std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
     SparseMatrix matrix, std::unique_ptr<CholmodFactor> factor, const AugmentedOptions& options) {
   const Timer timer;
+  const double cpu0 = thread_cpu_seconds();
   auto base = std::make_unique<AugmentedSystem::Base>();
   base->matrix = std::move(matrix);
   base->matrix.makeCompressed();
@@ -164,6 +166,7 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
     tridiagonal_spai(base->matrix, base->spai_lower, base->spai_diag, base->spai_upper);
   }
   base->seconds = timer.seconds();
+  base->cpu_seconds = thread_cpu_seconds() - cpu0;
   return base;
 }
 
@@ -211,6 +214,10 @@ const std::string& AugmentedSystem::factorization_message() const {
 
 double AugmentedSystem::factorization_seconds() const {
   return base_ && base_->status == FactorStatus::kOk ? base_->seconds : 0.0;
+}
+
+double AugmentedSystem::factorization_cpu_seconds() const {
+  return base_ && base_->status == FactorStatus::kOk ? base_->cpu_seconds : 0.0;
 }
 
 FactorStatus AugmentedSystem::factorization_status() const {

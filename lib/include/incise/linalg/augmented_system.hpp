@@ -213,6 +213,10 @@ class AugmentedSystem {
   /// §3.5 preconditioner data), in initialize() or in the background job that was swapped in;
   /// 0 without a factor. The cost model of an automatic §3.6 refactorization policy.
   double factorization_seconds() const;
+  /// CPU seconds (CLOCK_THREAD_CPUTIME_ID) of the thread that made the factor in use — the
+  /// background job's own thread for a swapped-in one (threads CHOLMOD or BLAS start are not
+  /// counted); 0 without a factor.
+  double factorization_cpu_seconds() const;
 
   /// Current number of DOFs n = n₀ + added DOFs.
   int num_dofs() const { return n_; }
