@@ -14,8 +14,8 @@
 ///
 /// Args: refined (0/1), blade advance per frame (0.1 mm units), frames, refactor_at_m (0: the
 /// automatic §3.6 policy), capacitance updated (1) or refactored at every solve (0), and the
-/// automatic policy's mode (0 break-even, the default; 1 continuous;
-/// interactive/refactorization_policy.hpp).
+/// automatic policy's mode (0 continuous, the default; 1 break-even;
+/// interactive/refactorization_policy.hpp), and AugmentedOptions::prepare_swap (1, the default).
 /// chg_* counters: frames that solved (the others reuse the last solution and cost the cut);
 /// bg_cpu_*: CPU of the background factorizations that were swapped in (their own thread).
 /// With INCISE_ORGAN_TRACE=<dir> the per-frame numbers go to <dir>/<benchmark args>.csv.
@@ -72,9 +72,10 @@ void BM_LiverScalpelPath(benchmark::State& state) {
   incise::interactive::AugmentedCutOptions opt;
   opt.refactor_at_m = static_cast<int>(state.range(3));
   opt.augmented.update_capacitance = state.range(4) != 0;
+  opt.augmented.prepare_swap = state.range(6) != 0;
   opt.refactorization_mode = state.range(5) == 0
-                                 ? incise::interactive::RefactorizationMode::kBreakEven
-                                 : incise::interactive::RefactorizationMode::kContinuous;
+                                 ? incise::interactive::RefactorizationMode::kContinuous
+                                 : incise::interactive::RefactorizationMode::kBreakEven;
   for (auto _ : state) {
     incise::interactive::AugmentedCutSession session(body, material, path.fixed, path.forces, opt);
     if (!session.initial_report().ok()) {
@@ -89,7 +90,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
     std::ofstream trace;
     if (const char* dir = std::getenv("INCISE_ORGAN_TRACE")) {
       std::string name = std::string(dir) + "/scalpel";
-      for (int a = 0; a < 6; ++a) name += "_" + std::to_string(state.range(a));
+      for (int a = 0; a < 7; ++a) name += "_" + std::to_string(state.range(a));
       trace.open(name + ".csv");
       trace << "frame,cut_cpu_ms,update_cpu_ms,m_before,m_after,swapped,started,new_columns,"
                "newcol_ms,capfactor_ms,cap_fresh,bg_cpu_ms,dirichlet\n";
@@ -202,19 +203,25 @@ void BM_LiverScalpelPath(benchmark::State& state) {
 // §3.6 policy, capacitance updated); at 3 mm also the capacitance LU made afresh at every solve
 // (before issue 17) for the ratio in one run. The refined liver takes minutes per path.
 BENCHMARK(BM_LiverScalpelPath)
-    ->Args({0, 10, 100, 0, 1, 0})
-    ->Args({0, 10, 100, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0})
-    ->Args({0, 30, 100, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 0})
-    ->Args({0, 100, 100, 0, 1, 1})
-    ->Args({0, 30, 30, 0, 1, 0})
-    ->Args({1, 30, 30, 0, 1, 0})
-    ->Args({1, 10, 100, 0, 1, 0})
-    ->Args({1, 30, 100, 0, 1, 0})
-    ->Args({1, 30, 100, 0, 0, 0})
-    ->Args({1, 100, 100, 0, 1, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 1, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 1, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 1, 0})
+    ->Args({0, 30, 30, 0, 1, 0, 1})
+    ->Args({1, 30, 30, 0, 1, 0, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1})
+    ->Args({1, 30, 100, 0, 0, 0, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 
@@ -308,7 +315,7 @@ BENCHMARK(BM_NewColumnsOfG)
 //               the current K in the frame thread and a solve with m = |𝓓| (its solution is
 //               compared when its DOF count equals the first session's: the same cut).
 // Args: refined (0/1), blade advance per frame (0.1 mm units), frames, the augmented session's
-// §3.6 policy mode (0 break-even, the default; 1 continuous). bg_cpu_*: CPU of the swapped-in
+// §3.6 policy mode (0 continuous, the default; 1 break-even). bg_cpu_*: CPU of the swapped-in
 // background factorizations (their own thread; not in any frame time).
 
 /// K̃ x = b with 𝓓 eliminated symmetrically (see above); x_d = ā_d.
@@ -421,8 +428,8 @@ void BM_LiverStrategies(benchmark::State& state) {
   const incise::material::Material material = incise::fixtures::organ_material();
   incise::interactive::AugmentedCutOptions aug_options;
   aug_options.refactorization_mode = state.range(3) == 0
-                                         ? incise::interactive::RefactorizationMode::kBreakEven
-                                         : incise::interactive::RefactorizationMode::kContinuous;
+                                         ? incise::interactive::RefactorizationMode::kContinuous
+                                         : incise::interactive::RefactorizationMode::kBreakEven;
   for (auto _ : state) {
     incise::interactive::AugmentedCutSession session(body, material, path.fixed, path.forces,
                                                      aug_options);

@@ -450,7 +450,7 @@ TEST(AugmentedCut, TinyPivotWarningOnK0IsAFailedInitialReport) {
 // The break-even rule of §3.6 (refactorization_policy.hpp) on hand-fed costs: floor = the
 // cheapest update of the period, excess = Σ (cost − floor); a start once excess ≥ T_f > 0.
 TEST(RefactorizationPolicy, Sec3_6BreakEvenRuleOnInjectedCosts) {
-  RefactorizationPolicy p;
+  RefactorizationPolicy p(RefactorizationMode::kBreakEven);
   EXPECT_FALSE(p.should_start(1.0));  // nothing observed
   p.observe(2.0, false);              // floor 2, excess 0
   p.observe(1.0, false);              // floor 1 (cheaper), excess 0 + 0
@@ -489,6 +489,7 @@ TEST(AugmentedCut, Sec3_6AutomaticPolicyStartsAtTheBreakEvenSolveAndStaysExact) 
     AugmentedCutOptions opt = test_options();
     ASSERT_TRUE(opt.automatic_refactorization);  // the default
     ASSERT_EQ(opt.refactor_at_m, 0);
+    opt.refactorization_mode = RefactorizationMode::kBreakEven;
     opt.cut.seed = rng();
     opt.update_cost = [](const linalg::AugmentedReport& r) { return static_cast<double>(r.m); };
     opt.factorization_cost = [](const linalg::AugmentedSystem&) { return kFactor; };
@@ -539,10 +540,11 @@ TEST(AugmentedCut, Sec3_6AutomaticPolicyStartsAtTheBreakEvenSolveAndStaysExact) 
 }
 
 // RefactorizationMode::kContinuous: a start whenever asked (the caller checks m − |𝓓| > 0 and
-// that no job is pending), the costs still recorded; the default is the break-even rule.
-TEST(RefactorizationPolicy, Sec3_6ContinuousModeAlwaysStartsAndBreakEvenIsTheDefault) {
-  EXPECT_EQ(RefactorizationPolicy().mode(), RefactorizationMode::kBreakEven);
-  EXPECT_EQ(AugmentedCutOptions().refactorization_mode, RefactorizationMode::kBreakEven);
+// that no job is pending), the costs still recorded; it is the default (with prepare_swap).
+TEST(RefactorizationPolicy, Sec3_6ContinuousModeAlwaysStartsAndIsTheDefault) {
+  EXPECT_EQ(RefactorizationPolicy().mode(), RefactorizationMode::kContinuous);
+  EXPECT_EQ(AugmentedCutOptions().refactorization_mode, RefactorizationMode::kContinuous);
+  EXPECT_TRUE(AugmentedCutOptions().augmented.prepare_swap);  // the session prepares its swaps
   RefactorizationPolicy p(RefactorizationMode::kContinuous);
   EXPECT_TRUE(p.should_start(1.0));  // nothing observed, no excess
   p.observe(2.0, false);
@@ -562,7 +564,7 @@ TEST(AugmentedCut, Sec3_6ContinuousPolicyStartsAfterEverySolveThatLeavesColumnsA
   const Body body = small_cube();
   int started = 0;
   AugmentedCutOptions opt = test_options();
-  opt.refactorization_mode = RefactorizationMode::kContinuous;
+  ASSERT_EQ(opt.refactorization_mode, RefactorizationMode::kContinuous);  // the default
   opt.cut.seed = rng();
   AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
   ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;

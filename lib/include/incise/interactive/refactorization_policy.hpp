@@ -14,11 +14,11 @@
 /// That rule assumes the factorization competes with the updates for the one core. With a
 /// second core for background work (issue 17) a factorization costs the frame thread nothing,
 /// so RefactorizationMode::kContinuous keeps one running whenever a refactorization would
-/// remove a column (m − |𝓓| > 0): the next starts right after the last is swapped in. Measured
-/// on the liver path of issue 17 it lost to the break-even rule (more swaps, and a swap frame
-/// pays the new columns of G for every column changed while the job ran: p95 and maximum 1.6–2.8×
-/// higher, median no better; docs/augmented.md, "Refactorization policy"), so kBreakEven is
-/// the default.
+/// remove a column (m − |𝓓| > 0): the next starts right after the last is swapped in. On the
+/// liver path of issue 17, with the swap prepared in the background (linalg::AugmentedOptions::
+/// prepare_swap), it had the lower p95 frame time on every path and the lower maximum on 5 of 6
+/// runs, at about twice the background CPU (docs/augmented.md, "Refactorization policy"), so
+/// it is the default; without prepare_swap it lost.
 
 #include <incise/core/name_table.hpp>
 
@@ -46,7 +46,7 @@ inline const char* to_string(RefactorizationMode m) {
 /// The rule of the file comment in either mode. Costs in seconds (any consistent unit).
 class RefactorizationPolicy {
  public:
-  explicit RefactorizationPolicy(RefactorizationMode mode = RefactorizationMode::kBreakEven)
+  explicit RefactorizationPolicy(RefactorizationMode mode = RefactorizationMode::kContinuous)
       : mode_(mode) {}
   /// The mode this policy decides by.
   RefactorizationMode mode() const { return mode_; }
