@@ -13,7 +13,12 @@
 /// of the frame's thread; they do not grow when other jobs share the cores, wall times do).
 ///
 /// Args: refined (0/1), blade advance per frame (0.1 mm units), frames, refactor_at_m (0: the
-/// automatic §3.6 policy), capacitance updated (1) or refactored at every solve (0).
+/// automatic §3.6 policy), capacitance updated (1) or refactored at every solve (0), and the
+/// automatic policy's mode (0 continuous, the default; 1 break-even;
+/// interactive/refactorization_policy.hpp), and AugmentedOptions::prepare_swap (1, the default).
+/// chg_* counters: frames that solved (the others reuse the last solution and cost the cut);
+/// bg_cpu_*: CPU of the background factorizations that were swapped in (their own thread).
+/// With INCISE_ORGAN_TRACE=<dir> the per-frame numbers go to <dir>/<benchmark args>.csv.
 
 #include <benchmark/benchmark.h>
 #include <incise/core/problem.hpp>
@@ -32,6 +37,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -65,6 +72,10 @@ void BM_LiverScalpelPath(benchmark::State& state) {
   incise::interactive::AugmentedCutOptions opt;
   opt.refactor_at_m = static_cast<int>(state.range(3));
   opt.augmented.update_capacitance = state.range(4) != 0;
+  opt.augmented.prepare_swap = state.range(6) != 0;
+  opt.refactorization_mode = state.range(5) == 0
+                                 ? incise::interactive::RefactorizationMode::kContinuous
+                                 : incise::interactive::RefactorizationMode::kBreakEven;
   for (auto _ : state) {
     incise::interactive::AugmentedCutSession session(body, material, path.fixed, path.forces, opt);
     if (!session.initial_report().ok()) {
@@ -74,12 +85,40 @@ void BM_LiverScalpelPath(benchmark::State& state) {
     std::vector<double> cut, update, frame, cut_cpu, update_cpu, frame_cpu;
     int failed = 0, swaps = 0, m_max = 0, iterations = 0, refreshed = 0, updated = 0;
     double setup = 0, step1 = 0, step2 = 0, step3 = 0, schur_solves = 0, newcols = 0, product = 0,
-           capfactor = 0;
+           capfactor = 0, bg_cpu = 0, bg_wall = 0;
+    std::vector<double> chg_frame_cpu, m_after;
+    std::ofstream trace;
+    if (const char* dir = std::getenv("INCISE_ORGAN_TRACE")) {
+      std::string name = std::string(dir) + "/scalpel";
+      for (int a = 0; a < 7; ++a) name += "_" + std::to_string(state.range(a));
+      trace.open(name + ".csv");
+      trace << "frame,cut_cpu_ms,update_cpu_ms,m_before,m_after,swapped,started,new_columns,"
+               "newcol_ms,capfactor_ms,cap_fresh,bg_cpu_ms,dirichlet\n";
+    }
     for (int f = 0; f < frames; ++f) {
       const auto tris = path.frame(f, advance);
-      double c = 0, u = 0, cc = 0, uc = 0;
+      double c = 0, u = 0, cc = 0, uc = 0, nc = 0, ncs = 0, cf = 0, bgc = 0;
+      int mb = 0, ma = 0, sw = 0, st = 0, fresh = 0, dir = 0;
+      bool solved = false;
       for (int k = 0; k < 2; ++k) {
         const incise::interactive::AugmentedCutStepReport r = session.step(tris[k]);
+        solved = solved || r.solved;
+        if (r.solved) {
+          mb = std::max(mb, r.m_before_solve);
+          ma = r.m_after_solve;
+          dir = r.solve.dirichlet;
+          nc += r.solve.schur_solves;
+          ncs += r.solve.seconds_new_columns;
+          cf += r.solve.seconds_capacitance_factor;
+          fresh += r.solve.capacitance_refreshed ? 1 : 0;
+          st += r.refactorization_started ? 1 : 0;
+        }
+        if (r.refactorization_swapped) {
+          ++sw;
+          bgc += session.system().factorization_cpu_seconds();
+          bg_cpu += session.system().factorization_cpu_seconds();
+          bg_wall += session.system().factorization_seconds();
+        }
         c += r.seconds_cut;
         u += r.seconds_update + r.seconds_solve;
         cc += r.cpu_seconds_cut;
@@ -104,7 +143,24 @@ void BM_LiverScalpelPath(benchmark::State& state) {
       cut_cpu.push_back(cc);
       update_cpu.push_back(uc);
       frame_cpu.push_back(cc + uc);
+      if (solved) {
+        chg_frame_cpu.push_back(cc + uc);
+        m_after.push_back(ma);
+      }
+      if (trace.is_open())
+        trace << f << ',' << 1e3 * cc << ',' << 1e3 * uc << ',' << mb << ',' << ma << ',' << sw
+              << ',' << st << ',' << nc << ',' << 1e3 * ncs << ',' << 1e3 * cf << ',' << fresh
+              << ',' << 1e3 * bgc << ',' << dir << '\n';
     }
+    const auto schg = summarize(chg_frame_cpu), sm = summarize(m_after);
+    state.counters["chg_frames"] = static_cast<double>(chg_frame_cpu.size());
+    state.counters["chg_cpu_frame_med_ms"] = 1e3 * schg.median;
+    state.counters["chg_cpu_frame_p95_ms"] = 1e3 * schg.p95;
+    state.counters["chg_cpu_frame_max_ms"] = 1e3 * schg.max;
+    state.counters["m_med"] = sm.median;
+    state.counters["bg_cpu_total_s"] = bg_cpu;
+    state.counters["bg_cpu_mean_ms"] = swaps > 0 ? 1e3 * bg_cpu / swaps : 0;
+    state.counters["bg_wall_mean_ms"] = swaps > 0 ? 1e3 * bg_wall / swaps : 0;
     const auto sc = summarize(cut), su = summarize(update), sf = summarize(frame);
     const auto scc = summarize(cut_cpu), suc = summarize(update_cpu), sfc = summarize(frame_cpu);
     state.counters["cpu_cut_med_ms"] = 1e3 * scc.median;
@@ -147,16 +203,25 @@ void BM_LiverScalpelPath(benchmark::State& state) {
 // §3.6 policy, capacitance updated); at 3 mm also the capacitance LU made afresh at every solve
 // (before issue 17) for the ratio in one run. The refined liver takes minutes per path.
 BENCHMARK(BM_LiverScalpelPath)
-    ->Args({0, 10, 100, 0, 1})
-    ->Args({0, 30, 100, 0, 1})
-    ->Args({0, 30, 100, 0, 0})
-    ->Args({0, 100, 100, 0, 1})
-    ->Args({0, 30, 30, 0, 1})
-    ->Args({1, 30, 30, 0, 1})
-    ->Args({1, 10, 100, 0, 1})
-    ->Args({1, 30, 100, 0, 1})
-    ->Args({1, 30, 100, 0, 0})
-    ->Args({1, 100, 100, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 1, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 1, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 1, 0})
+    ->Args({0, 30, 30, 0, 1, 0, 1})
+    ->Args({1, 30, 30, 0, 1, 0, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1})
+    ->Args({1, 30, 100, 0, 0, 0, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 
@@ -249,7 +314,9 @@ BENCHMARK(BM_NewColumnsOfG)
 //               (a library option, no scene key): its own cut and update, i.e. a factorization of
 //               the current K in the frame thread and a solve with m = |𝓓| (its solution is
 //               compared when its DOF count equals the first session's: the same cut).
-// Args: refined (0/1), blade advance per frame (0.1 mm units), frames.
+// Args: refined (0/1), blade advance per frame (0.1 mm units), frames, the augmented session's
+// §3.6 policy mode (0 continuous, the default; 1 break-even). bg_cpu_*: CPU of the swapped-in
+// background factorizations (their own thread; not in any frame time).
 
 /// K̃ x = b with 𝓓 eliminated symmetrically (see above); x_d = ā_d.
 struct FrameSystem {
@@ -359,8 +426,13 @@ void BM_LiverStrategies(benchmark::State& state) {
   const incise::mesh::MeshData& body = liver(refined);
   const incise::fixtures::OrganPath path = incise::fixtures::organ_path(body);
   const incise::material::Material material = incise::fixtures::organ_material();
+  incise::interactive::AugmentedCutOptions aug_options;
+  aug_options.refactorization_mode = state.range(3) == 0
+                                         ? incise::interactive::RefactorizationMode::kContinuous
+                                         : incise::interactive::RefactorizationMode::kBreakEven;
   for (auto _ : state) {
-    incise::interactive::AugmentedCutSession session(body, material, path.fixed, path.forces);
+    incise::interactive::AugmentedCutSession session(body, material, path.fixed, path.forces,
+                                                     aug_options);
     if (!session.initial_report().ok()) {
       state.SkipWithError(session.initial_report().message.c_str());
       return;
@@ -396,7 +468,8 @@ void BM_LiverStrategies(benchmark::State& state) {
     double err_aug = 0, err_ref = 0, err_upd = 0, err_cg = 0, worst_cg_res = 0;
     int changed = 0, updown_refactors = 0, updown_failures = 0, rank_max = 0, touched_max = 0;
     long cg_iterations = 0, cg_iter_max = 0;
-    double rank_sum = 0, split_sum = 0, updown_sum = 0;
+    double rank_sum = 0, split_sum = 0, updown_sum = 0, bg_cpu = 0;
+    int aug_swaps = 0, aug_m_max = 0;
     bool failed = false;
     for (int f = 0; f < frames && !failed; ++f) {
       double c = 0, u = 0, e = 0;
@@ -405,6 +478,11 @@ void BM_LiverStrategies(benchmark::State& state) {
         c += r.cpu_seconds_cut;
         u += r.cpu_seconds_update;
         if (!r.ok()) failed = true;
+        if (r.refactorization_swapped) {
+          ++aug_swaps;
+          bg_cpu += session.system().factorization_cpu_seconds();
+        }
+        aug_m_max = std::max(aug_m_max, r.m_after_solve);
         const incise::interactive::AugmentedCutStepReport re = session_every.step(tri);
         e += re.cpu_seconds_update;
         if (!re.ok()) failed = true;
@@ -546,6 +624,10 @@ void BM_LiverStrategies(benchmark::State& state) {
     put("updown", upd_t);
     put("cg", cg_t);
     put("every", every_t);
+    state.counters["aug_swaps"] = aug_swaps;
+    state.counters["aug_m_max"] = aug_m_max;
+    state.counters["bg_cpu_total_s"] = bg_cpu;
+    state.counters["bg_cpu_mean_ms"] = aug_swaps > 0 ? 1e3 * bg_cpu / aug_swaps : 0;
     state.counters["err_every"] = err_every;
     state.counters["every_dof_mismatch"] = every_mismatch;
     const auto sc = summarize(cut);
@@ -571,10 +653,13 @@ void BM_LiverStrategies(benchmark::State& state) {
 }
 // Shipped liver at 1, 3 and 10 mm per frame (100 frames), and the refined liver at 3 mm.
 BENCHMARK(BM_LiverStrategies)
-    ->Args({0, 10, 100})
-    ->Args({0, 30, 100})
-    ->Args({0, 100, 100})
-    ->Args({1, 30, 100})
+    ->Args({0, 10, 100, 0})
+    ->Args({0, 30, 100, 0})
+    ->Args({0, 100, 100, 0})
+    ->Args({0, 10, 100, 1})
+    ->Args({0, 30, 100, 1})
+    ->Args({0, 100, 100, 1})
+    ->Args({1, 30, 100, 0})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 

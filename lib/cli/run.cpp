@@ -7,6 +7,8 @@
 // Nothing is written before the scene has been parsed and built completely; the library writes
 // the outputs (scene/scene_outputs.hpp), this file prints.
 
+#include <incise/certify/frame_plot.hpp>
+#include <incise/core/atomic_file.hpp>
 #include <incise/core/error.hpp>
 #include <incise/core/timer.hpp>
 #include <incise/scene/delaunay_scene.hpp>
@@ -360,6 +362,14 @@ int run_scene(RunOptions& opt, Context& ctx) {
 
   std::vector<std::string> written =
       scene::write_outputs(built, res, {summary_json, total.seconds(), frames.frames()});
+  // Interactive cutting run with a trace CSV: the per-frame time plot beside it (issue 17).
+  if (!res.cut_steps.empty() && !spec.outputs.csv.empty()) {
+    const std::string plot = certify::frame_plot_path(spec.outputs.csv);
+    write_file_atomic(
+        plot, certify::frame_time_svg(
+                  res, "frame time per step: " + (spec.name.empty() ? scene_path : spec.name)));
+    written.push_back(plot);
+  }
   if (!write_solution.empty()) {
     if (res.u.allFinite()) {
       scene::write_solution(write_solution, res.u);

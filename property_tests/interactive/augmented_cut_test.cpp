@@ -450,7 +450,7 @@ TEST(AugmentedCut, TinyPivotWarningOnK0IsAFailedInitialReport) {
 // The break-even rule of §3.6 (refactorization_policy.hpp) on hand-fed costs: floor = the
 // cheapest update of the period, excess = Σ (cost − floor); a start once excess ≥ T_f > 0.
 TEST(RefactorizationPolicy, Sec3_6BreakEvenRuleOnInjectedCosts) {
-  RefactorizationPolicy p;
+  RefactorizationPolicy p(RefactorizationMode::kBreakEven);
   EXPECT_FALSE(p.should_start(1.0));  // nothing observed
   p.observe(2.0, false);              // floor 2, excess 0
   p.observe(1.0, false);              // floor 1 (cheaper), excess 0 + 0
@@ -489,6 +489,7 @@ TEST(AugmentedCut, Sec3_6AutomaticPolicyStartsAtTheBreakEvenSolveAndStaysExact) 
     AugmentedCutOptions opt = test_options();
     ASSERT_TRUE(opt.automatic_refactorization);  // the default
     ASSERT_EQ(opt.refactor_at_m, 0);
+    opt.refactorization_mode = RefactorizationMode::kBreakEven;
     opt.cut.seed = rng();
     opt.update_cost = [](const linalg::AugmentedReport& r) { return static_cast<double>(r.m); };
     opt.factorization_cost = [](const linalg::AugmentedSystem&) { return kFactor; };
@@ -536,6 +537,62 @@ TEST(AugmentedCut, Sec3_6AutomaticPolicyStartsAtTheBreakEvenSolveAndStaysExact) 
   }
   EXPECT_GE(started, 1);  // the model must trigger, or the test proves nothing
   EXPECT_EQ(swapped, started);
+}
+
+// RefactorizationMode::kContinuous: a start whenever asked (the caller checks m − |𝓓| > 0 and
+// that no job is pending), the costs still recorded; it is the default (with prepare_swap).
+TEST(RefactorizationPolicy, Sec3_6ContinuousModeAlwaysStartsAndIsTheDefault) {
+  EXPECT_EQ(RefactorizationPolicy().mode(), RefactorizationMode::kContinuous);
+  EXPECT_EQ(AugmentedCutOptions().refactorization_mode, RefactorizationMode::kContinuous);
+  EXPECT_TRUE(AugmentedCutOptions().augmented.prepare_swap);  // the session prepares its swaps
+  RefactorizationPolicy p(RefactorizationMode::kContinuous);
+  EXPECT_TRUE(p.should_start(1.0));  // nothing observed, no excess
+  p.observe(2.0, false);
+  p.observe(5.0, false);
+  EXPECT_EQ(p.excess(), 3.0);
+  EXPECT_TRUE(p.should_start(1e9));
+  EXPECT_TRUE(p.should_start(0.0));
+  EXPECT_STREQ(to_string(RefactorizationMode::kContinuous), "continuous");
+  EXPECT_EQ(kRefactorizationModeNames.find("break-even"), RefactorizationMode::kBreakEven);
+}
+
+/// Continuous mode in the session: after every solve that leaves m > |𝓓| with no job pending a
+/// background refactorization starts (the test waits for each, so m drops to |𝓓|), and every
+/// solution equals a fresh factorization's. Deterministic: no clocks decide (jobs are waited for).
+TEST(AugmentedCut, Sec3_6ContinuousPolicyStartsAfterEverySolveThatLeavesColumnsAndStaysExact) {
+  INCISE_SEEDED_RNG(rng, 611);
+  const Body body = small_cube();
+  int started = 0;
+  AugmentedCutOptions opt = test_options();
+  ASSERT_EQ(opt.refactorization_mode, RefactorizationMode::kContinuous);  // the default
+  opt.cut.seed = rng();
+  AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
+  ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
+  RandomBlade blade(body, rng);
+  for (int k = 0; k < blade.moves(); ++k) {
+    for (const std::array<Vec3, 3>& tri : blade.next_move()) {
+      ASSERT_FALSE(session.system().refactorization_pending());  // waited for below
+      const AugmentedCutStepReport r = session.step(tri);
+      ASSERT_TRUE(admissible(r));
+      if (!r.ok()) break;
+      ASSERT_EQ(r.refactorization_started, r.solved && r.m_after_solve > r.solve.dirichlet)
+          << "m " << r.m_after_solve << " |D| " << r.solve.dirichlet;
+      const Reference ref = reference_solution(session, linear_material(), body.forces);
+      ASSERT_TRUE(ref.ok);
+      ASSERT_LE(relative_difference(session, ref), tolerance(ref));
+      if (!r.refactorization_started) continue;
+      ++started;
+      ASSERT_TRUE(session.wait_for_refactorization());
+      const AugmentedCutStepReport q = session.solve();
+      ASSERT_TRUE(q.ok()) << q.message;
+      EXPECT_EQ(q.m_after_solve, q.solve.dirichlet);  // nothing changed while it ran
+      EXPECT_FALSE(q.refactorization_started);        // m − |𝓓| = 0: nothing to remove
+      const Reference after = reference_solution(session, linear_material(), body.forces);
+      ASSERT_TRUE(after.ok);
+      ASSERT_LE(relative_difference(session, after), tolerance(after));
+    }
+  }
+  EXPECT_GE(started, 2);  // the blade must change the system, or the test proves nothing
 }
 
 /// refactor_at_m > 0 overrides the automatic policy; automatic_refactorization = false with

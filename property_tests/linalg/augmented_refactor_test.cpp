@@ -120,13 +120,55 @@ TEST(AugmentedRefactor, SwapDropsMToChangesSinceStartSec3_6) {
   expect_equivalent(aug, m, f, dir);
 }
 
+// AugmentedOptions::prepare_swap (§3.6, issue 17): the swap brings G of the new factor for the
+// columns that stay in 𝓛 (changed since the snapshot, and 𝓓), so the solve after it makes no
+// new column of G; without it, that solve makes one per kept column of the factored DOFs.
+TEST(AugmentedRefactor, PreparedSwapBringsGOfTheKeptColumnsSec3_6) {
+  for (const bool prepare : {true, false}) {
+    CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
+    linalg::AugmentedOptions options;
+    options.schur_solver = linalg::SchurSolver::kDirectCached;
+    options.prepare_swap = prepare;
+    linalg::AugmentedSystem aug(options);
+    ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
+    Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
+    std::map<int, double> dir;
+    std::vector<int> plane;  // nodes on x = 0.2 (mid-plane)
+    for (int v = 0; v < static_cast<int>(m.points.cols()); ++v)
+      if (std::abs(m.points(0, v) - 0.2) < 1e-9 && m.node_dof[v] >= 0) plane.push_back(v);
+    ASSERT_GE(plane.size(), 5u);
+    for (int k = 0; k < 3; ++k) ASSERT_TRUE(cut_node(m, aug, plane[k]));
+    aug.impose_dirichlet(0, 0.01);
+    dir[0] = 0.01;
+    expect_equivalent(aug, m, f, dir);
+    ASSERT_TRUE(aug.start_refactorization());
+    ASSERT_TRUE(cut_node(m, aug, plane[3]));  // changed while the job runs
+    ASSERT_TRUE(cut_node(m, aug, plane[4]));
+    ASSERT_TRUE(aug.wait_for_refactorization());
+    int kept = 0;  // columns of 𝓛 on the factored DOFs: G's
+    for (int j : aug.replaced_columns()) kept += j < aug.factored_dofs();
+    ASSERT_GT(kept, 1);
+    const Eigen::Index old_size = f.size();  // new DOFs: as expect_equivalent loads them
+    f.conservativeResize(m.num_dofs);
+    f.tail(m.num_dofs - old_size).setConstant(0.5);
+    aug.set_force(f);
+    Eigen::VectorXd a, r;
+    const linalg::AugmentedReport rep = aug.solve(a, r);
+    ASSERT_TRUE(rep.ok()) << rep.message;
+    EXPECT_EQ(rep.schur_solves, prepare ? 0 : kept) << "prepare_swap " << prepare;
+    expect_equivalent(aug, m, f, dir);
+  }
+}
+
 // Updates and solves keep running in the foreground while background jobs start and finish
 // (polled in solve()); every solution equals a fresh factorization. The ThreadSanitizer build
 // of this test is the data-race check of §3.6. Step 3 runs its backward pass on two threads
-// (AugmentedOptions::solve_threads) meanwhile, so three threads share the factor data.
-TEST(AugmentedRefactor, ConcurrentUpdatesAndSolvesWhileFactoring) {
+// (AugmentedOptions::solve_threads) meanwhile, so three threads share the factor data. Run
+// twice: GMRES (the default), and the explicit capacitance form with prepare_swap, whose G is
+// computed by a second background stage.
+void concurrent_updates_and_solves(const linalg::AugmentedOptions& base_options) {
   CutModel m = CutModel::from_mesh(mesh::make_beam(10, 0.1));
-  linalg::AugmentedOptions options;
+  linalg::AugmentedOptions options = base_options;
   options.solve_threads = 2;
   linalg::AugmentedSystem aug(options);
   ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
@@ -164,6 +206,18 @@ TEST(AugmentedRefactor, ConcurrentUpdatesAndSolvesWhileFactoring) {
   expect_equivalent(aug, m, f, dir);
   EXPECT_GT(cuts, 0);
   EXPECT_GT(swaps, 0);
+}
+
+TEST(AugmentedRefactor, ConcurrentUpdatesAndSolvesWhileFactoring) {
+  concurrent_updates_and_solves({});
+}
+
+TEST(AugmentedRefactor, ConcurrentUpdatesAndSolvesWhileFactoringAndPreparingTheSwap) {
+  linalg::AugmentedOptions options;
+  options.schur_solver = linalg::SchurSolver::kDirectCached;
+  options.update_capacitance = true;
+  options.prepare_swap = true;
+  concurrent_updates_and_solves(options);
 }
 
 }  // namespace

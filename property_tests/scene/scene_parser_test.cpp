@@ -490,6 +490,40 @@ TEST(SceneParser, RefactorAtMParses) {
   EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.refactor_at_m, 300);
 }
 
+// refactorization (docs/scenes.md; interactive/refactorization_policy.hpp): "none" by default.
+TEST(SceneParser, RefactorizationParses) {
+  Json j = augmented_cut_scene();
+  EXPECT_FALSE(parse_scene(j.dump(), "scene.json", "").solver.refactorization.has_value());
+  j["solver"]["refactorization"] = "none";
+  EXPECT_FALSE(parse_scene(j.dump(), "scene.json", "").solver.refactorization.has_value());
+  j["solver"]["refactorization"] = "break-even";
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.refactorization,
+            incise::interactive::RefactorizationMode::kBreakEven);
+  j["solver"]["refactorization"] = "continuous";
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.refactorization,
+            incise::interactive::RefactorizationMode::kContinuous);
+}
+
+TEST(SceneParserBad, RefactorizationUnknownName) {
+  Json j = augmented_cut_scene();
+  j["solver"]["refactorization"] = "always";
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("scene.json:"), std::string::npos) << e;
+  EXPECT_NE(e.find("/solver/refactorization"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"none\", \"break-even\", \"continuous\""), std::string::npos) << e;
+}
+
+TEST(SceneParserBad, RefactorizationWithoutTool) {
+  Json j = augmented_cut_scene();
+  j["solver"].erase("cut_configuration");
+  j["solver"]["refactorization"] = "continuous";
+  j.erase("tools");
+  const std::string e = error_of(j);
+  EXPECT_NE(e.find("/solver/refactorization: not allowed here: the scene names no tool"),
+            std::string::npos)
+      << e;
+}
+
 TEST(SceneParserBad, RefactorAtMNegative) {
   Json j = augmented_cut_scene();
   j["solver"]["refactor_at_m"] = -5;
@@ -636,7 +670,8 @@ TEST(SceneDocs, NameEveryValueOfEverySceneEnum) {
   std::ostringstream os;
   os << in.rdbuf();
   const std::string doc = os.str();
-  std::vector<std::string> names = {incise::scene::kExplicitSchurName};
+  std::vector<std::string> names = {incise::scene::kExplicitSchurName,
+                                    incise::scene::kNoRefactorizationName};
   auto add = [&names](const auto& table) {
     for (const std::string& n : table.names()) names.push_back(n);
   };
@@ -650,6 +685,7 @@ TEST(SceneDocs, NameEveryValueOfEverySceneEnum) {
   add(incise::scene::kProbeQuantityNames);
   add(incise::solver::kPreconditionerNames);
   add(incise::linalg::kSchurPreconditionerNames);
+  add(incise::interactive::kRefactorizationModeNames);
   for (const std::string& n : incise::material::registered_material_names()) names.push_back(n);
   for (const std::string& n : names)
     EXPECT_NE(doc.find("`\"" + n + "\"`"), std::string::npos)

@@ -22,7 +22,7 @@ AugmentedCutSession::AugmentedCutSession(const mesh::MeshData& mesh,
                                          const std::vector<Index>& fixed_nodes,
                                          const Eigen::Matrix3Xd& node_forces,
                                          AugmentedCutOptions options)
-    : material_(material), options_(std::move(options)) {
+    : material_(material), options_(std::move(options)), policy_(options_.refactorization_mode) {
   INCISE_CHECK_PARAM(material_.name() == "linear",
                      "AugmentedCutSession needs the \"linear\" material (the augmented solver "
                      "solves the linear static problem K a = f), got \"" +
@@ -300,7 +300,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
         r.refactorization_started = system_->start_refactorization();
     } else if (options_.automatic_refactorization &&
                r.solve.status != linalg::AugmentedStatus::kNoFactor) {
-      // The break-even rule (refactorization_policy.hpp) on measured or injected costs.
+      // RefactorizationPolicy (break-even or continuous) on measured or injected costs.
       const double update =
           options_.update_cost ? options_.update_cost(r.solve) : r.solve.seconds_total;
       policy_.observe(update, r.solve.refactorization_swapped);

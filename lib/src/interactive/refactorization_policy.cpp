@@ -16,6 +16,7 @@ void RefactorizationPolicy::observe(double seconds, bool swapped) {
 }
 
 bool RefactorizationPolicy::should_start(double factorization_seconds) const {
+  if (mode_ == RefactorizationMode::kContinuous) return true;
   return factorization_seconds > 0 && excess_ >= factorization_seconds;
 }
 

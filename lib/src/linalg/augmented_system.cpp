@@ -63,7 +63,11 @@ struct AugmentedSystem::Base {
   Eigen::VectorXd spai_lower, spai_diag, spai_upper;  // S(j+1,j), S(j,j), S(j,j+1)
   FactorStatus status = FactorStatus::kNotAnalyzed;
   std::string message;
-  double seconds = 0;  // wall time of make_base (factorization, LDLᵀ copy, S)
+  double seconds = 0;      // wall time of make_base (factorization, LDLᵀ copy, S)
+  double cpu_seconds = 0;  // CPU time of the thread that ran make_base
+  // prepare_swap: G = (R⁻¹) of this factor on g_l (sorted), computed before the swap.
+  std::vector<int> g_l;
+  Eigen::MatrixXd g;
 };
 
 namespace {
@@ -141,6 +145,7 @@ void tridiagonal_spai(const SparseMatrix& r, Eigen::VectorXd& lower, Eigen::Vect
 std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
     SparseMatrix matrix, std::unique_ptr<CholmodFactor> factor, const AugmentedOptions& options) {
   const Timer timer;
+  const double cpu0 = thread_cpu_seconds();
   auto base = std::make_unique<AugmentedSystem::Base>();
   base->matrix = std::move(matrix);
   base->matrix.makeCompressed();
@@ -164,6 +169,7 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
     tridiagonal_spai(base->matrix, base->spai_lower, base->spai_diag, base->spai_upper);
   }
   base->seconds = timer.seconds();
+  base->cpu_seconds = thread_cpu_seconds() - cpu0;
   return base;
 }
 
@@ -188,6 +194,7 @@ FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
   }
   if (job_.valid()) job_.wait();
   job_ = {};
+  job_preparing_ = false;
   std::unique_ptr<CholmodFactor> reuse;
   if (base_) reuse = std::move(base_->factor);
   base_ = make_base(std::move(k), std::move(reuse), options_);
@@ -211,6 +218,10 @@ const std::string& AugmentedSystem::factorization_message() const {
 
 double AugmentedSystem::factorization_seconds() const {
   return base_ && base_->status == FactorStatus::kOk ? base_->seconds : 0.0;
+}
+
+double AugmentedSystem::factorization_cpu_seconds() const {
+  return base_ && base_->status == FactorStatus::kOk ? base_->cpu_seconds : 0.0;
 }
 
 FactorStatus AugmentedSystem::factorization_status() const {
@@ -391,7 +402,31 @@ bool AugmentedSystem::start_refactorization() {
   return true;
 }
 
+bool AugmentedSystem::start_preparing(std::unique_ptr<Base>& base) {
+  if (!options_.prepare_swap || options_.schur_solver != SchurSolver::kDirectCached ||
+      base->status != FactorStatus::kOk)
+    return false;
+  const int nb = static_cast<int>(base->matrix.rows());
+  std::set<int> keep;  // 𝓛 after the swap, on the new base's DOFs
+  for (int j : changed_since_snapshot_)
+    if (j < nb) keep.insert(j);
+  for (const auto& kv : dirichlet_)
+    if (kv.first < nb) keep.insert(kv.first);
+  if (keep.empty()) return false;
+  std::vector<int> l(keep.begin(), keep.end());
+  job_preparing_ = true;
+  job_ = std::async(std::launch::async, [b = std::move(base), l = std::move(l)]() mutable {
+    ClosureLdlSolver& solver = *b->solver;
+    const std::vector<int> closure = solver.closure(l);
+    solver.solve_restricted_block(l, closure, closure, l, b->g);
+    b->g_l = std::move(l);
+    return std::move(b);
+  });
+  return true;
+}
+
 bool AugmentedSystem::swap_in(std::unique_ptr<Base> base, const std::set<int>& changed_since) {
+  job_preparing_ = false;
   snapshot_active_ = false;
   last_refactor_status_ = base->status;
   if (base->status != FactorStatus::kOk) return false;
@@ -406,6 +441,13 @@ bool AugmentedSystem::swap_in(std::unique_ptr<Base> base, const std::set<int>& c
   base_ = std::move(base);
   ++base_generation_;  // a generation, not the address: a new Base may reuse a freed one's
   n_base_ = nb;
+  if (!base_->g_l.empty()) {  // prepared in the background (prepare_swap): G's cache
+    g_l_ = std::move(base_->g_l);
+    g_ = std::move(base_->g);
+    base_->g_l.clear();
+    base_->g.resize(0, 0);
+    g_generation_ = base_generation_;
+  }
   changed_since_snapshot_.clear();
   return true;
 }
@@ -413,13 +455,16 @@ bool AugmentedSystem::swap_in(std::unique_ptr<Base> base, const std::set<int>& c
 bool AugmentedSystem::poll_refactorization() {
   if (!job_.valid()) return false;
   if (job_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
-  return swap_in(job_.get(), changed_since_snapshot_);
+  std::unique_ptr<Base> base = job_.get();
+  if (!job_preparing_ && start_preparing(base)) return false;  // swapped by a later poll
+  return swap_in(std::move(base), changed_since_snapshot_);
 }
 
 bool AugmentedSystem::wait_for_refactorization() {
   if (!job_.valid()) return false;
-  job_.wait();
-  return swap_in(job_.get(), changed_since_snapshot_);
+  std::unique_ptr<Base> base = job_.get();
+  if (!job_preparing_ && start_preparing(base)) base = job_.get();
+  return swap_in(std::move(base), changed_since_snapshot_);
 }
 
 bool AugmentedSystem::refactor_now() {

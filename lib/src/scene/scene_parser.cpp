@@ -317,6 +317,13 @@ SolverSpec parse_solver(JsonObject o, bool slab, bool needle3d) {
     s.cut_configuration = o.choice("cut_configuration", kCutConfigurationNames,
                                    SolverSpec::CutConfiguration::kDeformed);
     s.refactor_at_m = o.integer("refactor_at_m", 0, std::numeric_limits<int>::max(), 0);
+    std::vector<std::string> refactorization_names = {kNoRefactorizationName};
+    for (const std::string& n : interactive::kRefactorizationModeNames.names())
+      refactorization_names.push_back(n);
+    const std::string refactorization =
+        o.choice("refactorization", refactorization_names, kNoRefactorizationName);
+    if (refactorization != kNoRefactorizationName)
+      s.refactorization = interactive::kRefactorizationModeNames.find(refactorization);
     s.solve_threads = o.integer("solve_threads", 1, 64, 1);
     std::vector<std::string> schur_names = {kExplicitSchurName};
     for (const std::string& n : linalg::kSchurPreconditionerNames.names()) schur_names.push_back(n);
@@ -330,6 +337,9 @@ SolverSpec parse_solver(JsonObject o, bool slab, bool needle3d) {
              "only the \"augmented\" method solves between sweep triangles (the others cut "
              "first, in the reference configuration)");
     o.forbid("refactor_at_m",
+             "only the \"augmented\" method has a factorization to refactor (§3.6 of Yeung et "
+             "al. 2016)");
+    o.forbid("refactorization",
              "only the \"augmented\" method has a factorization to refactor (§3.6 of Yeung et "
              "al. 2016)");
     o.forbid("solve_threads",
@@ -723,6 +733,7 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
     const std::pair<const char*, const char*> cut_only_keys[] = {
         {"cut_configuration", ""},
         {"refactor_at_m", ", so the augmented run solves once and never refactors"},
+        {"refactorization", ", so the augmented run solves once and never refactors"},
         {"solve_threads",
          ", so the augmented run is one direct CHOLMOD solve without the augmented steps"},
         {"schur_preconditioner",

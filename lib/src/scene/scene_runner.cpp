@@ -149,9 +149,10 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   options.update_deformed =
       spec.solver.cut_configuration == SolverSpec::CutConfiguration::kDeformed;
   options.refactor_at_m = spec.solver.refactor_at_m;
-  // Scenes keep their documented default (refactor_at_m 0 = never): the session's automatic
-  // §3.6 policy is not used by scene runs yet (docs/scenes.md).
-  options.automatic_refactorization = false;
+  // Scenes keep their documented default (refactor_at_m 0, refactorization "none" = never): the
+  // session's automatic §3.6 policy only when the scene names its mode (docs/scenes.md).
+  options.automatic_refactorization = spec.solver.refactorization.has_value();
+  if (spec.solver.refactorization) options.refactorization_mode = *spec.solver.refactorization;
   options.augmented.solve_threads = spec.solver.solve_threads;
   options.augmented.schur_solver = spec.solver.schur_solver;
   options.augmented.preconditioner = spec.solver.schur_preconditioner;
@@ -291,7 +292,11 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
          << (spec.solver.refactor_at_m > 0 ? "background refactorization (§3.6) at m - |D| >= " +
                                                  std::to_string(spec.solver.refactor_at_m) + ", " +
                                                  std::to_string(refactorizations) + " swapped in. "
-                                           : std::string("no refactorization. "))
+             : spec.solver.refactorization
+                 ? "background refactorization (§3.6), " +
+                       std::string(interactive::to_string(*spec.solver.refactorization)) +
+                       " policy, " + std::to_string(refactorizations) + " swapped in. "
+                 : std::string("no refactorization. "))
          << step << " steps, final m = " << session->system().num_replaced() << ", " << gmres_total
          << " GMRES iterations in all"
          << (dropped > 0 ? "; preconditioner dropped (singular LU, GMRES unpreconditioned) in " +

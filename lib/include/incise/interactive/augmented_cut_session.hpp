@@ -65,11 +65,16 @@ struct AugmentedCutOptions {
   /// factorization time follows its argument. The job wants a second core. Must be ≥ 0.
   /// A value > 0 overrides `automatic_refactorization`.
   int refactor_at_m = 0;
-  /// With refactor_at_m = 0: start the §3.6 background refactorization when the break-even
-  /// rule of RefactorizationPolicy (refactorization_policy.hpp) says so — the summed extra
-  /// update cost since the factor in use came in has reached the cost of one factorization.
+  /// With refactor_at_m = 0: start the §3.6 background refactorization when
+  /// RefactorizationPolicy (refactorization_policy.hpp) says so, in `refactorization_mode`.
   /// On by default; false (and refactor_at_m = 0) never refactors.
   bool automatic_refactorization = true;
+  /// The automatic policy's rule: kContinuous (default) keeps a background factorization
+  /// running whenever m − |𝓓| > 0 (it wants the second core); kBreakEven starts one when the
+  /// summed extra update cost reached one factorization's (the paper's single-core argument).
+  /// Measured side by side on the liver path, with augmented.prepare_swap on (the default):
+  /// docs/augmented.md, "Refactorization policy". Scene key `refactorization` (docs/scenes.md).
+  RefactorizationMode refactorization_mode = RefactorizationMode::kContinuous;
   /// Refactor every step instead of updating (the "refactor every step" strategy of
   /// docs/augmented.md, organ scale): before each solve that follows a change, the current K is
   /// factored in the calling thread and swapped in (AugmentedSystem::refactor_now(): m drops to

@@ -10,19 +10,53 @@
 /// excess reaches the measured time of one factorization T_f, a refactorization would have
 /// paid for itself, and one is started. A swapped-in factor resets floor and excess.
 /// Deterministic given the costs it is fed (tests inject them).
+///
+/// That rule assumes the factorization competes with the updates for the one core. With a
+/// second core for background work (issue 17) a factorization costs the frame thread nothing,
+/// so RefactorizationMode::kContinuous keeps one running whenever a refactorization would
+/// remove a column (m − |𝓓| > 0): the next starts right after the last is swapped in. On the
+/// liver path of issue 17, with the swap prepared in the background (linalg::AugmentedOptions::
+/// prepare_swap), it had the lower p95 frame time on every path and the lower maximum on 5 of 6
+/// runs, at about twice the background CPU (docs/augmented.md, "Refactorization policy"), so
+/// it is the default; without prepare_swap it lost.
+
+#include <incise/core/name_table.hpp>
 
 #include <limits>
 
 namespace incise::interactive {
 
-/// The break-even rule of the file comment. Costs in seconds (any consistent unit).
+/// When the automatic §3.6 policy starts a background refactorization.
+enum class RefactorizationMode {
+  kBreakEven,   ///< when the summed extra update cost reaches one factorization (file comment)
+  kContinuous,  ///< whenever m − |𝓓| > 0 and no job is pending (a second core does the work)
+};
+
+/// Names of the modes (scene key `refactorization`, docs/scenes.md).
+inline constexpr NameTable<RefactorizationMode, 2> kRefactorizationModeNames{{{
+    {RefactorizationMode::kBreakEven, "break-even"},
+    {RefactorizationMode::kContinuous, "continuous"},
+}}};
+
+/// Name from kRefactorizationModeNames.
+inline const char* to_string(RefactorizationMode m) {
+  return kRefactorizationModeNames.name(m);
+}
+
+/// The rule of the file comment in either mode. Costs in seconds (any consistent unit).
 class RefactorizationPolicy {
  public:
+  explicit RefactorizationPolicy(RefactorizationMode mode = RefactorizationMode::kContinuous)
+      : mode_(mode) {}
+  /// The mode this policy decides by.
+  RefactorizationMode mode() const { return mode_; }
   /// Records one solver update of cost `seconds` (≥ 0); `swapped`: a new factor came into use
   /// in this update (it then starts a new period: this update's cost is the new floor).
   void observe(double seconds, bool swapped);
-  /// Whether a refactorization should start now, with one costing `factorization_seconds`:
-  /// excess() ≥ factorization_seconds > 0 (a non-positive or NaN cost never starts one).
+  /// Whether a refactorization should start now (the caller checks that none is pending and
+  /// that m − |𝓓| > 0), with one costing `factorization_seconds`. kBreakEven: excess() ≥
+  /// factorization_seconds > 0 (a non-positive or NaN cost never starts one). kContinuous:
+  /// always (the costs are still recorded, for excess() and floor()).
   bool should_start(double factorization_seconds) const;
   /// The summed extra update cost since the factor in use came in: Σ (c − floor).
   double excess() const { return excess_; }
@@ -32,6 +66,7 @@ class RefactorizationPolicy {
   void reset();
 
  private:
+  RefactorizationMode mode_;
   double floor_ = std::numeric_limits<double>::infinity();
   double excess_ = 0;
 };

@@ -106,6 +106,15 @@ struct AugmentedOptions {
   /// LU; with the update, the yeung2016 verification's beam left GMRES at a true Schur residual
   /// of 3.8e-12 against the 1e-12 it asserts); AugmentedCutOptions turns it on.
   bool update_capacitance = false;
+  /// SchurSolver::kDirectCached, §3.6: prepare the swap in the background. When a background
+  /// factorization has finished, the next solve does not swap it in yet but hands it back to
+  /// a background thread that computes G = H R⁻¹ Hᵀ of the new factor for the columns that
+  /// will stay in 𝓛 after the swap (changed since the snapshot, and 𝓓); a later solve swaps
+  /// it in with that G as its cache, so the swap's solve computes only the columns that joined
+  /// since (without it: every column changed while the job ran, in the frame thread — the
+  /// 150–470 ms swap frames of docs/augmented.md, "Refactorization policy"). Off here;
+  /// AugmentedCutOptions turns it on. wait_for_refactorization() prepares and swaps in one call.
+  bool prepare_swap = false;
   /// Threads of step 3's full backward substitution (ClosureLdlSolver): 1 = serial, ≥ 1. The
   /// pass streams all of L and is memory-bound, so extra threads help as far as a core adds
   /// memory bandwidth (docs/augmented.md). The result is bit-identical for any value. Leave at
@@ -116,13 +125,14 @@ struct AugmentedOptions {
 /// The options of the interactive sessions at organ scale (interactive::AugmentedCutSession,
 /// the 3D needle's augmented path): a supernodal CHOLMOD factor (METIS kept), eq. 17
 /// preconditioned by the explicit H R⁻¹ J in capacitance form (SchurSolver::kDirectCached), its
-/// factorization updated between solves. Why, with the measurements: docs/cutting.md,
+/// factorization updated between solves, a background factor's G prepared before its swap. Why, with the measurements: docs/cutting.md,
 /// docs/augmented.md.
 inline AugmentedOptions interactive_options() {
   AugmentedOptions o;
   o.cholmod.kind = CholmodKind::kSupernodal;
   o.schur_solver = SchurSolver::kDirectCached;
   o.update_capacitance = true;  // issue 17: updated, not refactored (docs/augmented.md)
+  o.prepare_swap = true;        // issue 17: G of a new factor made in the background
   return o;
 }
 
@@ -226,6 +236,10 @@ class AugmentedSystem {
   /// §3.5 preconditioner data), in initialize() or in the background job that was swapped in;
   /// 0 without a factor. The cost model of an automatic §3.6 refactorization policy.
   double factorization_seconds() const;
+  /// CPU seconds (CLOCK_THREAD_CPUTIME_ID) of the thread that made the factor in use — the
+  /// background job's own thread for a swapped-in one (threads CHOLMOD or BLAS start are not
+  /// counted); 0 without a factor.
+  double factorization_cpu_seconds() const;
 
   /// Current number of DOFs n = n₀ + added DOFs.
   int num_dofs() const { return n_; }
@@ -302,6 +316,9 @@ class AugmentedSystem {
   const Column* changed_column(int j) const;
   void touch_column(int j);
   bool swap_in(std::unique_ptr<Base> base, const std::set<int>& changed_since);
+  // prepare_swap: G of the finished factor `base` on the columns that stay in 𝓛 after its
+  // swap, in a background job; false when there is nothing to prepare (swap now).
+  bool start_preparing(std::unique_ptr<Base>& base);
   int prune_unchanged_columns();
   // The steps of solve(), in order (defined in augmented_system.cpp with their equations).
   bool augment(Augmentation& aug, AugmentedReport& report);
@@ -327,6 +344,7 @@ class AugmentedSystem {
   std::set<int> changed_since_snapshot_;
   bool snapshot_active_ = false;
   std::future<std::unique_ptr<Base>> job_;
+  bool job_preparing_ = false;  // job_ is the prepare_swap stage (G of a finished factor)
   std::uint64_t pattern_version_ = 1;
   FactorStatus last_refactor_status_ = FactorStatus::kOk;
   double diag_scale_ = 1;  // max |K⁰_ii|: entries below 1e-13·diag_scale_ count as zero

@@ -12,6 +12,7 @@
 
 #include <incise/core/name_table.hpp>
 #include <incise/core/types.hpp>
+#include <incise/interactive/refactorization_policy.hpp>
 #include <incise/io/write_mesh.hpp>
 #include <incise/linalg/augmented_system.hpp>
 #include <incise/material/parameters.hpp>
@@ -186,6 +187,12 @@ struct SolverSpec {
   /// the augmented paper's §3.6 background refactorization — started after a solve once m − |𝓓|
   /// replaced columns (a count) have accumulated; 0 = never. Scene key `refactor_at_m`.
   int refactor_at_m = 0;
+  /// Interactive cutting run only, with refactor_at_m = 0: the automatic §3.6 policy of
+  /// interactive::AugmentedCutOptions in this mode; nullopt = none (scenes' default: m grows,
+  /// and the per-step rows do not depend on when a background job finishes). Scene key
+  /// `refactorization`: kNoRefactorizationName or a name of interactive::
+  /// kRefactorizationModeNames ("break-even", the library session's default, or "continuous").
+  std::optional<interactive::RefactorizationMode> refactorization;
   /// Interactive cutting run only: linalg::AugmentedOptions::solve_threads, the threads of
   /// step 3's full backward substitution (1 = serial; the result is bit-identical for any
   /// value). Scene key `solve_threads`, 1 … 64.
@@ -218,6 +225,10 @@ inline constexpr NameTable<SolverSpec::CutConfiguration, 2> kCutConfigurationNam
 /// The value of the scene key `schur_preconditioner` that selects linalg::SchurSolver::
 /// kDirectCached; its other values are the names in linalg::kSchurPreconditionerNames.
 inline constexpr const char* kExplicitSchurName = "explicit";
+
+/// The value of the scene key `refactorization` that selects no automatic §3.6 policy (the
+/// default); its other values are the names in interactive::kRefactorizationModeNames.
+inline constexpr const char* kNoRefactorizationName = "none";
 
 /// A tool. The scalpel is swept along a path; consecutive blade positions span the sweep
 /// triangles of thesis §3.2. The needle (thesis ch. 6: in 2D on a `slab2d` mesh, in 3D (§6.9)
