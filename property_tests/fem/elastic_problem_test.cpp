@@ -9,6 +9,7 @@
 #include <incise/fixtures/deformations.hpp>
 #include <incise/fixtures/derivative_check.hpp>
 #include <incise/mesh/generators.hpp>
+#include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
 #include <Eigen/Geometry>
@@ -353,12 +354,7 @@ TEST_P(ProblemProperty, SimdBlocksMatchScalarElementKernels) {
 
 INSTANTIATE_TEST_SUITE_P(AllRegistered, ProblemProperty,
                          ::testing::ValuesIn(incise::material::registered_material_names()),
-                         [](const auto& param_info) {
-                           std::string s = param_info.param;
-                           for (char& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
-                         });
+                         incise::test::material_param_name);
 
 TEST(ElasticProblem, RejectsBadMeshes) {
   const Material m("neohookean", test_parameters());

@@ -8,6 +8,7 @@
 #include <incise/fem/stiffness.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/mesh/tet_faces.hpp>
+#include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
 #include <gtest/gtest.h>
@@ -113,12 +114,7 @@ TEST_P(StiffnessProperty, ElementBlocksSumToTheAssembledMatrix) {
 
 INSTANTIATE_TEST_SUITE_P(AllRegistered, StiffnessProperty,
                          ::testing::ValuesIn(incise::material::registered_material_names()),
-                         [](const auto& param_info) {
-                           std::string s = param_info.param;
-                           for (char& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
-                         });
+                         incise::test::material_param_name);
 
 TEST(ElementStiffness, InvalidElementsGiveFalseAndAZeroBlock) {
   Mat34 x;
