@@ -28,14 +28,13 @@ namespace incise::scene {
 /// iteration), or in an interactive cutting run `<vtu>_<step>.vtu` of the cut mesh with
 /// tet_fields() of cut_session_problem() every vtu_every steps (step 0 = initial solve; pvd time =
 /// step); the index is zero-padded to 6 digits (more when max_iterations has more). In a needle
-/// scene:
-/// `<vtu>_<update>.vtu` of the refined slab (triangles; needle_fields()) every vtu_every updates
-/// and at the last planned update, the update zero-padded to max(4, digits of the last update),
-/// each frame followed by `<vtu>.pvd`, the ParaView index of the frames so far (timestep =
-/// update). A 3D needle scene writes the refined tetrahedral mesh the same way (needle_fields()
-/// of 3D) and beside it
-/// `<vtu>_needle_<update>.vtu`, the needle surface (needle3d.hpp) as triangles with point
-/// array "displacement" and cell array "area" (m², deformed), indexed by `<vtu>_needle.pvd`.
+/// scene: `<vtu>_<update>.vtu` of the refined slab (triangles; needle_fields()) every vtu_every
+/// updates and at the last planned update, the update zero-padded to max(4, digits of the last
+/// update), each frame followed by `<vtu>.pvd`, the ParaView index of the frames so far
+/// (timestep = update). A 3D needle scene writes the refined tetrahedral mesh the same way
+/// (needle_fields() of 3D) and beside it `<vtu>_needle_<update>.vtu`, the needle surface
+/// (needle3d.hpp) as triangles with point array "displacement" and cell array "area" (m²,
+/// deformed), indexed by `<vtu>_needle.pvd`.
 class FrameWriter {
  public:
   /// Keeps a reference to `scene`, which must outlive the writer.
