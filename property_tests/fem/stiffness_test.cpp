@@ -8,6 +8,7 @@
 #include <incise/fem/stiffness.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/mesh/tet_faces.hpp>
+#include <incise_test/material_parameters.hpp>
 #include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
@@ -35,12 +36,7 @@ using Mat12 = incise::fem::Mat12T<double>;
 constexpr double kAssemblyTol = 1e-14;
 
 incise::material::Parameters test_parameters() {
-  incise::material::Parameters p;
-  p.youngs_modulus = 5.0e3;
-  p.poisson_ratio = 0.35;
-  p.gamma = 0.3;
-  p.density = 1.1e3;
-  return p;
+  return incise::test::fem_test_parameters();
 }
 
 /// A 3×3×2 box (5-split) with its interior and boundary nodes jittered by up to 8% of the cell

@@ -13,6 +13,7 @@
 #include <incise/fixtures/deformations.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/solver/nonlinear_cg.hpp>
+#include <incise_test/material_parameters.hpp>
 #include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
@@ -35,12 +36,7 @@ using incise::material::Material;
 const std::vector<int> kThreadCounts = {1, 2, 3, 4, 7};
 
 incise::material::Parameters test_parameters() {
-  incise::material::Parameters p;
-  p.youngs_modulus = 5.0e3;
-  p.poisson_ratio = 0.35;
-  p.gamma = 0.3;
-  p.density = 1.1e3;
-  return p;
+  return incise::test::fem_test_parameters();
 }
 
 /// 10 × 10 × 8 cubes × 6 = 4,800 tetrahedra: above the one-chunk size (4,096), 19 chunks of
