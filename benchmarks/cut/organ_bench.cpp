@@ -411,6 +411,17 @@ class AssembledQuadratic : public incise::Problem {
   const Eigen::VectorXd& b_;
 };
 
+/// The session's displacement at its `n` DOFs (the layout of its system's matrix).
+Eigen::VectorXd dof_displacement(const incise::interactive::AugmentedCutSession& session, int n) {
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
+  for (Index v = 0; v < session.mesh().num_nodes(); ++v) {
+    const int d = session.dof(v);
+    if (d >= 0)
+      for (int k = 0; k < 3; ++k) x(d + k) = session.displacement()(k, v);
+  }
+  return x;
+}
+
 double max_relative(const Eigen::VectorXd& x, const Eigen::VectorXd& ref) {
   const double scale = ref.cwiseAbs().maxCoeff();
   const double diff = (x.head(ref.size()) - ref).cwiseAbs().maxCoeff();
@@ -514,21 +525,9 @@ void BM_LiverStrategies(benchmark::State& state) {
         return;
       }
       // Augmented: the session's displacement at the DOFs.
-      Eigen::VectorXd x_aug = Eigen::VectorXd::Zero(n);
-      for (Index v = 0; v < session.mesh().num_nodes(); ++v) {
-        const int d = session.dof(v);
-        if (d >= 0)
-          for (int k = 0; k < 3; ++k) x_aug(d + k) = session.displacement()(k, v);
-      }
-      err_aug = std::max(err_aug, max_relative(x_aug, x_ref));
+      err_aug = std::max(err_aug, max_relative(dof_displacement(session, n), x_ref));
       if (session_every.system().num_dofs() == n) {  // the same cut (solutions agree to 1e-12)
-        Eigen::VectorXd x_every = Eigen::VectorXd::Zero(n);
-        for (Index v = 0; v < session_every.mesh().num_nodes(); ++v) {
-          const int d = session_every.dof(v);
-          if (d >= 0)
-            for (int k = 0; k < 3; ++k) x_every(d + k) = session_every.displacement()(k, v);
-        }
-        err_every = std::max(err_every, max_relative(x_every, x_ref));
+        err_every = std::max(err_every, max_relative(dof_displacement(session_every, n), x_ref));
       } else {
         ++every_mismatch;
       }

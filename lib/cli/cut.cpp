@@ -5,7 +5,9 @@
 //
 // SWEEPS: a sweep file (io/sweep_file.hpp), coordinates in the mesh file's units (× --scale),
 // processed in order; a line "end" finishes an incision (the next triangles start a new one). Exit
-// 0 when the result is valid; 1 unreadable input; 2 usage; 3 invalid result (cli_util.hpp Exit).
+// 0 when the result is valid; 1 unreadable input; 2 usage; 3 invalid result (cli_util.hpp Exit;
+// a guard: Cutter::step's contract keeps the mesh valid, so no input is known to reach it —
+// docs/cli.md, "incise cut and status 3").
 
 #include <incise/core/error.hpp>
 #include <incise/cut/cutter.hpp>

@@ -9,6 +9,8 @@
 #include <incise/fixtures/deformations.hpp>
 #include <incise/fixtures/derivative_check.hpp>
 #include <incise/mesh/generators.hpp>
+#include <incise_test/material_parameters.hpp>
+#include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
 #include <Eigen/Geometry>
@@ -30,12 +32,7 @@ constexpr double kFdTolerance = 1e-6;
 constexpr double kMinTaylorOrder = 1.9;  // issue 3
 
 incise::material::Parameters test_parameters() {
-  incise::material::Parameters p;
-  p.youngs_modulus = 5.0e3;
-  p.poisson_ratio = 0.35;
-  p.gamma = 0.3;
-  p.density = 1.1e3;
-  return p;
+  return incise::test::fem_test_parameters();
 }
 
 incise::mesh::MeshData small_box(incise::mesh::CubeSplit split = incise::mesh::CubeSplit::kSix) {
@@ -353,12 +350,7 @@ TEST_P(ProblemProperty, SimdBlocksMatchScalarElementKernels) {
 
 INSTANTIATE_TEST_SUITE_P(AllRegistered, ProblemProperty,
                          ::testing::ValuesIn(incise::material::registered_material_names()),
-                         [](const auto& param_info) {
-                           std::string s = param_info.param;
-                           for (char& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
-                         });
+                         incise::test::material_param_name);
 
 TEST(ElasticProblem, RejectsBadMeshes) {
   const Material m("neohookean", test_parameters());

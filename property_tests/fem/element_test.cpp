@@ -7,6 +7,7 @@
 #include <incise/fixtures/deformations.hpp>
 #include <incise/fixtures/derivative_check.hpp>
 #include <incise/material/material.hpp>
+#include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
 #include <Eigen/Eigenvalues>
@@ -218,12 +219,7 @@ TEST_P(ElementProperty, InvertedElementBehaviour) {
 
 INSTANTIATE_TEST_SUITE_P(AllRegistered, ElementProperty,
                          ::testing::ValuesIn(incise::material::registered_material_names()),
-                         [](const auto& param_info) {
-                           std::string s = param_info.param;
-                           for (char& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
-                         });
+                         incise::test::material_param_name);
 
 TEST(TetReference, VolumeAndInverseOfUnitTet) {
   Mat34 z;

@@ -9,6 +9,7 @@
 #include <incise/fixtures/deformations.hpp>
 #include <incise/fixtures/derivative_check.hpp>
 #include <incise/material/material.hpp>
+#include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
 #include <gtest/gtest.h>
@@ -250,11 +251,9 @@ INSTANTIATE_TEST_SUITE_P(AllRegistered, PlaneStressElement, ::testing::ValuesIn(
                            return v;
                          }()),
                          [](const auto& param_info) {
-                           std::string s = param_info.param.material +
-                                           (param_info.param.nu == 0.0 ? "_nu0" : "_nu03");
-                           for (char& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
+                           return incise::test::gtest_name(
+                               param_info.param.material +
+                               (param_info.param.nu == 0.0 ? "_nu0" : "_nu03"));
                          });
 
 TEST(PlaneStressClosedForm, LinearUsesPlaneStressLame) {

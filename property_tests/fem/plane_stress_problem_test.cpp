@@ -10,6 +10,7 @@
 #include <incise/mesh/generators.hpp>
 #include <incise/solver/linear_cg.hpp>
 #include <incise/solver/nonlinear_cg.hpp>
+#include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
 #include <gtest/gtest.h>
@@ -101,12 +102,7 @@ TEST_P(PlaneStressProblemProperty, EnergyGradientHessianChain) {
 
 INSTANTIATE_TEST_SUITE_P(AllRegistered, PlaneStressProblemProperty,
                          ::testing::ValuesIn(incise::material::registered_material_names()),
-                         [](const auto& param_info) {
-                           std::string s = param_info.param;
-                           for (char& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
-                         });
+                         incise::test::material_param_name);
 
 TEST(PlaneStressProblem, SolversRunOnIt) {
   const auto mesh = slab();

@@ -13,6 +13,7 @@
 
 #include <incise/fem/tet_kernels.hpp>
 #include <incise/material/material.hpp>
+#include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
 #include <quadmath.h>
@@ -548,11 +549,6 @@ TEST_P(SmallStrainAccuracy, EnergyForceTangentWithin1000EpsAtStrains1eNeg10To1) 
 
 INSTANTIATE_TEST_SUITE_P(AllRegistered, SmallStrainAccuracy,
                          ::testing::ValuesIn(incise::material::registered_material_names()),
-                         [](const auto& param_info) {
-                           std::string s = param_info.param;
-                           for (char& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
-                         });
+                         incise::test::material_param_name);
 
 }  // namespace

@@ -8,6 +8,8 @@
 #include <incise/fem/stiffness.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/mesh/tet_faces.hpp>
+#include <incise_test/material_parameters.hpp>
+#include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
 #include <gtest/gtest.h>
@@ -34,12 +36,7 @@ using Mat12 = incise::fem::Mat12T<double>;
 constexpr double kAssemblyTol = 1e-14;
 
 incise::material::Parameters test_parameters() {
-  incise::material::Parameters p;
-  p.youngs_modulus = 5.0e3;
-  p.poisson_ratio = 0.35;
-  p.gamma = 0.3;
-  p.density = 1.1e3;
-  return p;
+  return incise::test::fem_test_parameters();
 }
 
 /// A 3×3×2 box (5-split) with its interior and boundary nodes jittered by up to 8% of the cell
@@ -113,12 +110,7 @@ TEST_P(StiffnessProperty, ElementBlocksSumToTheAssembledMatrix) {
 
 INSTANTIATE_TEST_SUITE_P(AllRegistered, StiffnessProperty,
                          ::testing::ValuesIn(incise::material::registered_material_names()),
-                         [](const auto& param_info) {
-                           std::string s = param_info.param;
-                           for (char& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
-                         });
+                         incise::test::material_param_name);
 
 TEST(ElementStiffness, InvalidElementsGiveFalseAndAZeroBlock) {
   Mat34 x;

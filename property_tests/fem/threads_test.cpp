@@ -13,6 +13,8 @@
 #include <incise/fixtures/deformations.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/solver/nonlinear_cg.hpp>
+#include <incise_test/material_parameters.hpp>
+#include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
 #include <atomic>
@@ -34,12 +36,7 @@ using incise::material::Material;
 const std::vector<int> kThreadCounts = {1, 2, 3, 4, 7};
 
 incise::material::Parameters test_parameters() {
-  incise::material::Parameters p;
-  p.youngs_modulus = 5.0e3;
-  p.poisson_ratio = 0.35;
-  p.gamma = 0.3;
-  p.density = 1.1e3;
-  return p;
+  return incise::test::fem_test_parameters();
 }
 
 /// 10 × 10 × 8 cubes × 6 = 4,800 tetrahedra: above the one-chunk size (4,096), 19 chunks of
@@ -78,23 +75,55 @@ Results evaluate(ElasticProblem& p, const VecX& u, const VecX& d) {
   return r;
 }
 
+/// Every result of `r` bitwise equal to `ref`'s.
+void expect_same_bits(const Results& r, const Results& ref) {
+  EXPECT_TRUE(same_bits(r.energy, ref.energy));
+  EXPECT_TRUE(same_bits(r.fused_energy, ref.fused_energy));
+  EXPECT_TRUE(same_bits(r.gep_energy, ref.gep_energy));
+  EXPECT_TRUE(same_bits(r.gradient, ref.gradient));
+  EXPECT_TRUE(same_bits(r.fused_gradient, ref.fused_gradient));
+  EXPECT_TRUE(same_bits(r.product, ref.product));
+  EXPECT_TRUE(same_bits(r.gep_gradient, ref.gep_gradient));
+  EXPECT_TRUE(same_bits(r.gep_product, ref.gep_product));
+  EXPECT_TRUE(same_bits(r.diagonal, ref.diagonal));
+  EXPECT_TRUE(same_bits(r.matrix, ref.matrix));
+}
+
+/// Holds `p` (a problem on `mesh`) at x = 0 and loads it with gravity along −y.
+void hold_and_load(ElasticProblem& p, const incise::mesh::MeshData& mesh) {
+  p.fix_nodes(incise::fem::nodes_on_plane(mesh, 0, 0.0));
+  p.add_gravity(incise::Vec3(0.0, -9.81, 0.0));
+}
+
+/// A random deformation: the homogeneous (F − I)X plus a random nodal field of amplitude 2e-3
+/// (no element inverted).
+template <class Rng>
+VecX random_deformation(const ElasticProblem& p, const Eigen::Matrix3d& f, Rng& rng) {
+  VecX u(p.size());
+  for (Index v = 0; v < p.num_nodes(); ++v)
+    u.segment<3>(3 * v) = (f - Eigen::Matrix3d::Identity()) * p.points().col(v);
+  return u + incise::fixtures::random_vector(rng, p.size(), 2e-3);
+}
+
+/// Every node mirrored through x = 0: every element inverted (det F = −1).
+VecX mirrored(const ElasticProblem& p) {
+  VecX u = VecX::Zero(p.size());
+  for (Index v = 0; v < p.num_nodes(); ++v) u[3 * v] = -2.0 * p.points()(0, v);
+  return u;
+}
+
 class ThreadsProperty : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(ThreadsProperty, ElementLoopsBitwiseEqualForEveryThreadCount) {
   INCISE_SEEDED_RNG(rng, 1919);
   const incise::mesh::MeshData mesh = test_box();
   ElasticProblem p(mesh, Material(GetParam(), test_parameters()));
-  p.fix_nodes(incise::fem::nodes_on_plane(mesh, 0, 0.0));
-  p.add_gravity(incise::Vec3(0.0, -9.81, 0.0));
+  hold_and_load(p, mesh);
   ASSERT_GT(p.chunk_schedule().num_chunks(), p.chunk_schedule().num_colours)
       << "the test mesh must let chunks run concurrently";
-  // A random deformation: homogeneous F plus a random nodal field (no element inverted).
   Eigen::Matrix3d f;
   f << 1.15, 0.1, -0.05, 0.08, 0.92, 0.12, -0.06, 0.04, 1.07;
-  VecX u(p.size());
-  for (Index v = 0; v < p.num_nodes(); ++v)
-    u.segment<3>(3 * v) = (f - Eigen::Matrix3d::Identity()) * p.points().col(v);
-  u += incise::fixtures::random_vector(rng, p.size(), 2e-3);
+  const VecX u = random_deformation(p, f, rng);
   const VecX d = incise::fixtures::random_vector(rng, p.size(), 1.0);
   p.set_threads(1);
   const Results ref = evaluate(p, u, d);
@@ -102,16 +131,7 @@ TEST_P(ThreadsProperty, ElementLoopsBitwiseEqualForEveryThreadCount) {
     SCOPED_TRACE("threads " + std::to_string(t));
     p.set_threads(t);
     const Results r = evaluate(p, u, d);
-    EXPECT_TRUE(same_bits(r.energy, ref.energy));
-    EXPECT_TRUE(same_bits(r.fused_energy, ref.fused_energy));
-    EXPECT_TRUE(same_bits(r.gep_energy, ref.gep_energy));
-    EXPECT_TRUE(same_bits(r.gradient, ref.gradient));
-    EXPECT_TRUE(same_bits(r.fused_gradient, ref.fused_gradient));
-    EXPECT_TRUE(same_bits(r.product, ref.product));
-    EXPECT_TRUE(same_bits(r.gep_gradient, ref.gep_gradient));
-    EXPECT_TRUE(same_bits(r.gep_product, ref.gep_product));
-    EXPECT_TRUE(same_bits(r.diagonal, ref.diagonal));
-    EXPECT_TRUE(same_bits(r.matrix, ref.matrix));
+    expect_same_bits(r, ref);
   }
   // The fused sweeps sum in the same order as the separate ones.
   EXPECT_TRUE(same_bits(ref.fused_energy, ref.energy));
@@ -122,15 +142,15 @@ TEST_P(ThreadsProperty, ElementLoopsBitwiseEqualForEveryThreadCount) {
 TEST_P(ThreadsProperty, InvertedElementReportedForEveryThreadCount) {
   const incise::mesh::MeshData mesh = test_box();
   ElasticProblem p(mesh, Material(GetParam(), test_parameters()));
-  // Mirror every node through x = 0: every element inverted (det F = −1).
-  VecX u = VecX::Zero(p.size());
-  for (Index v = 0; v < p.num_nodes(); ++v) u[3 * v] = -2.0 * p.points()(0, v);
+  const VecX u = mirrored(p);
   // The status of T = 1 (kInverted for models with a log term, e.g. neo-Hookean) for every T.
   p.set_threads(1);
   double e1 = 0.0;
   VecX g1;
   const EvalStatus s1 = p.gradient(u, g1, &e1);
-  if (GetParam() == "neohookean") EXPECT_EQ(s1, EvalStatus::kInverted);
+  if (GetParam() == "neohookean") {
+    EXPECT_EQ(s1, EvalStatus::kInverted);
+  }
   for (const int t : kThreadCounts) {
     SCOPED_TRACE("threads " + std::to_string(t));
     p.set_threads(t);
@@ -145,12 +165,7 @@ TEST_P(ThreadsProperty, InvertedElementReportedForEveryThreadCount) {
 
 INSTANTIATE_TEST_SUITE_P(AllRegistered, ThreadsProperty,
                          ::testing::ValuesIn(incise::material::registered_material_names()),
-                         [](const auto& info) {
-                           std::string s = info.param;
-                           for (char& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
-                         });
+                         incise::test::material_param_name);
 
 /// The AVX variant of the element loops (KernelIsa::kAvx: the same Lanes4 operations on 256-bit
 /// registers, no FMA) gives every result bitwise equal to the baseline (SSE2) variant: energy,
@@ -165,14 +180,10 @@ TEST_P(ElasticProblemIsa, AvxEqualsBaselineBitwise) {
   INCISE_SEEDED_RNG(rng, 2019);
   const incise::mesh::MeshData mesh = test_box();
   ElasticProblem p(mesh, Material(GetParam(), test_parameters()));
-  p.fix_nodes(incise::fem::nodes_on_plane(mesh, 0, 0.0));
-  p.add_gravity(incise::Vec3(0.0, -9.81, 0.0));
+  hold_and_load(p, mesh);
   Eigen::Matrix3d f;
   f << 1.12, -0.07, 0.05, 0.09, 0.95, -0.1, 0.04, 0.06, 1.1;
-  VecX u(p.size());
-  for (Index v = 0; v < p.num_nodes(); ++v)
-    u.segment<3>(3 * v) = (f - Eigen::Matrix3d::Identity()) * p.points().col(v);
-  u += incise::fixtures::random_vector(rng, p.size(), 2e-3);
+  const VecX u = random_deformation(p, f, rng);
   const VecX d = incise::fixtures::random_vector(rng, p.size(), 1.0);
   for (const int t : {1, 2}) {
     SCOPED_TRACE("threads " + std::to_string(t));
@@ -181,20 +192,10 @@ TEST_P(ElasticProblemIsa, AvxEqualsBaselineBitwise) {
     const Results ref = evaluate(p, u, d);
     p.set_kernel_isa(incise::fem::KernelIsa::kAvx);
     const Results r = evaluate(p, u, d);
-    EXPECT_TRUE(same_bits(r.energy, ref.energy));
-    EXPECT_TRUE(same_bits(r.fused_energy, ref.fused_energy));
-    EXPECT_TRUE(same_bits(r.gep_energy, ref.gep_energy));
-    EXPECT_TRUE(same_bits(r.gradient, ref.gradient));
-    EXPECT_TRUE(same_bits(r.fused_gradient, ref.fused_gradient));
-    EXPECT_TRUE(same_bits(r.product, ref.product));
-    EXPECT_TRUE(same_bits(r.gep_gradient, ref.gep_gradient));
-    EXPECT_TRUE(same_bits(r.gep_product, ref.gep_product));
-    EXPECT_TRUE(same_bits(r.diagonal, ref.diagonal));
-    EXPECT_TRUE(same_bits(r.matrix, ref.matrix));
+    expect_same_bits(r, ref);
   }
   // Every element inverted: same status and bits.
-  VecX w = VecX::Zero(p.size());
-  for (Index v = 0; v < p.num_nodes(); ++v) w[3 * v] = -2.0 * p.points()(0, v);
+  const VecX w = mirrored(p);
   double e0 = 0.0, e1 = 0.0;
   VecX g0, g1;
   p.set_kernel_isa(incise::fem::KernelIsa::kBaseline);
@@ -207,12 +208,7 @@ TEST_P(ElasticProblemIsa, AvxEqualsBaselineBitwise) {
 
 INSTANTIATE_TEST_SUITE_P(AllRegistered, ElasticProblemIsa,
                          ::testing::ValuesIn(incise::material::registered_material_names()),
-                         [](const auto& info) {
-                           std::string s = info.param;
-                           for (char& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
-                         });
+                         incise::test::material_param_name);
 
 TEST(Threads, NonlinearCgSolveIdenticalForEveryThreadCount) {
   // Veronda-Westmann box, one face fixed, gravity sideways (the issue-19 problem class), 150
@@ -222,8 +218,7 @@ TEST(Threads, NonlinearCgSolveIdenticalForEveryThreadCount) {
   prm.gamma = 1.0;
   const auto run = [&](int threads, incise::solver::SolverReport& rep) {
     ElasticProblem p(mesh, Material("veronda-westmann", prm));
-    p.fix_nodes(incise::fem::nodes_on_plane(mesh, 0, 0.0));
-    p.add_gravity(incise::Vec3(0.0, -9.81, 0.0));
+    hold_and_load(p, mesh);
     p.set_threads(threads);
     incise::solver::NonlinearCgOptions o;
     o.stop.epsilon = 1e-12;  // not reached: the budget ends every run

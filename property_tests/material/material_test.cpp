@@ -7,6 +7,7 @@
 #include <incise/fixtures/deformations.hpp>
 #include <incise/fixtures/derivative_check.hpp>
 #include <incise/material/material.hpp>
+#include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
 #include <Eigen/Eigenvalues>
@@ -356,12 +357,7 @@ TEST_P(MaterialProperty, InvertedDeformationBehaviour) {
 
 INSTANTIATE_TEST_SUITE_P(AllRegistered, MaterialProperty,
                          ::testing::ValuesIn(incise::material::registered_material_names()),
-                         [](const auto& param_info) {
-                           std::string s = param_info.param;
-                           for (char& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
-                         });
+                         incise::test::material_param_name);
 
 TEST(MaterialRegistry, NamesAndUnknownModel) {
   const auto names = incise::material::registered_material_names();

@@ -265,6 +265,25 @@ TEST(SceneNeedle, SmallInsertionRunsAndWritesCsvVtuSeriesAndPvd) {
     }
     EXPECT_EQ(stick, last.sticking) << f;
     EXPECT_EQ(slip, last.slipping) << f;
+    // The plane-stress fields (docs/mesh_formats.md "Fields"): Σ W·A·d over the triangles is the
+    // elastic energy the run reports (the needle acts through constraints: f_ext = 0, Π = Σ A d
+    // W₂), computed there by PlaneStressProblem::energy, here from the written cells' W and the
+    // file's reference areas. 1e-12 relative: two summation orders of the same ~10² terms.
+    const io::VtuContents v = io::read_vtu(vtu.string());
+    const auto w = vtu_array(vtu, "strain_energy_density");
+    ASSERT_EQ(w.size(), static_cast<std::size_t>(last.triangles)) << f;
+    EXPECT_EQ(vtu_array(vtu, "von_mises_stress").size(), w.size()) << f;
+    EXPECT_TRUE(vtu_array(vtu, "reaction_force").empty()) << f;
+    double energy = 0.0;
+    for (Index c = 0; c < v.mesh.num_cells(); ++c) {
+      const Vec3 a = v.mesh.points.col(v.mesh.cells(0, c)),
+                 b2 = v.mesh.points.col(v.mesh.cells(1, c)),
+                 c3 = v.mesh.points.col(v.mesh.cells(2, c));
+      energy += w[static_cast<std::size_t>(c)] * 0.5 * (b2 - a).cross(c3 - a).norm() *
+                b.spec.mesh.thickness;
+    }
+    EXPECT_GT(res.report.energy, 0.0);
+    EXPECT_NEAR(energy, res.report.energy, 1e-12 * res.report.energy) << f;
   }
   // The CSV: header in the documented order, one row per update.
   const auto csv = lines_of(read(dir / "updates.csv"));

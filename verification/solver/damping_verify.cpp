@@ -10,6 +10,7 @@
 #include <incise/mesh/generators.hpp>
 #include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/solver/eigen_estimates.hpp>
+#include <incise_test/param_names.hpp>
 
 #include <gtest/gtest.h>
 
@@ -150,18 +151,13 @@ TEST_P(DampingOnCylinder, ThreeWaysAgainstSweep_Sec4_1_Sec4_4_1) {
   }
 }
 
-std::string param_name(const ::testing::TestParamInfo<std::string>& p) {
-  std::string s = p.param;
-  for (char& ch : s)
-    if (ch == '-') ch = '_';
-  return s;
-}
-
 #ifdef INCISE_DAMPING_ALL_MATERIALS
 INSTANTIATE_TEST_SUITE_P(Materials, DampingOnCylinder,
-                         ::testing::Values("stvk", "neohookean", "veronda-westmann"), param_name);
+                         ::testing::Values("stvk", "neohookean", "veronda-westmann"),
+                         incise::test::material_param_name);
 #else
-INSTANTIATE_TEST_SUITE_P(Materials, DampingOnCylinder, ::testing::Values("linear"), param_name);
+INSTANTIATE_TEST_SUITE_P(Materials, DampingOnCylinder, ::testing::Values("linear"),
+                         incise::test::material_param_name);
 #endif
 
 }  // namespace

@@ -482,9 +482,17 @@ LoadedMesh finalize(RawMesh&& raw, const std::string& file, const ReadOptions& o
     }
     if (!(std::abs(normalized) > tol)) {
       std::ostringstream os;
-      os << "degenerate " << (volume ? "tetrahedron" : "triangle") << " (signed "
-         << (volume ? "volume " : "area ") << size << ", " << normalized
-         << " of the regular cell with its longest edge): expected a non-flat cell";
+      os << "degenerate " << (volume ? "tetrahedron" : "triangle");
+      if (std::isfinite(size) && std::isfinite(normalized))
+        os << " (signed " << (volume ? "volume " : "area ") << size << ", " << normalized
+           << " of the regular cell with its longest edge): expected a non-flat cell";
+      else {  // never print NaN: the products of the coordinates left the doubles
+        double largest = 0;
+        for (int r = 0; r < k; ++r) largest = std::max(largest, p[r].cwiseAbs().maxCoeff());
+        os << ": its " << (volume ? "volume" : "area") << " overflows or underflows the doubles"
+           << " (largest coordinate magnitude " << largest << "): expected coordinates whose "
+           << (volume ? "cubes" : "squares") << " stay within the doubles (check the scale)";
+      }
       throw ParseError(file, lines[c], os.str());
     }
     if (size < 0) {

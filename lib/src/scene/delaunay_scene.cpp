@@ -20,7 +20,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <optional>
 #include <set>
@@ -335,19 +334,6 @@ DelaunaySceneSpec parse_root(const Json& root_json, const std::string& file,
   return s;
 }
 
-std::string read_bounded(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ParseError(path, 0, "cannot open scene file");
-  std::string text;
-  char buf[1 << 16];
-  while (text.size() <= kMaxSceneBytes && in.read(buf, sizeof buf).gcount() > 0)
-    text.append(buf, static_cast<std::size_t>(in.gcount()));
-  if (in.bad()) throw ParseError(path, 0, "error while reading scene file");
-  if (text.size() > kMaxSceneBytes)
-    throw ParseError(path, 0, "scene file is larger than the limit of 16 MiB");
-  return text;
-}
-
 // ---- running -------------------------------------------------------------------------------
 
 /// Vertices of live triangles.
@@ -510,7 +496,7 @@ std::string summary(const DelaunaySceneSpec& s, const DelaunayRunResult& r,
 
 bool is_delaunay_scene(const std::string& path) {
   try {
-    const std::string text = read_bounded(path);
+    const std::string text = detail::read_scene_file(path);
     const Json j = Json::parse(text, nullptr, false);
     if (!j.is_object()) return false;
     const auto tools = j.find("tools");
@@ -537,7 +523,7 @@ DelaunaySceneSpec parse_delaunay_scene(const std::string& text, const std::strin
 }
 
 DelaunaySceneSpec load_delaunay_scene(const std::string& path) {
-  const std::string text = read_bounded(path);
+  const std::string text = detail::read_scene_file(path);
   return parse_delaunay_scene(text, path, std::filesystem::path(path).parent_path().string());
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <limits>
 #include <sstream>
 
@@ -383,6 +384,21 @@ LineIndex index_lines(const std::string& text, const std::string& file) {
 }
 
 }  // namespace
+
+std::string read_scene_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ParseError(path, 0, "cannot open scene file");
+  std::string text;
+  char buf[1 << 16];
+  while (text.size() <= kMaxSceneBytes && in.read(buf, sizeof buf).gcount() > 0)
+    text.append(buf, static_cast<std::size_t>(in.gcount()));
+  if (in.bad()) throw ParseError(path, 0, "error while reading scene file");
+  if (text.size() > kMaxSceneBytes)
+    throw ParseError(path, 0,
+                     "scene file is larger than the limit of " + mib(kMaxSceneBytes) + " (" +
+                         std::to_string(kMaxSceneBytes) + " bytes; docs/scenes.md, Limits)");
+  return text;
+}
 
 ParsedJson parse_strict(const std::string& text, const std::string& file) {
   if (text.size() > kMaxSceneBytes)

@@ -122,6 +122,12 @@ struct ParsedJson {
 /// (at the number, with its path).
 ParsedJson parse_strict(const std::string& text, const std::string& file);
 
+/// The text of the scene file `path`, read no further than kMaxSceneBytes + 1 bytes (the file
+/// may be a pipe, or endless like /dev/zero). Throws ParseError(path, 0, ...) when it cannot be
+/// opened or read, or is larger than kMaxSceneBytes ("scene file is larger than the limit of
+/// 16 MiB (...)"). Shared by load_scene and load_delaunay_scene.
+std::string read_scene_file(const std::string& path);
+
 /// `e` with the line of the JSON path its message starts with ("<path>: ...", as fail() writes
 /// it) when `e` names `file` without a line; otherwise `e` unchanged.
 ParseError with_line(const ParseError& e, const std::string& file, const LineIndex& lines);

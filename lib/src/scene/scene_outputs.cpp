@@ -167,7 +167,7 @@ void FrameWriter::iteration(const solver::IterationInfo& info) {
   const std::string file =
       outs.vtu + "_" +
       padded(info.iteration, frame_index_width(scene_.spec.solver.max_iterations)) + ".vtu";
-  const TetFields f = tet_fields(scene_, *info.u);
+  const FieldArrays f = tet_fields(scene_, *info.u);
   write_vtu_atomic(file, scene_.mesh, f.point, f.cell, outs.vtu_format);
   frame(file, info.time >= 0 ? info.time : static_cast<double>(info.iteration));
 }
@@ -185,7 +185,7 @@ void FrameWriter::cut_step(const CutStepRow& row, const interactive::AugmentedCu
   const VecX u = Eigen::Map<const VecX>(d.data(), d.size());
   VecX g;
   const bool ok = problem->gradient(u, g) == EvalStatus::kOk;
-  const TetFields f = tet_fields(*problem, u, ok ? &g : nullptr);
+  const FieldArrays f = tet_fields(*problem, u, ok ? &g : nullptr);
   write_vtu_atomic(file, live_mesh_data(session.mesh()), f.point, f.cell, outs.vtu_format);
   frame(file, static_cast<double>(row.step));
 }
@@ -201,59 +201,103 @@ void add_finite(std::vector<io::DataArray>& to, io::DataArray a) {
 
 }  // namespace
 
-TetFields tet_fields(const BuiltScene& scene, const VecX& u) {
+FieldArrays tet_fields(const BuiltScene& scene, const VecX& u) {
   if (!scene.problem || scene.problem->size() != u.size()) return {{displacement_array(u)}, {}};
   VecX g;
   const bool ok = scene.problem->gradient(u, g) == EvalStatus::kOk;
   return tet_fields(*scene.problem, u, ok ? &g : nullptr);
 }
 
-TetFields tet_fields(const fem::ElasticProblem& p, const VecX& u, const VecX* g) {
-  TetFields out;
-  out.point.push_back(displacement_array(u));
-  if (p.size() != u.size()) return out;
-  const std::size_t n = static_cast<std::size_t>(p.num_nodes());
-  if (g != nullptr && g->size() == p.size()) {
-    io::DataArray reaction{"reaction_force", 3, std::vector<double>(3 * n, 0.0)};
-    for (Eigen::Index i = 0; i < p.size(); ++i)
-      if (p.is_fixed(i)) reaction.values[static_cast<std::size_t>(i)] = (*g)[i];
-    add_finite(out.point, std::move(reaction));
-  }
-  io::DataArray fixed{"fixed", 1, std::vector<double>(n, 0.0), io::DataArray::Type::kUInt8};
-  io::DataArray loaded{"loaded", 1, std::vector<double>(n, 0.0), io::DataArray::Type::kUInt8};
-  const VecX& f = p.external_force();
-  for (std::size_t v = 0; v < n; ++v)
-    for (int c = 0; c < 3; ++c) {
-      const auto i = static_cast<Eigen::Index>(3 * v + c);
-      if (p.is_fixed(i)) fixed.values[v] = 1;
-      if (f[i] != 0.0) loaded.values[v] = 1;
-    }
-  out.point.push_back(std::move(fixed));
-  out.point.push_back(std::move(loaded));
-  fem::ElementFields e = fem::element_fields(p, u);
-  add_finite(out.cell, {"strain", 6, std::move(e.strain)});
-  add_finite(out.cell, {"second_piola_stress", 6, std::move(e.second_piola)});
-  add_finite(out.cell, {"cauchy_stress", 6, std::move(e.cauchy)});
-  add_finite(out.cell, {"von_mises_stress", 1, std::move(e.von_mises)});
-  add_finite(out.cell, {"strain_energy_density", 1, std::move(e.energy_density)});
-  out.cell.push_back({"inverted", 1, std::vector<double>(e.inverted.begin(), e.inverted.end()),
-                      io::DataArray::Type::kUInt8});
-  return out;
-}
+namespace {
 
-std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion& insertion) {
-  const VecX& u2 = insertion.displacement();
+/// "displacement" of in-plane displacements u (2 per node, m) with three components, z = 0.
+io::DataArray planar_displacement_array(const VecX& u2) {
   const Eigen::Index n = u2.size() / 2;
   io::DataArray u{"displacement", 3, std::vector<double>(static_cast<std::size_t>(3 * n), 0.0)};
   for (Eigen::Index v = 0; v < n; ++v) {
     u.values[static_cast<std::size_t>(3 * v)] = u2[2 * v];
     u.values[static_cast<std::size_t>(3 * v + 1)] = u2[2 * v + 1];
   }
-  io::DataArray state{"needle_state", 1, std::vector<double>(static_cast<std::size_t>(n), 0.0)};
-  for (const needle::NeedleNode& nd : insertion.needle_nodes())
+  return u;
+}
+
+/// The arrays of a problem `p` with `dim` DOFs per node at u (tet_fields() and tri_fields()):
+/// `displacement` (u as 3 components per node), then, when u is p's size, "reaction_force" (3
+/// components; when `g`, the gradient at u, is given), "fixed", "loaded", and the cell arrays of
+/// fem::element_fields().
+template <class P>
+FieldArrays state_arrays(const P& p, const VecX& u, const VecX* g, io::DataArray displacement,
+                         int dim) {
+  FieldArrays out;
+  out.point.push_back(std::move(displacement));
+  if (p.size() != u.size()) return out;
+  fem::ElementFields fields = fem::element_fields(p, u);
+  const std::size_t n = static_cast<std::size_t>(p.num_nodes());
+  if (g != nullptr && g->size() == p.size()) {
+    io::DataArray reaction{"reaction_force", 3, std::vector<double>(3 * n, 0.0)};
+    for (Eigen::Index i = 0; i < p.size(); ++i)
+      if (p.is_fixed(i))
+        reaction.values[static_cast<std::size_t>(3 * (i / dim) + i % dim)] = (*g)[i];
+    add_finite(out.point, std::move(reaction));
+  }
+  io::DataArray fixed{"fixed", 1, std::vector<double>(n, 0.0), io::DataArray::Type::kUInt8};
+  io::DataArray loaded{"loaded", 1, std::vector<double>(n, 0.0), io::DataArray::Type::kUInt8};
+  const VecX& f = p.external_force();
+  for (Eigen::Index i = 0; i < p.size(); ++i) {
+    const std::size_t v = static_cast<std::size_t>(i / dim);
+    if (p.is_fixed(i)) fixed.values[v] = 1;
+    if (f[i] != 0.0) loaded.values[v] = 1;
+  }
+  out.point.push_back(std::move(fixed));
+  out.point.push_back(std::move(loaded));
+  add_finite(out.cell, {"strain", 6, std::move(fields.strain)});
+  add_finite(out.cell, {"second_piola_stress", 6, std::move(fields.second_piola)});
+  add_finite(out.cell, {"cauchy_stress", 6, std::move(fields.cauchy)});
+  add_finite(out.cell, {"von_mises_stress", 1, std::move(fields.von_mises)});
+  add_finite(out.cell, {"strain_energy_density", 1, std::move(fields.energy_density)});
+  out.cell.push_back({"inverted", 1,
+                      std::vector<double>(fields.inverted.begin(), fields.inverted.end()),
+                      io::DataArray::Type::kUInt8});
+  return out;
+}
+
+}  // namespace
+
+FieldArrays tet_fields(const fem::ElasticProblem& p, const VecX& u, const VecX* g) {
+  return state_arrays(p, u, g, displacement_array(u), 3);
+}
+
+FieldArrays tri_fields(const fem::PlaneStressProblem& p, const VecX& u, const VecX* g) {
+  return state_arrays(p, u, g, planar_displacement_array(u), 2);
+}
+
+namespace {
+
+/// "needle_state" of an insertion's nodes (0 no needle node, 1 sticking, 2 slipping).
+template <class Insertion>
+io::DataArray needle_state_array(const Insertion& insertion, Index nodes) {
+  io::DataArray state{"needle_state", 1, std::vector<double>(static_cast<std::size_t>(nodes))};
+  for (const auto& nd : insertion.needle_nodes())
     state.values[static_cast<std::size_t>(nd.vertex)] =
         nd.state == needle::NodeState::kStick ? 1.0 : 2.0;
-  return {u, state};
+  return state;
+}
+
+}  // namespace
+
+FieldArrays needle_fields(const needle::NeedleInsertion& insertion) {
+  const fem::PlaneStressProblem& p = insertion.problem();
+  FieldArrays f = tri_fields(p, insertion.displacement());
+  f.point.push_back(needle_state_array(insertion, p.num_nodes()));
+  return f;
+}
+
+FieldArrays needle_fields(const needle::NeedleInsertion3D& insertion, const mesh::MeshData& mesh) {
+  const fem::ElasticProblem& p = insertion.problem();
+  FieldArrays f = tet_fields(p, insertion.displacement());
+  f.point.push_back(needle_state_array(insertion, p.num_nodes()));
+  f.cell.push_back(needle_cell_data(insertion, mesh));
+  return f;
 }
 
 namespace {
@@ -282,21 +326,9 @@ void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_up
   const std::string index = needle_frame_index(outs, row, total_updates, insertion);
   if (index.empty()) return;
   const std::string file = outs.vtu + "_" + index + ".vtu";
-  const mesh::MeshData m = insertion.mesh().to_mesh_data();
-  const std::vector<io::DataArray> data = needle_point_data(insertion);
-  write_vtu_atomic(file, m, data, {}, outs.vtu_format);
+  const FieldArrays f = needle_fields(insertion);
+  write_vtu_atomic(file, insertion.mesh().to_mesh_data(), f.point, f.cell, outs.vtu_format);
   frame(file, static_cast<double>(row.update));
-}
-
-std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion3D& insertion) {
-  const VecX& u3 = insertion.displacement();
-  const Eigen::Index n = u3.size() / 3;
-  io::DataArray u{"displacement", 3, std::vector<double>(u3.data(), u3.data() + u3.size())};
-  io::DataArray state{"needle_state", 1, std::vector<double>(static_cast<std::size_t>(n), 0.0)};
-  for (const needle::NeedleNode3D& nd : insertion.needle_nodes())
-    state.values[static_cast<std::size_t>(nd.vertex)] =
-        nd.state == needle::NodeState::kStick ? 1.0 : 2.0;
-  return {u, state};
 }
 
 io::DataArray needle_cell_data(const needle::NeedleInsertion3D& insertion,
@@ -331,7 +363,7 @@ void write_needle_surface_vtu(const std::string& path, const needle::NeedleInser
         0.5 * (x.col(m.cells(1, f)) - x.col(m.cells(0, f)))
                   .cross(x.col(m.cells(2, f)) - x.col(m.cells(0, f)))
                   .norm();
-  const std::vector<io::DataArray> point = {needle_point_data(insertion)[0]};
+  const std::vector<io::DataArray> point = {displacement_array(insertion.displacement())};
   write_vtu_atomic(path, m, point, {area}, encoding);
 }
 
@@ -343,10 +375,7 @@ void FrameWriter::needle_update(const NeedleUpdateRow& row, std::size_t total_up
   const std::string file = outs.vtu + "_" + index + ".vtu";
   const std::string surface = outs.vtu + "_needle_" + index + ".vtu";
   const mesh::MeshData m = insertion.mesh().to_mesh_data();
-  // The elastic fields (tet_fields) and the needle's state and faces.
-  TetFields f = tet_fields(insertion.problem(), insertion.displacement());
-  f.point.push_back(needle_point_data(insertion)[1]);
-  f.cell.push_back(needle_cell_data(insertion, m));
+  const FieldArrays f = needle_fields(insertion, m);
   write_vtu_atomic(file, m, f.point, f.cell, outs.vtu_format);
   write_needle_surface_vtu(surface, insertion, outs.vtu_format);
   surface_pvd_.push_back(
@@ -368,16 +397,17 @@ std::vector<std::string> write_outputs(const BuiltScene& scene, const SceneRunRe
     const std::string f = outs.vtu + ".vtu";
     std::string f_extra;  // 3D needle: the final needle surface, listed after f
     if (scene.needle) {
-      write_vtu_atomic(f, scene.mesh, needle_point_data(*scene.needle), {}, outs.vtu_format);
+      const FieldArrays fields = needle_fields(*scene.needle);
+      write_vtu_atomic(f, scene.mesh, fields.point, fields.cell, outs.vtu_format);
     } else if (scene.needle3d) {
-      write_vtu_atomic(f, scene.mesh, needle_point_data(*scene.needle3d),
-                       {needle_cell_data(*scene.needle3d, scene.mesh)}, outs.vtu_format);
+      const FieldArrays fields = needle_fields(*scene.needle3d, scene.mesh);
+      write_vtu_atomic(f, scene.mesh, fields.point, fields.cell, outs.vtu_format);
       const std::string sf = outs.vtu + "_needle.vtu";
       write_needle_surface_vtu(sf, *scene.needle3d, outs.vtu_format);
       written.push_back(f);
       f_extra = sf;
     } else {  // an augmented cut run has replaced scene.mesh and scene.problem by the cut ones
-      const TetFields fields = tet_fields(scene, result.u);
+      const FieldArrays fields = tet_fields(scene, result.u);
       write_vtu_atomic(f, scene.mesh, fields.point, fields.cell, outs.vtu_format);
     }
     written.push_back(f_extra.empty() ? f : f_extra);

@@ -7,7 +7,6 @@
 #include <incise/needle/insertion3d.hpp>
 
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <regex>
@@ -780,18 +779,7 @@ SceneSpec parse_scene(const std::string& text, const std::string& file,
 }
 
 SceneSpec load_scene(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ParseError(path, 0, "cannot open scene file");
-  // Read no further than the limit (the file may be a pipe, or endless like /dev/zero).
-  std::string text;
-  char buf[1 << 16];
-  while (text.size() <= kMaxSceneBytes && in.read(buf, sizeof buf).gcount() > 0)
-    text.append(buf, static_cast<std::size_t>(in.gcount()));
-  if (in.bad()) throw ParseError(path, 0, "error while reading scene file");
-  if (text.size() > kMaxSceneBytes)
-    throw ParseError(path, 0,
-                     "scene file is larger than the limit of 16 MiB (" +
-                         std::to_string(kMaxSceneBytes) + " bytes; docs/scenes.md, Limits)");
+  const std::string text = detail::read_scene_file(path);
   const std::string base = std::filesystem::path(path).parent_path().string();
   return parse_scene(text, path, base);
 }

@@ -116,6 +116,7 @@ class PlaneStressProblem : public Problem {
   Index num_nodes() const { return static_cast<Index>(points_.cols()); }
   Index num_elements() const { return static_cast<Index>(cells_.cols()); }
   double thickness() const { return thickness_; }
+  const material::Material& material() const { return material_; }
   const Eigen::Matrix2Xd& points() const { return points_; }
   const mesh::CellMatrix& cells() const { return cells_; }
   const TriReference& reference(Index e) const { return refs_[static_cast<std::size_t>(e)]; }

@@ -162,6 +162,7 @@ class NeedleInsertion {
   const mesh::BisectionMesh& mesh() const { return mesh_; }
   /// The current plane-stress problem (rebuilt after every refinement).
   fem::PlaneStressProblem& problem() { return *problem_; }
+  const fem::PlaneStressProblem& problem() const { return *problem_; }
   /// Nodal displacements u (original frame, 2·vertex + component), m.
   const VecX& displacement() const { return u_; }
   /// Deformed positions (2 × vertices), m.

@@ -26,17 +26,15 @@ namespace incise::scene {
 /// frames so far: `<vtu>_<iteration>.vtu` of the scene's mesh with tet_fields() every vtu_every
 /// iterations (pvd time: the simulated time of dynamic relaxation, IterationInfo::time, else the
 /// iteration), or in an interactive cutting run `<vtu>_<step>.vtu` of the cut mesh with
-/// "displacement" every vtu_every steps (step 0 = initial solve; pvd time = step); the index is
-/// zero-padded to 6 digits (more when max_iterations has more). In a needle scene:
-/// `<vtu>_<update>.vtu` of the refined slab (triangles; point arrays "displacement", z = 0, and
-/// "needle_state", 0 no needle node, 1 sticking, 2 slipping) every vtu_every updates and at the
-/// last planned update, the update zero-padded to max(4, digits of the last update), each frame
-/// followed by
-/// `<vtu>.pvd`, the ParaView index of the frames so far (timestep = update). A 3D needle scene
-/// writes the refined tetrahedral mesh the same way (needle_point_data, and the cell array
-/// "needle_faces": how many needle-surface faces each tetrahedron has, 0–4) and beside it
-/// `<vtu>_needle_<update>.vtu`, the needle surface (needle3d.hpp) as triangles with point
-/// array "displacement" and cell array "area" (m², deformed), indexed by `<vtu>_needle.pvd`.
+/// tet_fields() of cut_session_problem() every vtu_every steps (step 0 = initial solve; pvd time =
+/// step); the index is zero-padded to 6 digits (more when max_iterations has more). In a needle
+/// scene: `<vtu>_<update>.vtu` of the refined slab (triangles; needle_fields()) every vtu_every
+/// updates and at the last planned update, the update zero-padded to max(4, digits of the last
+/// update), each frame followed by `<vtu>.pvd`, the ParaView index of the frames so far
+/// (timestep = update). A 3D needle scene writes the refined tetrahedral mesh the same way
+/// (needle_fields() of 3D) and beside it `<vtu>_needle_<update>.vtu`, the needle surface
+/// (needle3d.hpp) as triangles with point array "displacement" and cell array "area" (m²,
+/// deformed), indexed by `<vtu>_needle.pvd`.
 class FrameWriter {
  public:
   /// Keeps a reference to `scene`, which must outlive the writer.
@@ -64,8 +62,8 @@ class FrameWriter {
   std::vector<io::PvdFrame> surface_pvd_;  ///< 3D needle-surface frames, for their index
 };
 
-/// The arrays of a tetrahedral scene's state (docs/mesh_formats.md "Fields"; units SI).
-struct TetFields {
+/// The arrays of a scene's state (docs/mesh_formats.md "Fields"; units SI).
+struct FieldArrays {
   std::vector<io::DataArray> point;  ///< see tet_fields()
   std::vector<io::DataArray> cell;   ///< see tet_fields()
 };
@@ -80,17 +78,25 @@ struct TetFields {
 /// size is not u's. Written for static and dynamic runs, every frame and the final state of an
 /// augmented cut run (cut_session_problem) and every 3D needle frame (the insertion's problem,
 /// without reactions: evaluating its gradient would add to the flops the run reports).
-TetFields tet_fields(const fem::ElasticProblem& problem, const VecX& u,
-                     const VecX* gradient = nullptr);
+FieldArrays tet_fields(const fem::ElasticProblem& problem, const VecX& u,
+                       const VecX* gradient = nullptr);
 /// tet_fields() of the scene's problem with its gradient at u (reactions); "displacement" only
 /// for a scene without a problem.
-TetFields tet_fields(const BuiltScene& scene, const VecX& u);
+FieldArrays tet_fields(const BuiltScene& scene, const VecX& u);
+/// The same arrays, by the same code, for a plane-stress slab at in-plane displacement `u` (2
+/// per node, m): "displacement" with 3 components (z = 0), "reaction_force" (z = 0), and the
+/// plane-stress fem::element_fields() (in-plane xx, yy, xy; strain zz = E₃₃, the thickness
+/// strain; stress zz ≈ 0; yz = xz = 0).
+FieldArrays tri_fields(const fem::PlaneStressProblem& problem, const VecX& u,
+                       const VecX* gradient = nullptr);
 
-/// The point arrays of a needle insertion's mesh: "displacement" (m, 3 components, z = 0) and
-/// "needle_state" (0: no needle node, 1: sticking, 2: slipping; needle::NodeState).
-std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion& insertion);
-/// The same for a 3D needle insertion ("displacement" with its three components).
-std::vector<io::DataArray> needle_point_data(const needle::NeedleInsertion3D& insertion);
+/// The arrays of a 2D needle frame and of a 2D needle scene's final state: tri_fields() of the
+/// insertion's problem (without reactions, as in 3D) and the point array "needle_state" (0: no
+/// needle node, 1: sticking, 2: slipping; needle::NodeState).
+FieldArrays needle_fields(const needle::NeedleInsertion& insertion);
+/// The same for a 3D needle insertion on its mesh `mesh` (to_mesh_data() of the insertion's):
+/// tet_fields() without reactions, "needle_state" and the cell array needle_cell_data().
+FieldArrays needle_fields(const needle::NeedleInsertion3D& insertion, const mesh::MeshData& mesh);
 /// The cell array "needle_faces" of a 3D insertion's mesh (cells in to_mesh_data() order): how
 /// many of each tetrahedron's faces are needle-surface faces.
 io::DataArray needle_cell_data(const needle::NeedleInsertion3D& insertion,
@@ -110,7 +116,7 @@ struct OutputOptions {
 
 /// After run_scene(scene, ...): writes the CSV trace (`outputs.csv`: one row per iteration, or
 /// per solve of an interactive cutting run, or per update of a needle scene), the final state
-/// `<vtu>.vtu` (a needle scene's with needle_point_data()) and, when
+/// `<vtu>.vtu` (a needle scene's with needle_fields()) and, when
 /// options.summary_json is set, summary_json() there. Returns what was written, in that order:
 /// the paths, with "<n> frames <vtu>_<it>.vtu, index <vtu>.pvd" (or "_<step>.vtu, ..."; a
 /// needle scene's "_<update>.vtu, ...") after the final VTU when options.frames > 0. The final
