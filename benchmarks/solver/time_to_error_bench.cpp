@@ -10,6 +10,8 @@
 /// Counters: cpu_s (to 1e-6), iters (to 1e-6), ms_per_iter, evals_per_iter (gradient or
 /// K-product evaluations per outer iteration, from the counted flops; NCG: 1 + line-search
 /// evaluations), ls_evals_per_iter (NCG: SolverReport::inner_iterations / iterations).
+/// BM_PerIteration/<material>/<method>: CPU ms per iteration in a long run (best of batches; the
+/// per-iteration table of docs/solvers.md), BM_Evaluation: CPU ms per evaluation at û.
 /// Command: build/release/benchmarks/solver/time_to_error_bench [--benchmark_filter=...]
 #include <incise/fem/elastic_problem.hpp>
 #include <incise/material/material.hpp>
