@@ -10,6 +10,8 @@
 /// Counters: cpu_s (to 1e-6), iters (to 1e-6), ms_per_iter, evals_per_iter (gradient or
 /// K-product evaluations per outer iteration, from the counted flops; NCG: 1 + line-search
 /// evaluations), ls_evals_per_iter (NCG: SolverReport::inner_iterations / iterations).
+/// BM_PerIteration/<material>/<method>: CPU ms per iteration in a long run (best of batches; the
+/// per-iteration table of docs/solvers.md), BM_Evaluation: CPU ms per evaluation at û.
 /// Command: build/release/benchmarks/solver/time_to_error_bench [--benchmark_filter=...]
 #include <incise/fem/elastic_problem.hpp>
 #include <incise/material/material.hpp>
@@ -25,6 +27,7 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -189,6 +192,63 @@ void BM_Evaluation(benchmark::State& state, const std::string& material, Eval wh
   state.counters["ms_per_eval"] = 1e3 * (process_cpu() - cpu0) / double(calls);
 }
 
+/// Cost of one iteration in a long run (the per-iteration table of docs/solvers.md): from the
+/// state after `warm` nonlinear-CG iterations from u = 0 (300 Veronda–Westmann, 60 linear; outside
+/// the timing), `kBatches` runs of kBatchIterations iterations of the method, each from that
+/// state (SS22 from rest there), with the stopping rule off. Counter ms_per_iter: the smallest
+/// process CPU ms per iteration over the batches (the machine is shared: the least disturbed
+/// batch is the cost). Each batch includes the solver's start (one gradient+energy sweep).
+constexpr int kBatches = 5;
+constexpr long kBatchIterations = 20;
+
+void BM_PerIteration(benchmark::State& state, const std::string& material, Method method) {
+  Case& c = get_case(material);
+  fem::ElasticProblem& p = *c.problem;
+  VecX u0 = VecX::Zero(p.size());
+  {
+    solver::NonlinearCgOptions o;
+    o.stop.epsilon = 0.0;
+    o.budget.max_iterations = material == "linear" ? 60 : 300;
+    (void)solver::nonlinear_cg(p, u0, o);
+  }
+  double dt = 0.0, eta = 0.0;
+  if (method == Method::kSs22) {
+    const solver::DynamicParameterEstimate dp =
+        solver::estimate_dynamic_parameters(p, VecX::Zero(p.size()));
+    dt = dp.time_step;
+    eta = dp.damping;
+  }
+  double best = INFINITY;
+  for (auto _ : state) {
+    for (int b = 0; b < kBatches; ++b) {
+      VecX u = u0;
+      solver::RelaxationOptions common;
+      common.stop.epsilon = 0.0;
+      common.budget.max_iterations = kBatchIterations;
+      const double cpu0 = process_cpu();
+      solver::SolverReport rep;
+      if (method == Method::kCg) {
+        solver::LinearCgOptions o;
+        static_cast<solver::RelaxationOptions&>(o) = common;
+        rep = solver::linear_cg(p, u, o);
+      } else if (method == Method::kNcg) {
+        solver::NonlinearCgOptions o;
+        static_cast<solver::RelaxationOptions&>(o) = common;
+        rep = solver::nonlinear_cg(p, u, o);
+      } else {
+        solver::DynamicRelaxationOptions o;
+        static_cast<solver::RelaxationOptions&>(o) = common;
+        o.time_step = dt;
+        o.damping = eta;
+        rep = solver::dynamic_relaxation(p, u, o);
+      }
+      const double cpu = process_cpu() - cpu0;
+      if (rep.iterations > 0) best = std::min(best, 1e3 * cpu / double(rep.iterations));
+    }
+  }
+  state.counters["ms_per_iter"] = best;
+}
+
 const bool kRegistered = [] {
   auto add = [](const std::string& name, const std::string& m, Method k) {
     benchmark::RegisterBenchmark(name.c_str(),
@@ -201,6 +261,17 @@ const bool kRegistered = [] {
   add("BM_TimeToError/linear/ss22", "linear", Method::kSs22);
   add("BM_TimeToError/veronda-westmann/ncg", "veronda-westmann", Method::kNcg);
   add("BM_TimeToError/veronda-westmann/ss22", "veronda-westmann", Method::kSs22);
+  auto per_iteration = [](const std::string& name, const std::string& m, Method k) {
+    benchmark::RegisterBenchmark(name.c_str(),
+                                 [m, k](benchmark::State& s) { BM_PerIteration(s, m, k); })
+        ->Iterations(1)
+        ->Unit(benchmark::kMillisecond);
+  };
+  for (const std::string m : {"linear", "veronda-westmann"}) {
+    if (m == "linear") per_iteration("BM_PerIteration/linear/cg", m, Method::kCg);
+    per_iteration("BM_PerIteration/" + m + "/ncg", m, Method::kNcg);
+    per_iteration("BM_PerIteration/" + m + "/ss22", m, Method::kSs22);
+  }
   auto eval = [](const std::string& name, const std::string& m, Eval k) {
     benchmark::RegisterBenchmark(name.c_str(), [m, k](benchmark::State& s) {
       BM_Evaluation(s, m, k);

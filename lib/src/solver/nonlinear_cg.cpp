@@ -19,6 +19,7 @@ struct LineSearchResult {
   StopReason status = StopReason::kConverged;  // kConverged: an admissible α was found
   double alpha = 0.0;
   int evaluations = 0;
+  bool recurrence = false;  // g_out, e_out from the quadratic recurrence, not evaluated
 };
 
 /// Work vectors of the line search, kept across iterations (no allocation per iteration).
@@ -43,6 +44,39 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
   double delta0 = 0.0;
   bool accepted = false;  // g_out holds the gradient at x + αd (else it is set from g0 below)
   e_out = e0;
+  // Quadratic Π (Problem::energy_is_quadratic): g(α) is linear, so the first step of the
+  // secant and Newton searches, α₁ = γ₀/(d, K d), is the exact minimizer along d, the step
+  // after it is round-off (|δ₁| < ε_newton|δ₀|: the search ends there), and the trial
+  // gradient and energy follow from K·d: ∇Π(x + αd) = g₀ + αKd, Π = e₀ − αγ₀ + ½α²(d, Kd)
+  // (γ₀ = −(g₀, d) for a projected d). One K·d per iteration instead of K·d + gradient (the
+  // evaluating search below only when the recurrence overflows); the
+  // same α, a gradient that differs from an evaluated one by round-off (nonlinear_cg replaces
+  // it by an evaluation periodically and before declaring convergence).
+  if (problem.energy_is_quadratic() && opt.line_search != LineSearchKind::kScaleDependentSecant) {
+    const EvalStatus st = problem.hessian_product(x, d, s);
+    ++res.evaluations;
+    meter.add(4 * nn);
+    if (st != EvalStatus::kOk || !s.allFinite()) {
+      res.status = failure_reason(st);
+      return res;
+    }
+    const double c = d.dot(s);
+    if (!std::isfinite(c) || c <= 0.0) {
+      res.status = std::isfinite(c) ? StopReason::kIndefinite : StopReason::kNonFinite;
+      return res;
+    }
+    const double a1 = gamma0 / c;
+    g_out = g0 + a1 * s;
+    e_out = e0 - a1 * gamma0 + 0.5 * a1 * a1 * c;
+    meter.add(2 * nn);
+    if (g_out.allFinite() && std::isfinite(e_out)) {
+      res.alpha = a1;
+      res.recurrence = true;
+      if (a1 == 0.0) res.status = StopReason::kStagnated;
+      return res;
+    }
+    e_out = e0;  // overflow in the recurrence: the evaluating search below decides
+  }
   // Newton: each trial point's gradient, energy and K·d come from one evaluation
   // (Problem::gradient_energy_product), so s already holds K(x + α_j d)·d for j ≥ 1.
   const bool newton = opt.line_search == LineSearchKind::kNewton;
@@ -175,7 +209,8 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   rep.residual_history.push_back(rnorm);
   rep.energy_history.push_back(energy);
 
-  long k = 0, since_restart = 0;
+  long k = 0, since_restart = 0, since_evaluated = 0;
+  constexpr long kReplaceEvery = 50;  // quadratic Π: recurrence steps between evaluated gradients
   StopReason reason = StopReason::kConverged;
   VecX g_new, r_new;
   LineSearchWork work;
@@ -206,7 +241,27 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
     energy = e_new;
     r_new = -g;
     problem.project(r_new);
-    const double rr_new = r_new.squaredNorm();
+    double rr_new = r_new.squaredNorm();
+    if (ls.recurrence) {
+      // Gradient replacement (as CG's residual replacement): every kReplaceEvery recurrence
+      // steps, and whenever the recurrence residual meets the stopping rule, the gradient and
+      // energy are evaluated at u, so round-off drift can neither fake convergence nor grow.
+      ++since_evaluated;
+      if (since_evaluated >= kReplaceEvery ||
+          std::sqrt(rr_new) <= residual_threshold(options.stop, fex, fixed_dofs.norm(g), n)) {
+        st = problem.gradient(u, g, &energy);
+        ++rep.inner_iterations;
+        since_evaluated = 0;
+        if (st != EvalStatus::kOk || !g.allFinite()) {
+          reason = failure_reason(st);
+          break;
+        }
+        r_new = -g;
+        problem.project(r_new);
+        rr_new = r_new.squaredNorm();
+        meter.add(2 * nn);
+      }
+    }
     double beta = 0.0;
     if (options.beta == BetaRule::kFletcherReeves)
       beta = rr_new / rr;  // (2.48)

@@ -62,6 +62,12 @@ class Problem {
     return hessian_product(u, d, out);
   }
 
+  /// True when Π is exactly quadratic in u: K does not depend on u and ∇Π(u + αd) =
+  /// ∇Π(u) + α K·d, Π(u + αd) = Π(u) + α ∇Π(u)·d + ½α² dᵀK d for every u, d (linear material,
+  /// no geometric nonlinearity, dead loads). Solvers may then update the gradient by that
+  /// recurrence instead of evaluating it (nonlinear_cg). Default: false (always safe).
+  virtual bool energy_is_quadratic() const { return false; }
+
   /// Diagonal of K(u), for Jacobi preconditioning. Default: not available (returns false).
   virtual bool hessian_diagonal(const VecX& u, VecX& diag) { return false; }
 

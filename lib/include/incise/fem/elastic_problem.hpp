@@ -155,6 +155,9 @@ class ElasticProblem : public Problem {
   /// Diagonal of K(u) (from element tangents; with set_assembled_product, from the assembled
   /// K). Fixed DOFs get 1. Returns false if inverted.
   bool hessian_diagonal(const VecX& u, VecX& diag) override;
+  /// True for a material with linear geometry (Material::linear_geometry(), the linear model):
+  /// Π = ½uᵀKu − f_extᵀu with constant K (the loads are dead loads).
+  bool energy_is_quadratic() const override { return material_.linear_geometry(); }
   void project(VecX& v) const override;
   bool is_fixed(Eigen::Index i) const override { return fixed_[static_cast<std::size_t>(i)] != 0; }
   /// ‖f_ext‖₂ over free DOFs.

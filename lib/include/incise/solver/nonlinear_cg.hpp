@@ -59,6 +59,12 @@ struct NonlinearCgOptions : RelaxationOptions {
 /// thesis does), update β. A trial step into Π = +∞ is halved towards the last admissible α
 /// (never accepted). Reports kIndefinite when the curvature along d is not positive at α = 0,
 /// kLineSearchFailed when no admissible α > 0 was found, kStagnated when α = 0.
+/// For a quadratic Π (Problem::energy_is_quadratic()) with the secant or Newton search, each
+/// iteration takes one K·d: α = γ₀/(d, Kd) (the step both searches accept) and the gradient
+/// and energy at x + αd by the recurrence g + αKd, evaluated instead every 50 iterations and
+/// whenever the recurrence residual meets the stopping rule (so convergence is certified on an
+/// evaluated gradient). Iterates differ from the evaluating search by round-off only (test
+/// NonlinearCgQuadratic.RecurrenceMatchesEvaluatedSearch_Sec2_4_2).
 SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& options);
 
 }  // namespace incise::solver
