@@ -86,6 +86,27 @@ Case& get_case(const std::string& material) {
 
 enum class Method { kCg, kNcg, kSs22 };
 
+// One solve by `method` with the options `common` (SS22: step dt, damping eta).
+template <class P>
+solver::SolverReport run_method(Method method, P& p, VecX& u,
+                                const solver::RelaxationOptions& common, double dt, double eta) {
+  if (method == Method::kCg) {
+    solver::LinearCgOptions o;
+    static_cast<solver::RelaxationOptions&>(o) = common;
+    return solver::linear_cg(p, u, o);
+  }
+  if (method == Method::kNcg) {
+    solver::NonlinearCgOptions o;
+    static_cast<solver::RelaxationOptions&>(o) = common;
+    return solver::nonlinear_cg(p, u, o);
+  }
+  solver::DynamicRelaxationOptions o;
+  static_cast<solver::RelaxationOptions&>(o) = common;
+  o.time_step = dt;
+  o.damping = eta;
+  return solver::dynamic_relaxation(p, u, o);
+}
+
 void BM_TimeToError(benchmark::State& state, const std::string& material, Method method) {
   Case& c = get_case(material);
   fem::ElasticProblem& p = *c.problem;
@@ -140,21 +161,7 @@ void BM_TimeToError(benchmark::State& state, const std::string& material, Method
     };
     solver::SolverReport rep;
     try {
-      if (method == Method::kCg) {
-        solver::LinearCgOptions o;
-        static_cast<solver::RelaxationOptions&>(o) = common;
-        rep = solver::linear_cg(p, u, o);
-      } else if (method == Method::kNcg) {
-        solver::NonlinearCgOptions o;
-        static_cast<solver::RelaxationOptions&>(o) = common;
-        rep = solver::nonlinear_cg(p, u, o);
-      } else {
-        solver::DynamicRelaxationOptions o;
-        static_cast<solver::RelaxationOptions&>(o) = common;
-        o.time_step = dt;
-        o.damping = eta;
-        rep = solver::dynamic_relaxation(p, u, o);
-      }
+      rep = run_method(method, p, u, common, dt, eta);
     } catch (const std::runtime_error&) {
       // stopped 20 iterations after the level was reached and held
     }
@@ -226,22 +233,7 @@ void BM_PerIteration(benchmark::State& state, const std::string& material, Metho
       common.stop.epsilon = 0.0;
       common.budget.max_iterations = kBatchIterations;
       const double cpu0 = process_cpu();
-      solver::SolverReport rep;
-      if (method == Method::kCg) {
-        solver::LinearCgOptions o;
-        static_cast<solver::RelaxationOptions&>(o) = common;
-        rep = solver::linear_cg(p, u, o);
-      } else if (method == Method::kNcg) {
-        solver::NonlinearCgOptions o;
-        static_cast<solver::RelaxationOptions&>(o) = common;
-        rep = solver::nonlinear_cg(p, u, o);
-      } else {
-        solver::DynamicRelaxationOptions o;
-        static_cast<solver::RelaxationOptions&>(o) = common;
-        o.time_step = dt;
-        o.damping = eta;
-        rep = solver::dynamic_relaxation(p, u, o);
-      }
+      const solver::SolverReport rep = run_method(method, p, u, common, dt, eta);
       const double cpu = process_cpu() - cpu0;
       if (rep.iterations > 0) best = std::min(best, 1e3 * cpu / double(rep.iterations));
     }
