@@ -3,8 +3,8 @@
 #include <incise/scene/solution_file.hpp>
 
 #include <cerrno>
+#include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -23,8 +23,10 @@ void write_solution(const std::string& path, const VecX& u) {
   text.reserve(text.size() + static_cast<std::size_t>(u.size()) * 25);
   char buf[40];
   for (Eigen::Index i = 0; i < u.size(); ++i) {
-    std::snprintf(buf, sizeof buf, "%.17g\n", u[i]);
-    text += buf;
+    // 17 significant digits (printf's %.17g): every double reads back bitwise.
+    const auto r = std::to_chars(buf, buf + sizeof buf, u[i], std::chars_format::general, 17);
+    text.append(buf, r.ptr);
+    text += '\n';
   }
   write_file_atomic(path, text);
 }
