@@ -15,34 +15,68 @@ function(incise_add_library name)
   set_property(GLOBAL APPEND PROPERTY INCISE_LIBRARIES incise_${name})
 endfunction()
 
-# incise_add_gtest(NAME SOURCES ... LIBS ... LABELS ... [TIMEOUT s])
-#   A GoogleTest executable; every TEST becomes one ctest case carrying LABELS.
+# incise_add_gtest(NAME SOURCES ... LIBS ... LABELS ... [TIMEOUT s] [OWN_EXECUTABLE])
+#   GoogleTest drivers; every TEST becomes one ctest case carrying LABELS.
 #   Label vocabulary: unit, property, verification, slow, threads (starts threads: run under
 #   ThreadSanitizer by ci/test.sh), plus the module name; outside gtest also python, examples
 #   and vtk (VTK's own reader, property_tests/io/vtk_readback.py).
+#   With INCISE_GROUP_TESTS (default ON) the drivers of every call with the same LABELS and
+#   TIMEOUT share one executable, <labels joined by _>_tests (e.g. property_mesh_tests), unity-
+#   built INCISE_TEST_UNITY_BATCH sources per translation unit: Eigen's and GoogleTest's
+#   templates are then compiled once per batch instead of once per file, which halves the
+#   drivers' compile time (docs/ci.md). NAME becomes an alias of that executable (add_test and
+#   $<TARGET_FILE:NAME> work; ctest runs each TEST in its own process either way). A driver
+#   file must therefore compile after the other files of its group: no file-scope names that
+#   collide with theirs. OWN_EXECUTABLE gives NAME an executable of its own: needed when the
+#   caller changes the target afterwards (compile definitions, include folders, dependencies)
+#   or runs the whole executable under a test of its own.
+option(INCISE_GROUP_TESTS "One unity-built executable per label set of GoogleTest drivers" ON)
+set(INCISE_TEST_UNITY_BATCH 6 CACHE STRING "Driver files per unity translation unit (INCISE_GROUP_TESTS)")
 function(incise_add_gtest name)
-  cmake_parse_arguments(A "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(A "OWN_EXECUTABLE" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  set(exe ${name})
+  if(INCISE_GROUP_TESTS AND NOT A_OWN_EXECUTABLE)
+    string(REPLACE ";" "_" exe "${A_LABELS}")
+    if(A_TIMEOUT)
+      string(APPEND exe "_timeout${A_TIMEOUT}")
+    endif()
+    string(APPEND exe "_tests")
+  endif()
   if(NOT A_TIMEOUT)
     set(A_TIMEOUT 600)
   endif()
-  add_executable(${name} ${A_SOURCES})
-  target_link_libraries(${name} PRIVATE ${A_LIBS} incise_test_support GTest::gtest GTest::gtest_main
-                                        incise_options)
-  target_compile_options(${name} PRIVATE ${INCISE_TEST_DRIVER_FLAGS})
-  # gtest_discover_tests (CMake 3.25) flattens PROPERTIES into one list, so a multi-valued
-  # LABELS would lose every label after the first. Discover without properties, then apply them
-  # from a second ctest include file that runs after the discovered list (<name>_TESTS) is known.
-  gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                       WORKING_DIRECTORY ${PROJECT_SOURCE_DIR} TEST_LIST ${name}_TESTS)
-  set(props "${CMAKE_CURRENT_BINARY_DIR}/${name}_properties.cmake")
-  file(WRITE "${props}"
-       "if(${name}_TESTS)\n"
-       "  set_tests_properties(\${${name}_TESTS} PROPERTIES LABELS \"${A_LABELS}\"\n"
-       "    TIMEOUT ${A_TIMEOUT} ENVIRONMENT \"INCISE_SOURCE_DIR=${PROJECT_SOURCE_DIR}\")\n"
-       "endif()\n")
-  set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES "${props}")
-  if("threads" IN_LIST A_LABELS)
-    set_property(GLOBAL APPEND PROPERTY INCISE_THREADS_TESTS ${name})
+  list(TRANSFORM A_SOURCES PREPEND "${CMAKE_CURRENT_SOURCE_DIR}/" REGEX "^[^/]")
+  if(TARGET ${exe})
+    target_sources(${exe} PRIVATE ${A_SOURCES})
+    target_link_libraries(${exe} PRIVATE ${A_LIBS})
+  else()
+    add_executable(${exe} ${A_SOURCES})
+    target_link_libraries(${exe} PRIVATE ${A_LIBS} incise_test_support GTest::gtest
+                                         GTest::gtest_main incise_options)
+    target_compile_options(${exe} PRIVATE ${INCISE_TEST_DRIVER_FLAGS})
+    if(NOT exe STREQUAL name)
+      set_target_properties(${exe} PROPERTIES UNITY_BUILD ON
+                                              UNITY_BUILD_BATCH_SIZE ${INCISE_TEST_UNITY_BATCH})
+    endif()
+    # gtest_discover_tests (CMake 3.25) flattens PROPERTIES into one list, so a multi-valued
+    # LABELS would lose every label after the first. Discover without properties, then apply
+    # them from a second ctest include file that runs after the discovered list (<exe>_TESTS)
+    # is known.
+    gtest_discover_tests(${exe} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
+                         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR} TEST_LIST ${exe}_TESTS)
+    set(props "${CMAKE_CURRENT_BINARY_DIR}/${exe}_properties.cmake")
+    file(WRITE "${props}"
+         "if(${exe}_TESTS)\n"
+         "  set_tests_properties(\${${exe}_TESTS} PROPERTIES LABELS \"${A_LABELS}\"\n"
+         "    TIMEOUT ${A_TIMEOUT} ENVIRONMENT \"INCISE_SOURCE_DIR=${PROJECT_SOURCE_DIR}\")\n"
+         "endif()\n")
+    set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES "${props}")
+    if("threads" IN_LIST A_LABELS)
+      set_property(GLOBAL APPEND PROPERTY INCISE_THREADS_TESTS ${exe})
+    endif()
+  endif()
+  if(NOT exe STREQUAL name)
+    add_executable(${name} ALIAS ${exe})
   endif()
 endfunction()
 

@@ -9,6 +9,7 @@
 #include <incise/fixtures/deformations.hpp>
 #include <incise/fixtures/derivative_check.hpp>
 #include <incise/mesh/generators.hpp>
+#include <incise_test/fd_check.hpp>
 #include <incise_test/material_parameters.hpp>
 #include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
@@ -27,14 +28,6 @@ using incise::fem::FixedDofTreatment;
 using incise::fixtures::random_vector;
 using incise::material::Material;
 
-// Best central difference of the 1e-2…1e-8 sweep: ~1e-9 relative on these smooth sums.
-constexpr double kFdTolerance = 1e-6;
-constexpr double kMinTaylorOrder = 1.9;  // issue 3
-
-incise::material::Parameters test_parameters() {
-  return incise::test::fem_test_parameters();
-}
-
 incise::mesh::MeshData small_box(incise::mesh::CubeSplit split = incise::mesh::CubeSplit::kSix) {
   return incise::mesh::make_box(2, 2, 3, 0.2, 0.25, 0.3, split);
 }
@@ -51,7 +44,7 @@ VecX deformed_state(const ElasticProblem& p, std::mt19937_64& rng, double amplit
 
 class ProblemProperty : public ::testing::TestWithParam<std::string> {
  protected:
-  Material material() const { return Material(GetParam(), test_parameters()); }
+  Material material() const { return Material(GetParam(), incise::test::fem_test_parameters()); }
 };
 
 TEST_P(ProblemProperty, AssembledEqualsMatrixFreeEqualsFiniteDifferences) {
@@ -90,7 +83,7 @@ TEST_P(ProblemProperty, AssembledEqualsMatrixFreeEqualsFiniteDifferences) {
           10.0 * p.tangent_matrix().norm() * (u.norm() + step * d.norm()) * w.norm();
       const auto r = incise::fixtures::check_directional_derivative(
           phi, kd.dot(w), step, scale * w.norm() * 1e-3, g0.norm() * w.norm() + terms);
-      EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
+      EXPECT_LE(r.best_relative_error, incise::test::kFdTolerance) << r.report;
       // Taylor order on the whole gradient vector (a contraction can hide the quadratic term).
       std::string rep;
       const double order = incise::fixtures::vector_taylor_order(
@@ -101,7 +94,7 @@ TEST_P(ProblemProperty, AssembledEqualsMatrixFreeEqualsFiniteDifferences) {
           },
           kd, 10.0 * step, 10.0 * p.tangent_matrix().norm() * (u.norm() + 10.0 * step * d.norm()),
           &rep);
-      EXPECT_GE(order, kMinTaylorOrder) << rep;
+      EXPECT_GE(order, incise::test::kMinTaylorOrder) << rep;
     }
   }
 }
@@ -127,8 +120,8 @@ TEST_P(ProblemProperty, GradientIsEnergyDerivativeWithLoads) {
   const double step = 0.01 * 0.2 / d.lpNorm<Eigen::Infinity>();
   const auto r = incise::fixtures::check_directional_derivative(
       phi, g.dot(d), step, 1e-3 * g.norm() * d.norm(), std::abs(e0));
-  EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
-  EXPECT_GE(r.taylor_order, kMinTaylorOrder) << r.report;
+  EXPECT_LE(r.best_relative_error, incise::test::kFdTolerance) << r.report;
+  EXPECT_GE(r.taylor_order, incise::test::kMinTaylorOrder) << r.report;
 }
 
 TEST_P(ProblemProperty, InternalForcesSumToZero) {
@@ -194,7 +187,7 @@ TEST_P(ProblemProperty, EnergyInvariantUnderRigidMotionOfDeformedShape) {
 
 TEST_P(ProblemProperty, LumpedMassAndGravityTotals) {
   ElasticProblem p(small_box(), material());
-  const double rho = test_parameters().density;
+  const double rho = incise::test::fem_test_parameters().density;
   const double vol = 0.2 * 0.25 * 0.3;
   EXPECT_NEAR(p.volume(), vol, 1e-15);  // sum of exact tetrahedra volumes
   // §2.5: a quarter of each tet's mass on each of its nodes; per DOF, total 3·ρV.
@@ -353,7 +346,7 @@ INSTANTIATE_TEST_SUITE_P(AllRegistered, ProblemProperty,
                          incise::test::material_param_name);
 
 TEST(ElasticProblem, RejectsBadMeshes) {
-  const Material m("neohookean", test_parameters());
+  const Material m("neohookean", incise::test::fem_test_parameters());
   auto mesh = small_box();
   std::swap(mesh.cells(0, 3), mesh.cells(1, 3));  // invert element 3
   try {
@@ -369,7 +362,7 @@ TEST(ElasticProblem, RejectsBadMeshes) {
 
 TEST(ElasticProblem, AssembledProductEqualsMatrixFreeForLinearMaterial) {
   INCISE_SEEDED_RNG(rng, 611);
-  const Material linear("linear", test_parameters());
+  const Material linear("linear", incise::test::fem_test_parameters());
   for (int threads : {1, 3}) {
     SCOPED_TRACE("threads " + std::to_string(threads));
     ElasticProblem p(small_box(incise::mesh::CubeSplit::kFive), linear);
@@ -399,7 +392,7 @@ TEST(ElasticProblem, AssembledProductEqualsMatrixFreeForLinearMaterial) {
     EXPECT_EQ(again, kd);
   }
   // Only a linear-geometry material has one K.
-  ElasticProblem nh(small_box(), Material("neohookean", test_parameters()));
+  ElasticProblem nh(small_box(), Material("neohookean", incise::test::fem_test_parameters()));
   EXPECT_THROW(nh.set_assembled_product(true), incise::UsageError);
 }
 

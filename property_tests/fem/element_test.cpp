@@ -7,6 +7,7 @@
 #include <incise/fixtures/deformations.hpp>
 #include <incise/fixtures/derivative_check.hpp>
 #include <incise/material/material.hpp>
+#include <incise_test/fd_check.hpp>
 #include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
@@ -23,12 +24,7 @@ using incise::material::Material;
 using Mat34 = Eigen::Matrix<double, 3, 4>;
 using Mat12 = Eigen::Matrix<double, 12, 12>;
 
-// Best central difference of the 1e-2…1e-8 sweep reaches ~1e-9 here; three digits of margin.
-constexpr double kFdTolerance = 1e-6;
-// Issue 3: observed Taylor order ≥ 1.9.
-constexpr double kMinTaylorOrder = 1.9;
-
-incise::material::Parameters test_parameters() {
+incise::material::Parameters element_test_parameters() {
   incise::material::Parameters p;
   p.youngs_modulus = 3.0;
   p.poisson_ratio = 0.3;
@@ -82,11 +78,11 @@ ElementCase make_setup(std::mt19937_64& rng, const Mat3& f) {
 
 class ElementProperty : public ::testing::TestWithParam<std::string> {
  protected:
-  Material material() const { return Material(GetParam(), test_parameters()); }
+  Material material() const { return Material(GetParam(), element_test_parameters()); }
 };
 
 template <class Fn>
-void for_model(const Material& m, Fn&& fn) {
+void for_tet_model(const Material& m, Fn&& fn) {
   incise::material::visit_model(m.model_index(), [&](auto model) {
     fn(TetKernel<decltype(model), double>{});
     return 0;
@@ -96,7 +92,7 @@ void for_model(const Material& m, Fn&& fn) {
 TEST_P(ElementProperty, ForceIsEnergyGradient_SweepAndTaylor) {
   INCISE_SEEDED_RNG(rng, 501);
   const Material m = material();
-  for_model(m, [&](auto k) {
+  for_tet_model(m, [&](auto k) {
     using K = decltype(k);
     for (const auto& def : incise::fixtures::deformation_families(rng)) {
       SCOPED_TRACE(def.family);
@@ -111,8 +107,8 @@ TEST_P(ElementProperty, ForceIsEnergyGradient_SweepAndTaylor) {
       const double dw = q.cwiseProduct(s.d).sum();
       const double unit = m.lame().mu * s.ref.volume * s.d.norm();
       const auto r = incise::fixtures::check_directional_derivative(phi, dw, s.step, unit);
-      EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
-      EXPECT_GE(r.taylor_order, kMinTaylorOrder) << r.report;
+      EXPECT_LE(r.best_relative_error, incise::test::kFdTolerance) << r.report;
+      EXPECT_GE(r.taylor_order, incise::test::kMinTaylorOrder) << r.report;
     }
   });
 }
@@ -120,7 +116,7 @@ TEST_P(ElementProperty, ForceIsEnergyGradient_SweepAndTaylor) {
 TEST_P(ElementProperty, TangentIsForceDerivative_SweepAndTaylor) {
   INCISE_SEEDED_RNG(rng, 502);
   const Material m = material();
-  for_model(m, [&](auto k) {
+  for_tet_model(m, [&](auto k) {
     using K = decltype(k);
     for (const auto& def : incise::fixtures::deformation_families(rng)) {
       SCOPED_TRACE(def.family);
@@ -153,9 +149,10 @@ TEST_P(ElementProperty, TangentIsForceDerivative_SweepAndTaylor) {
       // difference then errs by ~ε_eff^(2/3) (balancing h² truncation against ε_eff/h), times a
       // constant (20) for the larger third derivatives near inversion: 1e-5 at κ ≈ 10³.
       const double eps_eff = std::numeric_limits<double>::epsilon() * s.condition * s.condition;
-      EXPECT_LE(r.best_relative_error, std::max(kFdTolerance, 20.0 * std::pow(eps_eff, 2.0 / 3.0)))
+      EXPECT_LE(r.best_relative_error,
+                std::max(incise::test::kFdTolerance, 20.0 * std::pow(eps_eff, 2.0 / 3.0)))
           << r.report;
-      EXPECT_GE(r.taylor_order, kMinTaylorOrder) << r.report;
+      EXPECT_GE(r.taylor_order, incise::test::kMinTaylorOrder) << r.report;
     }
   });
 }
@@ -163,7 +160,7 @@ TEST_P(ElementProperty, TangentIsForceDerivative_SweepAndTaylor) {
 TEST_P(ElementProperty, TangentSymmetricForcesBalanced) {
   INCISE_SEEDED_RNG(rng, 503);
   const Material m = material();
-  for_model(m, [&](auto k) {
+  for_tet_model(m, [&](auto k) {
     using K = decltype(k);
     for (const auto& def : incise::fixtures::deformation_families(rng)) {
       SCOPED_TRACE(def.family);
@@ -190,7 +187,7 @@ TEST_P(ElementProperty, TangentSymmetricForcesBalanced) {
 TEST_P(ElementProperty, InvertedElementBehaviour) {
   INCISE_SEEDED_RNG(rng, 504);
   const Material m = material();
-  for_model(m, [&](auto k) {
+  for_tet_model(m, [&](auto k) {
     using K = decltype(k);
     const Mat34 z = random_tet(rng);
     const TetReference ref = incise::fem::make_tet_reference(z);

@@ -9,6 +9,7 @@
 #include <incise/fixtures/deformations.hpp>
 #include <incise/fixtures/derivative_check.hpp>
 #include <incise/material/material.hpp>
+#include <incise_test/fd_check.hpp>
 #include <incise_test/param_names.hpp>
 #include <incise_test/seed.hpp>
 
@@ -29,11 +30,6 @@ using incise::material::Material;
 using incise::material::PlaneStressStatus;
 using Mat23 = Eigen::Matrix<double, 2, 3>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
-
-// As for the tet kernels (element_test.cpp): the best central difference reaches ~1e-9.
-constexpr double kFdTolerance = 1e-6;
-// Issue 3: observed Taylor order ≥ 1.9.
-constexpr double kMinTaylorOrder = 1.9;
 
 incise::material::Parameters parameters(double nu) {
   incise::material::Parameters p;
@@ -120,7 +116,7 @@ class PlaneStressElement : public ::testing::TestWithParam<Param> {
 };
 
 template <class Fn>
-void for_model(const Material& m, Fn&& fn) {
+void for_tri_model(const Material& m, Fn&& fn) {
   incise::material::visit_model(m.model_index(), [&](auto model) {
     fn(TriKernel<decltype(model), double>{});
     return 0;
@@ -130,7 +126,7 @@ void for_model(const Material& m, Fn&& fn) {
 TEST_P(PlaneStressElement, ForceIsEnergyGradient_SweepAndTaylor) {
   INCISE_SEEDED_RNG(rng, 1501);
   const Material m = material();
-  for_model(m, [&](auto k) {
+  for_tri_model(m, [&](auto k) {
     using K = decltype(k);
     for (const auto& def : families(rng)) {
       SCOPED_TRACE(def.family);
@@ -151,8 +147,8 @@ TEST_P(PlaneStressElement, ForceIsEnergyGradient_SweepAndTaylor) {
       };
       const double unit = m.lame().mu * c.ref.volume * c.d.norm();
       const auto r = incise::fixtures::check_directional_derivative(phi, dw, 0.1, unit);
-      EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
-      EXPECT_GE(r.taylor_order, kMinTaylorOrder) << r.report;
+      EXPECT_LE(r.best_relative_error, incise::test::kFdTolerance) << r.report;
+      EXPECT_GE(r.taylor_order, incise::test::kMinTaylorOrder) << r.report;
     }
   });
 }
@@ -160,7 +156,7 @@ TEST_P(PlaneStressElement, ForceIsEnergyGradient_SweepAndTaylor) {
 TEST_P(PlaneStressElement, TangentIsForceDerivative_SweepAndTaylor) {
   INCISE_SEEDED_RNG(rng, 1502);
   const Material m = material();
-  for_model(m, [&](auto k) {
+  for_tri_model(m, [&](auto k) {
     using K = decltype(k);
     for (const auto& def : families(rng)) {
       SCOPED_TRACE(def.family);
@@ -200,8 +196,8 @@ TEST_P(PlaneStressElement, TangentIsForceDerivative_SweepAndTaylor) {
       // last pairs at det 1e-3 fell into it under clang; κ itself left too few pairs).
       const auto r = incise::fixtures::check_directional_derivative(
           phi, (dq.array() * w.array()).sum(), 0.1, unit, q2.norm() * w.norm() * std::sqrt(kappa));
-      EXPECT_LE(r.best_relative_error, kFdTolerance) << r.report;
-      EXPECT_GE(r.taylor_order, kMinTaylorOrder) << r.report;
+      EXPECT_LE(r.best_relative_error, incise::test::kFdTolerance) << r.report;
+      EXPECT_GE(r.taylor_order, incise::test::kMinTaylorOrder) << r.report;
     }
   });
 }

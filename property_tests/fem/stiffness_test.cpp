@@ -35,10 +35,6 @@ using Mat12 = incise::fem::Mat12T<double>;
 // ‖K‖); 1e-14 leaves two digits of margin.
 constexpr double kAssemblyTol = 1e-14;
 
-incise::material::Parameters test_parameters() {
-  return incise::test::fem_test_parameters();
-}
-
 /// A 3×3×2 box (5-split) with its interior and boundary nodes jittered by up to 8% of the cell
 /// size, its elements shuffled and one dropped (89 elements: a tail of 1 after blocks of four).
 incise::mesh::MeshData random_mesh(std::mt19937_64& rng) {
@@ -83,7 +79,7 @@ Eigen::MatrixXd summed_blocks(const incise::mesh::MeshData& m, const Material& m
 
 class StiffnessProperty : public ::testing::TestWithParam<std::string> {
  protected:
-  Material material() const { return Material(GetParam(), test_parameters()); }
+  Material material() const { return Material(GetParam(), incise::test::fem_test_parameters()); }
 };
 
 TEST_P(StiffnessProperty, ElementBlocksSumToTheAssembledMatrix) {
@@ -120,7 +116,7 @@ TEST(ElementStiffness, InvalidElementsGiveFalseAndAZeroBlock) {
   const Mat34 rest = Mat34::Zero();
   Mat12 k;
   for (const char* model : {"linear", "neohookean"}) {
-    const Material m(model, test_parameters());
+    const Material m(model, incise::test::fem_test_parameters());
     ASSERT_TRUE(incise::fem::element_stiffness(m, x, rest, k));
     EXPECT_GT(k.norm(), 0.0);
     Mat34 flipped = x;
@@ -132,7 +128,7 @@ TEST(ElementStiffness, InvalidElementsGiveFalseAndAZeroBlock) {
   // Node 4 pushed through the opposite face: det F < 0, undefined for the log-term model.
   Mat34 through = Mat34::Zero();
   through(2, 3) = -2.0;
-  const Material neo("neohookean", test_parameters());
+  const Material neo("neohookean", incise::test::fem_test_parameters());
   k.setOnes();
   EXPECT_FALSE(incise::fem::element_stiffness(neo, x, through, k));
   EXPECT_EQ(k, Mat12::Zero());
@@ -172,7 +168,7 @@ TEST(SurfaceTraction, TotalForceIsTractionTimesAreaWithTheExactFirstMoment) {
 
 TEST(SurfaceTraction, TractionOnAPlaneLoadsTheBoundaryFacesInIt) {
   const incise::mesh::MeshData m = incise::mesh::make_box(4, 2, 3, 0.8, 0.2, 0.3);
-  ElasticProblem p(m, Material("linear", test_parameters()));
+  ElasticProblem p(m, Material("linear", incise::test::fem_test_parameters()));
   const Vec3 t(0.0, 0.0, -250.0);
   const double area = p.add_traction_on_plane(2, 0.3, t);
   constexpr double kSumTol = 1e-12;  // a few dozen additions of O(1) numbers

@@ -27,18 +27,6 @@ using incise::Vec2;
 using incise::mesh::BisectionMesh;
 using incise::mesh::ElementHandle;
 
-#ifdef INCISE_PARANOID
-// Paranoid builds already run the structural validate() after every edit (connectivity.hpp);
-// the test's own call adds orientation and connected stars, every 20th call there.
-constexpr int kValidateEvery = 20;
-#else
-constexpr int kValidateEvery = 1;
-#endif
-
-bool slow_run() {
-  return std::getenv("INCISE_BISECTION_SLOW") != nullptr;
-}
-
 double edge(const BisectionMesh& m, Index a, Index b) {
   return (m.points().col(a) - m.points().col(b)).norm();
 }
@@ -80,7 +68,7 @@ TEST(Slab2d, ThesisSpacingsAndCounts) {
 
 TEST(Bisection, RandomBisectionsStayValidAndCongruent) {
   INCISE_SEEDED_RNG(rng, 1701);
-  const bool slow = slow_run();
+  const bool slow = incise::test::env_set("INCISE_BISECTION_SLOW");
   const int level = slow ? 2 : 1;
   // 10⁴ bisect calls; a tenth of the rounds in builds with debug checks (paranoid validation
   // after every edit makes the sequence quadratic there: 102 s under ASan, 3.3 s in Release).
@@ -103,7 +91,7 @@ TEST(Bisection, RandomBisectionsStayValidAndCongruent) {
       const long before = m.num_bisections();
       const Index n = m.bisect(s.vertex(i), s.vertex((i + 1) % 3));
       ASSERT_GT(m.num_bisections(), before);
-      if (it % kValidateEvery == 0) {
+      if (it % incise::test::kValidateEvery == 0) {
         incise::mesh::ValidateOptions o;
         o.positions = &m.points();
         const auto rep = incise::mesh::validate(conn, o);

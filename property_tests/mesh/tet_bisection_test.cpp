@@ -46,20 +46,9 @@ using incise::mesh::ElementHandle;
 using incise::mesh::MeshData;
 using incise::mesh::TetBisectionMesh;
 
-#ifdef INCISE_PARANOID
-// Paranoid builds already run the structural validate() after every edit (connectivity.hpp);
-// the test's own full call (orientation, connected stars) every 20th call there.
-constexpr int kValidateEvery = 20;
-#else
-constexpr int kValidateEvery = 1;
-#endif
 // Full validate() of the liver (17k tetrahedra at the start, ≈ 130k after 4000 calls; ≈ 0.3 s
 // each there) every 500 calls and at the end; validate_local() covers every call (file comment).
 constexpr int kLiverFullValidateEvery = 500;
-
-bool slow_run() {
-  return std::getenv("INCISE_TET_BISECTION_SLOW") != nullptr;
-}
 
 MeshData liver() {
   return incise::io::read_mesh(incise::test::source_path("reference_data/meshes/liver_coarse.mesh"))
@@ -205,7 +194,7 @@ TEST(TetBisection, KuhnCubeIsMarkedTypeA) {
 
 TEST(TetBisection, RandomBisectionsOnKuhnCubes) {
   INCISE_SEEDED_RNG(rng, 2101);
-  const bool slow = slow_run();
+  const bool slow = incise::test::env_set("INCISE_TET_BISECTION_SLOW");
   const int n = slow ? 4 : 2;
   // 6000 calls by default; a tenth in builds with debug checks (they validate every edit).
   const int rounds = incise::test::scaled_for_checks(slow ? 10 : 60), per_round = slow ? 1000 : 100;
@@ -224,7 +213,7 @@ TEST(TetBisection, RandomBisectionsOnKuhnCubes) {
       ASSERT_GT(m.num_bisections(), before);
       ASSERT_EQ(v + 1, m.connectivity().num_vertices());
       ++calls;
-      if (it % kValidateEvery == 0) {
+      if (it % incise::test::kValidateEvery == 0) {
         const auto rep = full_validate(m);
         ASSERT_TRUE(rep.ok()) << rep.summary();
       }
@@ -246,7 +235,8 @@ TEST(TetBisection, RandomBisectionsOnKuhnCubes) {
 TEST(TetBisection, RandomBisectionsOnTheLiver) {
   INCISE_SEEDED_RNG(rng, 2102);
   // 4000 calls by default; a tenth in builds with debug checks (they validate every edit).
-  const int calls = incise::test::scaled_for_checks(slow_run() ? 20000 : 4000);
+  const int calls = incise::test::scaled_for_checks(
+      incise::test::env_set("INCISE_TET_BISECTION_SLOW") ? 20000 : 4000);
   const MeshData start = liver();
   TetBisectionMesh m(start);
   const double volume = total_volume(m), area = boundary_area(m);

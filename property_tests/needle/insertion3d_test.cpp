@@ -14,6 +14,7 @@
 #include <incise/mesh/validate.hpp>
 #include <incise/needle/insertion3d.hpp>
 #include <incise/needle/needle_problem.hpp>
+#include <incise_test/needle_support.hpp>
 #include <incise_test/seed.hpp>
 
 #include <gtest/gtest.h>
@@ -41,13 +42,6 @@ using incise::needle::StepStatus;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-incise::material::Material material(const std::string& name = "linear") {
-  incise::material::Parameters p;
-  p.youngs_modulus = 3.4e4;  // §6.8.1
-  p.poisson_ratio = 0.34;
-  return incise::material::Material(name, p);
-}
-
 /// A 0.1 m Kuhn cube of 6·4³ tetrahedra fixed at z = 0; a needle of radius 2.5 mm refined to
 /// 8 mm around it (coarse, so that a test stays fast).
 std::unique_ptr<NeedleInsertion3D> make_sim(InsertionOptions3D o = {},
@@ -55,7 +49,7 @@ std::unique_ptr<NeedleInsertion3D> make_sim(InsertionOptions3D o = {},
   o.h_ref = 8e-3;
   o.h_shaft = 8e-3;
   return std::make_unique<NeedleInsertion3D>(
-      incise::mesh::make_kuhn_cube(4, 0.1), material(model),
+      incise::mesh::make_kuhn_cube(4, 0.1), incise::test::needle_material(model),
       std::vector<FixedBox>{{Vec3(-kInf, -kInf, 0.0), Vec3(kInf, kInf, 0.0)}},
       incise::needle::FrictionProfile{}, o);
 }
@@ -335,24 +329,28 @@ TEST(NeedleInsertion3D, NonlinearCgAndNeoHookeanRunTheLoop) {
 
 TEST(NeedleInsertion3D, BadInputIsRejected) {
   const auto fixed = std::vector<FixedBox>{{Vec3(-kInf, -kInf, 0.0), Vec3(kInf, kInf, 0.0)}};
-  EXPECT_THROW(NeedleInsertion3D(incise::mesh::make_thesis_slab(2), material(), fixed, {}, {}),
+  EXPECT_THROW(NeedleInsertion3D(incise::mesh::make_thesis_slab(2), incise::test::needle_material(),
+                                 fixed, {}, {}),
                incise::ParameterError);
-  EXPECT_THROW(NeedleInsertion3D(incise::mesh::make_kuhn_cube(2, 0.1), material(),
-                                 {{Vec3(1, 0, 0), Vec3(0, 1, 1)}}, {}, {}),
-               incise::ParameterError);
+  EXPECT_THROW(
+      NeedleInsertion3D(incise::mesh::make_kuhn_cube(2, 0.1), incise::test::needle_material(),
+                        {{Vec3(1, 0, 0), Vec3(0, 1, 1)}}, {}, {}),
+      incise::ParameterError);
   InsertionOptions3D o;
   o.h_shaft = -1.0;
-  EXPECT_THROW(NeedleInsertion3D(incise::mesh::make_kuhn_cube(2, 0.1), material(), fixed, {}, o),
+  EXPECT_THROW(NeedleInsertion3D(incise::mesh::make_kuhn_cube(2, 0.1),
+                                 incise::test::needle_material(), fixed, {}, o),
                incise::ParameterError);
   auto sim = make_sim();
   EXPECT_THROW(sim->settle(), incise::UsageError);
   InsertionOptions3D aug;
   aug.solve_path = incise::needle::SolvePath3D::kAugmented;
-  EXPECT_THROW(NeedleInsertion3D(incise::mesh::make_kuhn_cube(2, 0.1), material("neohookean"),
-                                 fixed, {}, aug),
+  EXPECT_THROW(NeedleInsertion3D(incise::mesh::make_kuhn_cube(2, 0.1),
+                                 incise::test::needle_material("neohookean"), fixed, {}, aug),
                incise::ParameterError);
   aug.refactor_at_m = 0;
-  EXPECT_THROW(NeedleInsertion3D(incise::mesh::make_kuhn_cube(2, 0.1), material(), fixed, {}, aug),
+  EXPECT_THROW(NeedleInsertion3D(incise::mesh::make_kuhn_cube(2, 0.1),
+                                 incise::test::needle_material(), fixed, {}, aug),
                incise::ParameterError);
 }
 

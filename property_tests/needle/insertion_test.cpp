@@ -12,6 +12,7 @@
 #include <incise/mesh/validate.hpp>
 #include <incise/needle/insertion.hpp>
 #include <incise/needle/needle_problem.hpp>
+#include <incise_test/needle_support.hpp>
 #include <incise_test/seed.hpp>
 
 #include <gtest/gtest.h>
@@ -34,20 +35,13 @@ using incise::needle::NodeState;
 using incise::needle::StepReport;
 using incise::needle::StepStatus;
 
-incise::material::Material material(const std::string& name = "linear", double nu = 0.34) {
-  incise::material::Parameters p;
-  p.youngs_modulus = 3.4e4;  // §6.8.1
-  p.poisson_ratio = nu;
-  return incise::material::Material(name, p);
-}
-
 /// The §6.8.1 slab (0.1 × 0.1 × 0.01 m, fixed at x = 0.1) at h_start = h3, refined to h5.
-std::unique_ptr<NeedleInsertion> make_sim(InsertionOptions o = {},
-                                          const std::string& model = "linear") {
+std::unique_ptr<NeedleInsertion> make_slab_sim(InsertionOptions o = {},
+                                               const std::string& model = "linear") {
   if (o.h_ref == InsertionOptions{}.h_ref) o.h_ref = incise::mesh::thesis_slab_spacing(5);
-  return std::make_unique<NeedleInsertion>(incise::mesh::make_thesis_slab(3), material(model), 0.01,
-                                           std::vector<incise::needle::FixedLine>{{0, 0.1}},
-                                           incise::needle::FrictionProfile{}, o);
+  return std::make_unique<NeedleInsertion>(
+      incise::mesh::make_thesis_slab(3), incise::test::needle_material(model), 0.01,
+      std::vector<incise::needle::FixedLine>{{0, 0.1}}, incise::needle::FrictionProfile{}, o);
 }
 
 void expect_valid_mesh(const NeedleInsertion& sim) {
@@ -136,7 +130,7 @@ void expect_needle_force(NeedleInsertion& sim, const StepReport& rep) {
 }
 
 TEST(NeedleInsertion, NeedleNodesMoveWithTheNeedleByTheirCoordinates) {
-  auto sim = make_sim();
+  auto sim = make_slab_sim();
   const Vec2 dir(1.0, 0.1);
   std::map<Index, NeedleNode> previous;
   for (int k = 0; k <= 12; ++k) {
@@ -171,7 +165,7 @@ TEST(NeedleInsertion, RandomInsertionsKeepMeshValidAndFrictionInequalities) {
   for (int path = 0; path < paths; ++path) {
     InsertionOptions o;
     o.epsilon = 1e-6;
-    auto sim = make_sim(o);
+    auto sim = make_slab_sim(o);
     const double angle = (uni(rng) - 0.5) * 0.9;  // ±26°
     const Vec2 dir(std::cos(angle), std::sin(angle));
     const Vec2 entry(0.0, 0.035 + 0.03 * uni(rng));
@@ -208,7 +202,7 @@ TEST(NeedleInsertion, RefinementCarriesTheFieldExactly) {
   INCISE_SEEDED_RNG(rng, 6702);
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   incise::mesh::BisectionMesh mesh(incise::mesh::make_thesis_slab(2));
-  const auto mat = material();
+  const auto mat = incise::test::needle_material();
   std::normal_distribution<double> g(0.0, 1e-3);
   VecX u(2 * mesh.points().cols());
   for (Eigen::Index i = 0; i < u.size(); ++i) u[i] = g(rng);
@@ -239,7 +233,7 @@ TEST(NeedleInsertion, RefinementCarriesTheFieldExactly) {
 }
 
 TEST(NeedleInsertion, WithdrawalReleasesEveryNode) {
-  auto sim = make_sim();
+  auto sim = make_slab_sim();
   const Vec2 dir(1.0, 0.0);
   int released = 0;
   const double step = 0.003;
@@ -259,7 +253,7 @@ TEST(NeedleInsertion, WithdrawalReleasesEveryNode) {
 TEST(NeedleInsertion, RearrangementCapIsAReportedStatus) {
   InsertionOptions o;
   o.max_rearrangements = 0;
-  auto sim = make_sim(o);
+  auto sim = make_slab_sim(o);
   const Vec2 dir(1.0, 0.0);
   bool cycled = false;
   for (double d = -0.002; d <= 0.04 && !cycled; d += 0.004) {
@@ -281,7 +275,7 @@ TEST(NeedleInsertion, NonlinearCgAndNeoHookeanRunTheLoop) {
   o.epsilon = 1e-4;
   for (const std::string model : {"linear", "neohookean"}) {
     SCOPED_TRACE(model);
-    auto sim = make_sim(o, model);
+    auto sim = make_slab_sim(o, model);
     const Vec2 dir(1.0, -0.2);
     // 0.1 h_ref per update: a needle node moved by a whole element would invert its neighbours
     // in the warm start, which a nonlinear material cannot evaluate (LargeNonlinearStep...).
@@ -300,7 +294,7 @@ TEST(NeedleInsertion, LargeNonlinearStepIsAReportedFailure) {
   // (Π = +∞ there): reported, never a crash or NaN displacements.
   InsertionOptions o;
   o.relaxation = incise::needle::Relaxation::kNonlinearCg;
-  auto sim = make_sim(o, "neohookean");
+  auto sim = make_slab_sim(o, "neohookean");
   const Vec2 dir(1.0, 0.0);
   bool failed = false;
   for (double d = -0.001; d <= 0.05 && !failed; d += 3 * sim->options().h_ref) {
@@ -319,7 +313,7 @@ TEST(NeedleInsertion, RelocationPutsNeedleNodesOnTheShaft) {
   // §6.8.6: intercepted nodes are projected onto the needle (d_perp = 0) and stay there.
   InsertionOptions o;
   o.relocate = true;
-  auto sim = make_sim(o);
+  auto sim = make_slab_sim(o);
   const Vec2 dir(1.0, 0.3);
   for (double d = -0.002; d <= 0.03; d += 0.5 * sim->options().h_ref) {
     const NeedlePose pose = NeedlePose::make(Vec2(0.0, 0.04) + d * dir.normalized(), dir, 0.1);
@@ -341,13 +335,14 @@ TEST(NeedleInsertion, BadInputIsRejected) {
   EXPECT_THROW(NeedlePose::make(Vec2(0, 0), Vec2(1, 0), 0.0), incise::ParameterError);
   InsertionOptions o;
   o.h_ref = 0.0;
-  EXPECT_THROW(make_sim(o), incise::ParameterError);
-  EXPECT_THROW(NeedleInsertion(incise::mesh::make_thesis_slab(2), material(), -0.01, {},
-                               incise::needle::FrictionProfile{}, InsertionOptions{}),
+  EXPECT_THROW(make_slab_sim(o), incise::ParameterError);
+  EXPECT_THROW(NeedleInsertion(incise::mesh::make_thesis_slab(2), incise::test::needle_material(),
+                               -0.01, {}, incise::needle::FrictionProfile{}, InsertionOptions{}),
                incise::ParameterError);
-  EXPECT_THROW(NeedleInsertion(incise::mesh::make_thesis_slab(2), material(), 0.01, {{2, 0.1}},
-                               incise::needle::FrictionProfile{}, InsertionOptions{}),
-               incise::ParameterError);
+  EXPECT_THROW(
+      NeedleInsertion(incise::mesh::make_thesis_slab(2), incise::test::needle_material(), 0.01,
+                      {{2, 0.1}}, incise::needle::FrictionProfile{}, InsertionOptions{}),
+      incise::ParameterError);
 }
 
 }  // namespace

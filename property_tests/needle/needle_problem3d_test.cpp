@@ -12,6 +12,7 @@
 #include <incise/mesh/generators.hpp>
 #include <incise/needle/needle_problem.hpp>
 #include <incise/solver/linear_cg.hpp>
+#include <incise_test/needle_support.hpp>
 #include <incise_test/seed.hpp>
 
 #include <gtest/gtest.h>
@@ -31,13 +32,6 @@ using incise::needle::NeedlePose3D;
 using incise::needle::NeedleProblem3D;
 using incise::needle::NodeState;
 
-incise::material::Material material(const std::string& name) {
-  incise::material::Parameters p;
-  p.youngs_modulus = 3.4e4;  // §6.8.1
-  p.poisson_ratio = 0.34;
-  return incise::material::Material(name, p);
-}
-
 /// A 0.1 m cube (6·5³ tetrahedra) fixed at z = 0, a random needle through it and random needle
 /// nodes (the vertices within 0.6 h of the axis, behind the tip).
 struct Case {
@@ -52,7 +46,7 @@ Case make_case(std::mt19937_64& rng, const std::string& model = "linear") {
   const double h = 0.1 / n;
   const auto mesh = incise::mesh::make_box(n, n, n, 0.1, 0.1, 0.1);
   Case c;
-  c.base = std::make_unique<ElasticProblem>(mesh, material(model));
+  c.base = std::make_unique<ElasticProblem>(mesh, incise::test::needle_material(model));
   c.base->fix_nodes(incise::fem::nodes_on_plane(mesh, 2, 0.0));
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   const Vec3 dir = Vec3(1.0, uni(rng) - 0.5, uni(rng) - 0.5).normalized();
@@ -73,13 +67,6 @@ Case make_case(std::mt19937_64& rng, const std::string& model = "linear") {
   return c;
 }
 
-VecX random_vector(std::mt19937_64& rng, Eigen::Index n, double scale) {
-  std::normal_distribution<double> g(0.0, scale);
-  VecX v(n);
-  for (Eigen::Index i = 0; i < n; ++i) v[i] = g(rng);
-  return v;
-}
-
 TEST(NeedleProblem3D, ProjectionIsOrthogonalOntoAdmissibleMovements) {
   INCISE_SEEDED_RNG(rng, 6901);
   int slipping = 0, sticking = 0;
@@ -87,7 +74,8 @@ TEST(NeedleProblem3D, ProjectionIsOrthogonalOntoAdmissibleMovements) {
     Case c = make_case(rng);
     ASSERT_FALSE(c.nodes.empty());
     NeedleProblem3D p(*c.base, c.pose, c.nodes, c.friction);
-    const VecX v = random_vector(rng, p.size(), 1.0), w = random_vector(rng, p.size(), 1.0);
+    const VecX v = incise::test::gaussian_vector(rng, p.size(), 1.0),
+               w = incise::test::gaussian_vector(rng, p.size(), 1.0);
     VecX pv = v, pw = w;
     p.project_original(pv);
     p.project_original(pw);
@@ -129,8 +117,8 @@ TEST(NeedleProblem3D, GradientAndHessianAreDerivativesOfTheEnergy) {
     SCOPED_TRACE(model);
     Case c = make_case(rng, model);
     NeedleProblem3D p(*c.base, c.pose, c.nodes, c.friction);
-    const VecX u = random_vector(rng, p.size(), 1e-4);
-    const VecX d = random_vector(rng, p.size(), 1e-4);
+    const VecX u = incise::test::gaussian_vector(rng, p.size(), 1e-4);
+    const VecX d = incise::test::gaussian_vector(rng, p.size(), 1e-4);
     VecX g, hd, gp, gm;
     ASSERT_EQ(p.gradient(u, g), incise::EvalStatus::kOk);
     ASSERT_EQ(p.hessian_product(u, d, hd), incise::EvalStatus::kOk);
@@ -157,7 +145,7 @@ TEST(NeedleProblem3D, JacobiDiagonalIsTheRotatedBodyDiagonal) {
   INCISE_SEEDED_RNG(rng, 6904);
   Case c = make_case(rng);
   NeedleProblem3D p(*c.base, c.pose, c.nodes, c.friction);
-  const VecX u = random_vector(rng, p.size(), 1e-4);
+  const VecX u = incise::test::gaussian_vector(rng, p.size(), 1e-4);
   VecX d, db;
   ASSERT_TRUE(p.hessian_diagonal(u, d));
   ASSERT_TRUE(c.base->hessian_diagonal(p.to_original(u), db));
@@ -188,7 +176,7 @@ TEST(NeedleProblem3D, ProjectedCgMatchesDirectCholmodSolve) {
     NeedleProblem3D p(*c.base, c.pose, c.nodes, c.friction);
     // Prescribed needle displacements (stick: all components, slip: the normal ones) and a
     // random warm start elsewhere.
-    VecX u0 = random_vector(rng, p.size(), 1e-3);
+    VecX u0 = incise::test::gaussian_vector(rng, p.size(), 1e-3);
     for (Eigen::Index i = 0; i < p.size(); ++i)
       if (c.base->is_fixed(i)) u0[i] = 0.0;
     VecX direct = u0;

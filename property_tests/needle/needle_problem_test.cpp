@@ -10,6 +10,7 @@
 #include <incise/mesh/slab2d.hpp>
 #include <incise/needle/needle_problem.hpp>
 #include <incise/solver/linear_cg.hpp>
+#include <incise_test/needle_support.hpp>
 #include <incise_test/seed.hpp>
 
 #include <gtest/gtest.h>
@@ -29,26 +30,19 @@ using incise::needle::NeedlePose;
 using incise::needle::NeedleProblem;
 using incise::needle::NodeState;
 
-incise::material::Material material(const std::string& name) {
-  incise::material::Parameters p;
-  p.youngs_modulus = 3.4e4;  // §6.8.1
-  p.poisson_ratio = 0.34;
-  return incise::material::Material(name, p);
-}
-
 /// A slab fixed at x = 0.1 with a random needle through it and random needle nodes.
-struct Case {
+struct SlabCase {
   std::unique_ptr<PlaneStressProblem> base;
   NeedlePose pose;
   std::vector<NeedleNode> nodes;
   std::vector<double> friction;
 };
 
-Case make_case(std::mt19937_64& rng, const std::string& model = "linear") {
+SlabCase make_slab_case(std::mt19937_64& rng, const std::string& model = "linear") {
   const double h = 0.1 / 16;
   const auto mesh = incise::mesh::make_right_triangle_slab(0.1, 0.1, h);
-  Case c;
-  c.base = std::make_unique<PlaneStressProblem>(mesh, material(model), 0.01);
+  SlabCase c;
+  c.base = std::make_unique<PlaneStressProblem>(mesh, incise::test::needle_material(model), 0.01);
   std::vector<Index> fixed;
   for (Index v = 0; v < mesh.num_points(); ++v)
     if (mesh.points(0, v) > 0.1 - 1e-12) fixed.push_back(v);
@@ -73,20 +67,14 @@ Case make_case(std::mt19937_64& rng, const std::string& model = "linear") {
   return c;
 }
 
-VecX random_vector(std::mt19937_64& rng, Eigen::Index n, double scale) {
-  std::normal_distribution<double> g(0.0, scale);
-  VecX v(n);
-  for (Eigen::Index i = 0; i < n; ++i) v[i] = g(rng);
-  return v;
-}
-
 TEST(NeedleProblem, ProjectionIsOrthogonalOntoAdmissibleMovements) {
   INCISE_SEEDED_RNG(rng, 6601);
   for (int trial = 0; trial < 20; ++trial) {
-    Case c = make_case(rng);
+    SlabCase c = make_slab_case(rng);
     ASSERT_FALSE(c.nodes.empty());
     NeedleProblem p(*c.base, c.pose, c.nodes, c.friction);
-    const VecX v = random_vector(rng, p.size(), 1.0), w = random_vector(rng, p.size(), 1.0);
+    const VecX v = incise::test::gaussian_vector(rng, p.size(), 1.0),
+               w = incise::test::gaussian_vector(rng, p.size(), 1.0);
     VecX pv = v, pw = w;
     p.project_original(pv);
     p.project_original(pw);
@@ -114,10 +102,10 @@ TEST(NeedleProblem, GradientAndHessianAreDerivativesOfTheEnergy) {
   INCISE_SEEDED_RNG(rng, 6602);
   for (const std::string model : {"linear", "neohookean"}) {
     SCOPED_TRACE(model);
-    Case c = make_case(rng, model);
+    SlabCase c = make_slab_case(rng, model);
     NeedleProblem p(*c.base, c.pose, c.nodes, c.friction);
-    const VecX u = random_vector(rng, p.size(), 1e-4);
-    const VecX d = random_vector(rng, p.size(), 1e-4);
+    const VecX u = incise::test::gaussian_vector(rng, p.size(), 1e-4);
+    const VecX d = incise::test::gaussian_vector(rng, p.size(), 1e-4);
     VecX g, hd, gp, gm;
     ASSERT_EQ(p.gradient(u, g), incise::EvalStatus::kOk);
     ASSERT_EQ(p.hessian_product(u, d, hd), incise::EvalStatus::kOk);
@@ -140,11 +128,11 @@ TEST(NeedleProblem, ProjectedCgMatchesDirectCholmodSolve) {
   INCISE_SEEDED_RNG(rng, 6603);
   for (int trial = 0; trial < 12; ++trial) {
     SCOPED_TRACE("trial " + std::to_string(trial));
-    Case c = make_case(rng);
+    SlabCase c = make_slab_case(rng);
     NeedleProblem p(*c.base, c.pose, c.nodes, c.friction);
     // Prescribed needle displacements (stick: both components, slip: the normal one) and a
     // random warm start elsewhere.
-    VecX u0 = random_vector(rng, p.size(), 1e-3);
+    VecX u0 = incise::test::gaussian_vector(rng, p.size(), 1e-3);
     for (Eigen::Index i = 0; i < p.size(); ++i)
       if (c.base->is_fixed(i)) u0[i] = 0.0;
     VecX direct = u0;

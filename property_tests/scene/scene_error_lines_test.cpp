@@ -8,6 +8,8 @@
 #include <incise/scene/scene_builder.hpp>
 #include <incise/scene/scene_parser.hpp>
 
+#include <incise_test/scene_errors.hpp>
+
 #include <gtest/gtest.h>
 
 #include <string>
@@ -46,15 +48,6 @@ std::string edited(const std::string& from, const std::string& to) {
   EXPECT_NE(at, std::string::npos) << from;
   if (at != std::string::npos) s.replace(at, from.size(), to);
   return s;
-}
-
-std::string parse_error(const std::string& text) {
-  try {
-    (void)parse_scene(text, "scene.json", "");
-  } catch (const ParseError& e) {
-    return e.what();
-  }
-  return "<no error>";
 }
 
 // The builder's error for `spec`: its line and message ("<no error>" when it builds).
@@ -99,47 +92,51 @@ TEST(SceneErrorLines, ValidSceneRecordsTheLineOfEveryValue) {
 }
 
 TEST(SceneErrorLines, OutOfRangeValueNamesItsLine) {
-  EXPECT_EQ(parse_error(edited("\"nx\": 2", "\"nx\": 0")),
+  EXPECT_EQ(incise::test::scene_parse_error(edited("\"nx\": 2", "\"nx\": 0")),
             "scene.json:4: /mesh/nx: expected an integer in [1, 1000], got 0");
 }
 
 // material::validate judges the parameters; the parser names the line of the rejected one.
 TEST(SceneErrorLines, InadmissibleMaterialParameterNamesItsLine) {
-  EXPECT_EQ(parse_error(edited("\"nu\": 0.0", "\"nu\": 0.5")),
+  EXPECT_EQ(incise::test::scene_parse_error(edited("\"nu\": 0.0", "\"nu\": 0.5")),
             "scene.json:9: /material/nu: material parameter nu (Poisson ratio) = 0.5 is "
             "inadmissible: must satisfy -1 < nu < 0.5");
-  EXPECT_EQ(parse_error(edited("\"E\": 1e6", "\"E\": -2")),
+  EXPECT_EQ(incise::test::scene_parse_error(edited("\"E\": 1e6", "\"E\": -2")),
             "scene.json:8: /material/E: material parameter E (Young's modulus) = -2 is "
             "inadmissible: must be finite and > 0 Pa");
 }
 
 TEST(SceneErrorLines, WrongTypeInANestedArrayNamesItsLine) {
-  EXPECT_EQ(parse_error(edited("\"axis\": \"y\"", "\"axis\": 1")),
+  EXPECT_EQ(incise::test::scene_parse_error(edited("\"axis\": \"y\"", "\"axis\": 1")),
             "scene.json:14: /fixed/1/axis: expected one of \"x\", \"y\", \"z\", got 1");
 }
 
 TEST(SceneErrorLines, UnknownKeyNamesTheLineOfTheKey) {
-  const std::string e = parse_error(edited("\"E\": 1e6,", "\"E\": 1e6, \"poisson\": 0.3,"));
+  const std::string e =
+      incise::test::scene_parse_error(edited("\"E\": 1e6,", "\"E\": 1e6, \"poisson\": 0.3,"));
   EXPECT_EQ(e.rfind("scene.json:8: /material/poisson: unknown key \"poisson\"", 0), 0u) << e;
 }
 
 TEST(SceneErrorLines, KeyHoldingColonAndSlashIsFoundByItsEscapedPointer) {
   // The JSON pointer escapes "/" as "~1"; the message's path is itself followed by ": ".
-  const std::string e = parse_error(edited("\"version\": 1,", "\"version\": 1,\n  \"a: b/c\": 2,"));
+  const std::string e = incise::test::scene_parse_error(
+      edited("\"version\": 1,", "\"version\": 1,\n  \"a: b/c\": 2,"));
   EXPECT_EQ(e.rfind("scene.json:3: /a: b~1c: unknown key \"a: b/c\"", 0), 0u) << e;
 }
 
 TEST(SceneErrorLines, MissingKeyNamesTheEnclosingObject) {
-  const std::string e = parse_error(edited("    \"E\": 1e6,\n", ""));
+  const std::string e = incise::test::scene_parse_error(edited("    \"E\": 1e6,\n", ""));
   EXPECT_EQ(e.rfind("scene.json:6: /material: missing required key \"E\"", 0), 0u) << e;
 }
 
 TEST(SceneErrorLines, RootNotAnObjectIsLineOfTheRoot) {
-  EXPECT_EQ(parse_error("\n\n  [1, 2]\n").rfind("scene.json:3: /: expected a scene object", 0), 0u);
+  EXPECT_EQ(incise::test::scene_parse_error("\n\n  [1, 2]\n")
+                .rfind("scene.json:3: /: expected a scene object", 0),
+            0u);
 }
 
 TEST(SceneErrorLines, SyntaxErrorKeepsItsOwnLineAndColumn) {
-  const std::string e = parse_error(edited("\"nu\": 0.0", "\"nu\": 0.0,"));
+  const std::string e = incise::test::scene_parse_error(edited("\"nu\": 0.0", "\"nu\": 0.0,"));
   EXPECT_EQ(e.rfind("scene.json:10: invalid JSON at column", 0), 0u) << e;
 }
 
@@ -190,7 +187,7 @@ TEST(SceneErrorLines, MeshBeyondTheMemoryBudgetIsRefusedWithEstimateAndBudget) {
             std::string::npos)
       << e.what;
   EXPECT_EQ(build_error(parse_scene(with_limit(big, "64"), "scene.json", "")).line, -1);  // builds
-  EXPECT_EQ(parse_error(with_limit(kScene, "0")),
+  EXPECT_EQ(incise::test::scene_parse_error(with_limit(kScene, "0")),
             "scene.json:2: /limits/memory_mb: expected an integer in [1, 2147483647], got 0");
   // The 1000^3 box against the default budget (half the physical memory: smaller on any
   // machine with less than 2.4 TB): 6e9 cells × 184 B (4 indices, element reference and cell of
@@ -212,11 +209,12 @@ TEST(SceneErrorLines, MeshBeyondTheMemoryBudgetIsRefusedWithEstimateAndBudget) {
 TEST(SceneErrorLines, ProbeNameOutsideTheCsvAlphabetNamesItsLine) {
   // docs/scenes.md, outputs: probe names become CSV column names.
   const std::string text = with_probe("{\"name\": \"tip probe\", \"at\": [1.2, 0.2, 0.3]}");
-  EXPECT_EQ(parse_error(text).rfind("scene.json:19: /outputs/probes/0/name: expected a name of "
-                                    "letters, digits, '_', '.', '-', got string \"tip probe\"",
-                                    0),
+  EXPECT_EQ(incise::test::scene_parse_error(text).rfind(
+                "scene.json:19: /outputs/probes/0/name: expected a name of "
+                "letters, digits, '_', '.', '-', got string \"tip probe\"",
+                0),
             0u)
-      << parse_error(text);
+      << incise::test::scene_parse_error(text);
 }
 
 TEST(SceneErrorLines, ProbeOutsideTheMeshNamesTheLineOfItsLocation) {

@@ -19,6 +19,7 @@
 #include <sstream>
 #include <string>
 
+#include "incise_test/files.hpp"
 #include "incise_test/seed.hpp"
 
 namespace {
@@ -36,13 +37,6 @@ bool contains(const std::string& s, const std::string& part) {
   return s.find(part) != std::string::npos;
 }
 
-std::string read(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 /// True when `text` holds "nan" or "inf" as a word (any case): a non-finite number in a file.
 bool has_non_finite_text(const std::string& text) {
   static const std::regex word("(^|[^a-zA-Z])(nan|inf)([^a-zA-Z]|$)", std::regex::icase);
@@ -52,7 +46,7 @@ bool has_non_finite_text(const std::string& text) {
 /// Whether the file at `p` holds a NaN or infinity: a VTU's values (either encoding, read back
 /// with io::read_vtu: binary data is not text), any other file's words.
 bool has_non_finite(const fs::path& p) {
-  if (p.extension() != ".vtu") return has_non_finite_text(read(p));
+  if (p.extension() != ".vtu") return has_non_finite_text(test::read_file(p));
   const io::VtuContents v = io::read_vtu(p.string());
   if (!v.mesh.points.allFinite()) return true;
   for (const auto* arrays : {&v.point_data, &v.cell_data})
@@ -97,7 +91,7 @@ TEST(SceneHostile, LoadWhoseNormOverflowsIsNonFiniteNotConverged) {
     ASSERT_TRUE(fs::exists(r.dir / f)) << f;
     EXPECT_FALSE(has_non_finite(r.dir / f)) << f;
   }
-  const Json j = Json::parse(read(r.dir / "summary.json"));
+  const Json j = Json::parse(test::read_file(r.dir / "summary.json"));
   EXPECT_EQ(j["status"], "failed");
   EXPECT_EQ(j["result"], "non_finite");
   EXPECT_FALSE(j["converged"].get<bool>());
@@ -120,7 +114,7 @@ TEST(SceneHostile, LoadWhoseNormOverflowsIsNonFiniteUnderTheDirectSolver) {
     if (fs::exists(r.dir / f)) {
       EXPECT_FALSE(has_non_finite(r.dir / f)) << f;
     }
-  EXPECT_EQ(Json::parse(read(r.dir / "summary.json"))["status"], "failed");
+  EXPECT_EQ(Json::parse(test::read_file(r.dir / "summary.json"))["status"], "failed");
 }
 
 // Zero effective load — [0, 0, 0], a load only on fixed nodes, every node fixed, a 1e-308 N
@@ -157,7 +151,7 @@ TEST(SceneHostile, ConvergedStateWithInvertedElementsIsAStatusUnlessAllowed) {
                                         std::to_string(r.result.inverted_elements) + " of "))
       << rep.message;
   EXPECT_TRUE(contains(rep.message, "\"allow_inversion\": true")) << rep.message;
-  const Json j = Json::parse(read(r.dir / "summary.json"));
+  const Json j = Json::parse(test::read_file(r.dir / "summary.json"));
   EXPECT_EQ(j["status"], "failed");
   EXPECT_EQ(j["result"], "inverted");
   EXPECT_EQ(j["inverted_elements"], r.result.inverted_elements);
@@ -167,7 +161,7 @@ TEST(SceneHostile, ConvergedStateWithInvertedElementsIsAStatusUnlessAllowed) {
   const Ran allowed = run_in_scratch(hostile("stvk_inverted_allowed"), "stvk_allowed");
   EXPECT_TRUE(allowed.result.report.ok()) << allowed.result.report.brief();
   EXPECT_EQ(allowed.result.inverted_elements, r.result.inverted_elements);  // the same state
-  const Json ja = Json::parse(read(allowed.dir / "summary.json"));
+  const Json ja = Json::parse(test::read_file(allowed.dir / "summary.json"));
   EXPECT_EQ(ja["status"], "ok");
   EXPECT_EQ(ja["inverted_elements"], r.result.inverted_elements);
   EXPECT_TRUE(ja["allow_inversion"].get<bool>());

@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include <incise_test/scene_errors.hpp>
 #include "incise_test/seed.hpp"
 
 #include <cstdio>
@@ -27,15 +28,6 @@ using incise::scene::kMaxSceneDepth;
 using incise::scene::LineIndex;
 using incise::scene::parse_scene;
 
-std::string error_of(const std::string& text) {
-  try {
-    (void)parse_scene(text, "scene.json", "");
-  } catch (const ParseError& e) {
-    return e.what();
-  }
-  return "<no error>";
-}
-
 std::string nested_arrays(std::size_t depth, const std::string& sep = "") {
   std::string s;
   for (std::size_t i = 0; i < depth; ++i) s += "[" + sep;
@@ -47,35 +39,41 @@ TEST(SceneLimits, NestingOfTheIssueIsRefusedAtTheFirstLevelBeyondTheLimit) {
   const std::string expected =
       "scene.json:1: arrays and objects nested deeper than 64 levels (a scene needs at most 6";
   for (std::size_t depth : {10000u, 30000u, 100000u}) {
-    EXPECT_EQ(error_of(nested_arrays(depth)).rfind(expected, 0), 0u) << depth;
+    EXPECT_EQ(incise::test::scene_parse_error(nested_arrays(depth)).rfind(expected, 0), 0u)
+        << depth;
     // Nested objects inside a valid key.
     std::string s = "{\"version\": 1, \"description\": ";
     for (std::size_t i = 0; i < depth; ++i) s += "{\"a\":";
     s += "0";
     for (std::size_t i = 0; i < depth; ++i) s += "}";
-    EXPECT_EQ(error_of(s + "}").rfind(expected, 0), 0u) << depth;
+    EXPECT_EQ(incise::test::scene_parse_error(s + "}").rfind(expected, 0), 0u) << depth;
   }
 }
 
 TEST(SceneLimits, TheDepthLimitCountsBracketsOutsideStringsAndNamesTheLine) {
   // One bracket per line: level 65 opens on line 65.
   const std::string deep = nested_arrays(kMaxSceneDepth + 1, "\n");
-  EXPECT_EQ(error_of(deep).rfind("scene.json:65: arrays and objects nested deeper", 0), 0u)
-      << error_of(deep);
+  EXPECT_EQ(incise::test::scene_parse_error(deep).rfind(
+                "scene.json:65: arrays and objects nested deeper", 0),
+            0u)
+      << incise::test::scene_parse_error(deep);
   // 64 levels pass the limit (and fail later: the root is no object).
-  EXPECT_EQ(error_of(nested_arrays(kMaxSceneDepth)).rfind("scene.json:1: /: expected a scene", 0),
+  EXPECT_EQ(incise::test::scene_parse_error(nested_arrays(kMaxSceneDepth))
+                .rfind("scene.json:1: /: expected a scene", 0),
             0u);
   // Brackets inside strings, also after an escaped quote, are text: the scene gets as far as
   // its first missing key.
   const std::string in_string = "{\"name\": \"\\\"" + std::string(1000, '[') + "\"}";
-  EXPECT_EQ(error_of(in_string).rfind("scene.json:1: /: missing required key \"mesh\"", 0), 0u)
-      << error_of(in_string);
+  EXPECT_EQ(incise::test::scene_parse_error(in_string).rfind(
+                "scene.json:1: /: missing required key \"mesh\"", 0),
+            0u)
+      << incise::test::scene_parse_error(in_string);
 }
 
 TEST(SceneLimits, OversizedTextAndFileAreRefusedWithTheLimit) {
   // A valid JSON object padded with spaces to one byte over the limit.
   const std::string big = "{" + std::string(kMaxSceneBytes - 1, ' ') + "}";
-  const std::string e = error_of(big);
+  const std::string e = incise::test::scene_parse_error(big);
   EXPECT_EQ(
       e.rfind("scene.json: scene text of 16777217 bytes is larger than the limit of 16 MiB", 0), 0u)
       << e.substr(0, 200);
@@ -106,25 +104,27 @@ TEST(SceneLimits, OversizedTextAndFileAreRefusedWithTheLimit) {
 TEST(SceneLimits, NumberBeyondTheDoublesNamesItsLineAndPath) {
   const std::string text =
       "{\"version\": 1,\n \"mesh\": {\"type\": \"box\",\n  \"lx\": 1e400}}";  // issue input
-  EXPECT_EQ(error_of(text),
+  EXPECT_EQ(incise::test::scene_parse_error(text),
             "scene.json:3: /mesh/lx: number 1e400 is out of range: expected a finite number "
             "(magnitude below 1.8e308)");
-  EXPECT_EQ(error_of("{\"loads\": [0,\n -1e999]}"),
+  EXPECT_EQ(incise::test::scene_parse_error("{\"loads\": [0,\n -1e999]}"),
             "scene.json:2: /loads/1: number -1e999 is out of range: expected a finite number "
             "(magnitude below 1.8e308)");
   // Beyond the doubles as an integer, too; an underflow is a finite 0 (then out of range).
-  EXPECT_EQ(error_of("[" + std::string(400, '9') + "]").rfind("scene.json:1: /0: number 999", 0),
+  EXPECT_EQ(incise::test::scene_parse_error("[" + std::string(400, '9') + "]")
+                .rfind("scene.json:1: /0: number 999", 0),
             0u);
-  EXPECT_NE(error_of(R"({"mesh": {"type": "box", "nx": 1, "ny": 1, "nz": 1, "lx": 1e-400}})")
+  EXPECT_NE(incise::test::scene_parse_error(
+                R"({"mesh": {"type": "box", "nx": 1, "ny": 1, "nz": 1, "lx": 1e-400}})")
                 .find("/mesh/lx: expected a number > 0, got 0"),
             std::string::npos);
 }
 
 TEST(SceneLimits, DuplicateKeyNamesTheLineOfTheRepeat) {
-  EXPECT_EQ(error_of("{\"version\": 1,\n\n \"version\": 1}"),
+  EXPECT_EQ(incise::test::scene_parse_error("{\"version\": 1,\n\n \"version\": 1}"),
             "scene.json:3: /version: duplicate key \"version\" (each key may appear once per "
             "object)");
-  EXPECT_EQ(error_of("{\"fixed\": [{},\n {\"a/b\": 1,\n  \"a/b\": 2}]}"),
+  EXPECT_EQ(incise::test::scene_parse_error("{\"fixed\": [{},\n {\"a/b\": 1,\n  \"a/b\": 2}]}"),
             "scene.json:3: /fixed/1/a~1b: duplicate key \"a/b\" (each key may appear once per "
             "object)");
 }
@@ -133,7 +133,7 @@ TEST(SceneLimits, DuplicateKeyNamesTheLineOfTheRepeat) {
 // the rest; the line index then met a second root value and failed a UsageError check. The
 // crash input is kept in property_tests/scene/data/.
 TEST(SceneLimits, NulByteIsRefusedWithItsLineAndColumn) {
-  EXPECT_EQ(error_of(std::string("{\"version\": 1}\n  \0{\"mesh\": 1}", 28)),
+  EXPECT_EQ(incise::test::scene_parse_error(std::string("{\"version\": 1}\n  \0{\"mesh\": 1}", 28)),
             "scene.json:2: invalid JSON at column 3: NUL byte (expected JSON text)");
   const std::string crash =
       incise::test::source_path("property_tests/scene/data/fuzz_crash_nul_after_root.json");
@@ -157,7 +157,8 @@ TEST(SceneLimits, LineIndexIsLinearInTheTextSize) {
   s += "]";
   for (int i = 0; i < 60; ++i) s += "}";
   ASSERT_LT(s.size(), kMaxSceneBytes);
-  const std::string e = error_of(s);  // parsed and indexed; then the scene lacks its keys
+  const std::string e =
+      incise::test::scene_parse_error(s);  // parsed and indexed; then the scene lacks its keys
   EXPECT_EQ(e.rfind("scene.json:1: /: missing required key \"mesh\"", 0), 0u) << e.substr(0, 100);
 }
 

@@ -89,10 +89,6 @@ fs::path fresh_dir(const std::string& name) {
 }
 
 using incise::test::lines_of;
-std::string read(const fs::path& p) {
-  return incise::test::read_file(p);
-}
-
 // The values of the point or cell array named `name` of a VTU file (io::read_vtu, either
 // encoding); "types": the VTK cell type of each cell (10 tetrahedra, 5 triangles).
 std::vector<double> vtu_array(const fs::path& file, const std::string& name) {
@@ -234,7 +230,7 @@ TEST(SceneNeedle, SmallInsertionRunsAndWritesCsvVtuSeriesAndPvd) {
   ASSERT_EQ(written.size(), 3u);
   EXPECT_EQ(written[2], "4 frames " + (dir / "needle").string() + "_<update>.vtu, index " +
                             (dir / "needle").string() + ".pvd");
-  const std::string pvd = read(dir / "needle.pvd");
+  const std::string pvd = incise::test::read_file(dir / "needle.pvd");
   EXPECT_NE(pvd.find("<VTKFile type=\"Collection\""), std::string::npos);
   for (const char* k : {"0", "2", "4", "5"}) {
     const std::string frame = std::string("needle_000") + k + ".vtu";
@@ -286,7 +282,7 @@ TEST(SceneNeedle, SmallInsertionRunsAndWritesCsvVtuSeriesAndPvd) {
     EXPECT_NEAR(energy, res.report.energy, 1e-12 * res.report.energy) << f;
   }
   // The CSV: header in the documented order, one row per update.
-  const auto csv = lines_of(read(dir / "updates.csv"));
+  const auto csv = lines_of(incise::test::read_file(dir / "updates.csv"));
   ASSERT_EQ(csv.size(), 7u);
   EXPECT_EQ(csv[0],
             "update,depth,tip_x,tip_y,sticking,slipping,rearrangements,cg_iterations,"
@@ -567,7 +563,7 @@ TEST(SceneNeedle3D, SmallInsertionRunsAndWritesCsvVtuSeriesAndNeedleSurface) {
   ASSERT_EQ(written.size(), 4u);
   EXPECT_EQ(written[2], (dir / "needle_needle.vtu").string());
   // CSV: the 2D columns with "tetrahedra", then the 3D ones.
-  const auto csv = lines_of(read(dir / "updates.csv"));
+  const auto csv = lines_of(incise::test::read_file(dir / "updates.csv"));
   ASSERT_EQ(csv.size(), 15u);
   EXPECT_NE(csv[0].find(",nodes,tetrahedra,flops,tip_z,needle_force_z,surface_faces,"
                         "surface_area,refine_seconds,solve_seconds,rearrange_seconds,"
@@ -578,8 +574,9 @@ TEST(SceneNeedle3D, SmallInsertionRunsAndWritesCsvVtuSeriesAndNeedleSurface) {
     EXPECT_TRUE(fs::exists(dir / ("needle_" + std::string(k) + ".vtu"))) << k;
     EXPECT_TRUE(fs::exists(dir / ("needle_needle_" + std::string(k) + ".vtu"))) << k;
   }
-  EXPECT_NE(read(dir / "needle_needle.pvd").find("file=\"needle_needle_0013.vtu\""),
-            std::string::npos);
+  EXPECT_NE(
+      incise::test::read_file(dir / "needle_needle.pvd").find("file=\"needle_needle_0013.vtu\""),
+      std::string::npos);
   // The final VTU: tetrahedra, the needle-face counts of each; the surface VTU: triangles whose
   // areas sum to the reported surface area.
   const fs::path vtu = dir / "needle.vtu";

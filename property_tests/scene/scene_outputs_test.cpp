@@ -40,10 +40,6 @@ std::string padded(long index, std::size_t width) {
   std::string s = std::to_string(index);
   return std::string(width - std::min(width, s.size()), '0') + s;
 }
-std::string read(const fs::path& p) {
-  return incise::test::read_file(p);
-}
-
 /// Files below `dir` whose name ends in ".tmp" (none may be left behind).
 int temporary_files(const fs::path& dir) {
   int n = 0;
@@ -100,7 +96,7 @@ TEST(SceneOutputs, RunSceneAndWriteOutputsWriteTheFilesTheSceneNames) {
                  "\" group=\"\" part=\"0\" file=\"" + name + "\"";
   }
   // The ParaView index lists every frame in order with the iteration as its time.
-  const std::string pvd = read(stem + ".pvd");
+  const std::string pvd = incise::test::read_file(stem + ".pvd");
   std::string listed;
   for (auto p = pvd.find("timestep="); p != std::string::npos; p = pvd.find("timestep=", p + 1))
     listed += pvd.substr(p, pvd.find("/>", p) - p);
@@ -111,7 +107,7 @@ TEST(SceneOutputs, RunSceneAndWriteOutputsWriteTheFilesTheSceneNames) {
   EXPECT_EQ(written, expected);
 
   // The trace: a header with the probe's columns, then one row per iteration.
-  const std::vector<std::string> rows = lines_of(read(csv));
+  const std::vector<std::string> rows = lines_of(incise::test::read_file(csv));
   ASSERT_EQ(rows.size(), res.trace.size() + 1);
   EXPECT_EQ(rows[0],
             "iteration,residual_norm,relative_residual,energy,flops,seconds,cpu_seconds,tip_x,"
@@ -121,13 +117,13 @@ TEST(SceneOutputs, RunSceneAndWriteOutputsWriteTheFilesTheSceneNames) {
         << rows[k + 1];
 
   // The final state: the mesh with its displacement.
-  const std::string vtu = read(stem + ".vtu");
+  const std::string vtu = incise::test::read_file(stem + ".vtu");
   EXPECT_NE(vtu.find("NumberOfPoints=\"" + std::to_string(built.mesh.num_points()) + "\""),
             std::string::npos);
   EXPECT_NE(vtu.find("Name=\"displacement\""), std::string::npos);
 
   // The summary names the run and lists the files written before it.
-  const Json s = Json::parse(read(summary));
+  const Json s = Json::parse(incise::test::read_file(summary));
   EXPECT_EQ(s.at("scene"), "scene.json");
   EXPECT_EQ(s.at("method"), "cg");
   EXPECT_EQ(s.at("result"), "converged");
@@ -139,7 +135,7 @@ TEST(SceneOutputs, RunSceneAndWriteOutputsWriteTheFilesTheSceneNames) {
     EXPECT_EQ(s.at("environment").at(key), value) << key;
   const std::vector<std::string> before_summary(expected.begin(), expected.end() - 1);
   EXPECT_EQ(s.at("outputs"), Json(before_summary));
-  EXPECT_EQ(read(summary), scene::summary_json(built, res, 1.5, before_summary));
+  EXPECT_EQ(incise::test::read_file(summary), scene::summary_json(built, res, 1.5, before_summary));
   EXPECT_EQ(temporary_files(dir), 0);
 }
 
@@ -161,7 +157,7 @@ TEST(SceneOutputs, InteractiveCutRunWritesOneRowAndOneFramePerSolve) {
             (std::vector<std::string>{spec.outputs.csv, spec.outputs.vtu + ".vtu",
                                       std::to_string(solves) + " frames " + spec.outputs.vtu +
                                           "_<step>.vtu, index " + spec.outputs.vtu + ".pvd"}));
-  const std::vector<std::string> rows = lines_of(read(spec.outputs.csv));
+  const std::vector<std::string> rows = lines_of(incise::test::read_file(spec.outputs.csv));
   ASSERT_EQ(rows.size(), solves + 1);
   EXPECT_EQ(rows[0].rfind("step,tool,status,", 0), 0u) << rows[0];
   // Each solve carries whether GMRES ran unpreconditioned (a dropped singular preconditioner)
@@ -229,13 +225,13 @@ TEST(SceneOutputs, InteractiveCutRunWritesOneRowAndOneFramePerSolve) {
     EXPECT_TRUE(
         fs::is_regular_file(spec.outputs.vtu + "_" + padded(static_cast<long>(k), 6) + ".vtu"))
         << k;
-  EXPECT_NE(read(spec.outputs.vtu + ".pvd")
+  EXPECT_NE(incise::test::read_file(spec.outputs.vtu + ".pvd")
                 .find("timestep=\"" + std::to_string(solves - 1) +
                       "\" group=\"\" part=\"0\" file=\"cube_" +
                       padded(static_cast<long>(solves - 1), 6) + ".vtu\""),
             std::string::npos);
   // The final state is on the final cut mesh (the run replaced built.mesh by it).
-  EXPECT_NE(read(spec.outputs.vtu + ".vtu")
+  EXPECT_NE(incise::test::read_file(spec.outputs.vtu + ".vtu")
                 .find("NumberOfPoints=\"" + std::to_string(built.mesh.num_points()) + "\""),
             std::string::npos);
   EXPECT_EQ(temporary_files(dir), 0);
@@ -260,7 +256,7 @@ TEST(SceneOutputs, CantileverReactionsBalanceTheLoadInTheFinalVtu) {
     scene::SceneRunResult res;
     (void)run_and_write(built, "", res);
     ASSERT_TRUE(res.report.ok()) << res.report.message;
-    const std::string text = read(spec.outputs.vtu + ".vtu");
+    const std::string text = incise::test::read_file(spec.outputs.vtu + ".vtu");
     EXPECT_EQ(text.find("vtkZLibDataCompressor") != std::string::npos,
               std::string(format) == "binary");
     const io::VtuContents v = io::read_vtu(spec.outputs.vtu + ".vtu");

@@ -15,6 +15,7 @@
 #include <string>
 #include <tuple>
 
+#include <incise_test/scene_errors.hpp>
 #include "incise_test/seed.hpp"
 
 namespace {
@@ -39,17 +40,8 @@ Json valid_scene() {
   })");
 }
 
-std::string error_of_text(const std::string& text) {
-  try {
-    (void)parse_scene(text, "scene.json", "");
-  } catch (const ParseError& e) {
-    return e.what();
-  }
-  return "<no error>";
-}
-
 std::string error_of(const Json& j) {
-  return error_of_text(j.dump(2));
+  return incise::test::scene_parse_error(j.dump(2));
 }
 
 TEST(SceneParser, ValidCantileverParses) {
@@ -90,24 +82,24 @@ TEST(SceneParser, KuhnSplitParsesAndUnknownSplitIsRefused) {
 // One bad-scene kind per test: the message must name the path and the expected form.
 
 TEST(SceneParserBad, JsonSyntaxErrorGivesLine) {
-  const std::string e = error_of_text("{\n  \"version\": 1,\n  \"mesh\": {]\n}");
+  const std::string e = incise::test::scene_parse_error("{\n  \"version\": 1,\n  \"mesh\": {]\n}");
   EXPECT_NE(e.find("scene.json:3: invalid JSON at column"), std::string::npos) << e;
 }
 
 TEST(SceneParserBad, DuplicateKey) {
-  const std::string e =
-      error_of_text(R"({"version": 1, "material": {"model": "linear", "E": 1, "E": 2}})");
+  const std::string e = incise::test::scene_parse_error(
+      R"({"version": 1, "material": {"model": "linear", "E": 1, "E": 2}})");
   EXPECT_NE(e.find("/material/E: duplicate key \"E\""), std::string::npos) << e;
 }
 
 TEST(SceneParserBad, DuplicateKeyInsideArrayElement) {
-  const std::string e =
-      error_of_text(R"({"fixed": [{"type": "box"}, {"type": "tag", "tag": 1, "tag": 2}]})");
+  const std::string e = incise::test::scene_parse_error(
+      R"({"fixed": [{"type": "box"}, {"type": "tag", "tag": 1, "tag": 2}]})");
   EXPECT_NE(e.find("/fixed/1/tag: duplicate key"), std::string::npos) << e;
 }
 
 TEST(SceneParserBad, RootNotAnObject) {
-  const std::string e = error_of_text("[1, 2, 3]");
+  const std::string e = incise::test::scene_parse_error("[1, 2, 3]");
   EXPECT_NE(e.find("scene.json:1: /: expected a scene object"), std::string::npos) << e;
 }
 

@@ -16,6 +16,10 @@ std::string source_path(const std::string& relative) {
   return base + "/" + relative;
 }
 
+bool env_set(const char* name) {
+  return std::getenv(name) != nullptr;
+}
+
 int scaled(int n) {
   double scale = 1.0;
   if (const char* s = std::getenv("INCISE_TEST_SCALE"); s != nullptr && *s != '\0')

@@ -10,6 +10,7 @@
 #include <incise/mesh/generators.hpp>
 #include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/solver/eigen_estimates.hpp>
+#include <incise_test/mesh_measures.hpp>
 #include <incise_test/param_names.hpp>
 
 #include <gtest/gtest.h>
@@ -44,15 +45,6 @@ Cylinder make(const std::string& material) {
   return c;
 }
 
-double shortest_edge(const mesh::MeshData& m) {
-  double h = 1e300;
-  for (Index e = 0; e < m.num_cells(); ++e)
-    for (int a = 0; a < 4; ++a)
-      for (int b = a + 1; b < 4; ++b)
-        h = std::min(h, (m.points.col(m.cells(a, e)) - m.points.col(m.cells(b, e))).norm());
-  return h;
-}
-
 DynamicRelaxationOptions options(double dt) {
   DynamicRelaxationOptions o;
   o.time_step = dt;
@@ -73,7 +65,8 @@ TEST_P(DampingOnCylinder, ThreeWaysAgainstSweep_Sec4_1_Sec4_4_1) {
   const EigenEstimate big = largest_eigenvalue(p, u0, EigenOptions{1e-8, 20000, 1e-8, 1});
   ASSERT_TRUE(big.ok()) << to_string(big.status);
   const double dt_computed = critical_time_step(big.value);
-  const double dt_cfl = cfl_time_step(shortest_edge(c.mesh), c.lame.lambda, c.lame.mu, c.density);
+  const double dt_cfl =
+      cfl_time_step(test::shortest_edge(c.mesh), c.lame.lambda, c.lame.mu, c.density);
   const StableTimeStep st = find_stable_time_step(p, u0, dt_cfl);
   ASSERT_TRUE(st.found);
   std::printf(

@@ -16,6 +16,7 @@
 #include <incise/mesh/generators.hpp>
 #include <incise/solver/eigen_estimates.hpp>
 #include <incise/solver/linear_cg.hpp>
+#include <incise_test/mesh_measures.hpp>
 
 #include <gtest/gtest.h>
 
@@ -30,15 +31,6 @@ struct SplitMesh {
   mesh::MeshData mesh;
   double shortest_edge = 0.0;  // m
 };
-
-double shortest_edge(const mesh::MeshData& m) {
-  double h = 1e300;
-  for (Index e = 0; e < m.num_cells(); ++e)
-    for (int a = 0; a < 4; ++a)
-      for (int b = a + 1; b < 4; ++b)
-        h = std::min(h, (m.points.col(m.cells(a, e)) - m.points.col(m.cells(b, e))).norm());
-  return h;
-}
 
 // The small cylinder with the tetrahedron whose centroid is nearest to (0.05, 0, 0) split 1-to-4
 // at p = a + δ(centroid − a), a its first vertex.
@@ -71,7 +63,7 @@ SplitMesh split_near_middle(double delta) {
     m.cells.col(slot) = child;
     if (tagged) m.cell_tags[std::size_t(slot)] = m.cell_tags[std::size_t(best)];
   }
-  return SplitMesh{m, shortest_edge(m)};
+  return SplitMesh{m, test::shortest_edge(m)};
 }
 
 struct Measured {
@@ -104,7 +96,8 @@ Measured measure(const mesh::MeshData& m) {
   while (its4 < long(rep.residual_history.size()) &&
          rep.residual_history[std::size_t(its4)] > 1e-4 * p.external_force_norm())
     ++its4;
-  return Measured{shortest_edge(m), big.value, critical_time_step(big.value), rep.iterations, its4};
+  return Measured{test::shortest_edge(m), big.value, critical_time_step(big.value), rep.iterations,
+                  its4};
 }
 
 TEST(ShortEdge, CriticalStepShrinksLinearCgBarelyChanges_Sec4_5_6) {

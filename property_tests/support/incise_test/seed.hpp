@@ -35,6 +35,19 @@ inline int scaled_for_checks(int n, int divisor = 10) {
 #endif
 }
 
+/// Whether the environment variable `name` is set: how the slow variants of tests (ctest label
+/// slow, set by their add_test ENVIRONMENT) ask for their longer runs.
+bool env_set(const char* name);
+
+/// How often a long random edit sequence calls its own full validate(): after every edit in
+/// plain builds, every 20th with INCISE_PARANOID (the connectivity then already runs the
+/// structural validate() after every edit itself; connectivity.hpp).
+#ifdef INCISE_PARANOID
+inline constexpr int kValidateEvery = 20;
+#else
+inline constexpr int kValidateEvery = 1;
+#endif
+
 }  // namespace incise::test
 
 /// Declare a std::mt19937_64 named `rng` seeded by incise::test::seed(default) and print the seed

@@ -19,12 +19,6 @@
 namespace incise::verify {
 namespace {
 
-// Thesis §3.3 (reference values): 108 faces dissected, 143 degenerate elements, 2439 CG
-// iterations after the cut without removal; 99 collapses, 13 incollapsible, 3034 elements and
-// 823 nodes, 236 iterations with removal.
-constexpr int kThesisFaces = 108, kThesisDegenerate = 143, kThesisItersWithout = 2439,
-              kThesisCollapses = 99, kThesisIncollapsible = 13, kThesisElements = 3034,
-              kThesisNodes = 823, kThesisItersWith = 236;
 // Our CG iterations after the cut, columns (b), (c), (d) of README.md's table.
 constexpr long kReadmeItersB = 560, kReadmeItersC = 335, kReadmeItersD = 221;
 

@@ -31,7 +31,6 @@
 namespace incise::verify {
 namespace {
 
-constexpr int kThesisDegenerate = 143;  // §3.3, reference value
 /// Aspect-ratio thresholds tried: the thesis' 0.01 and up to 20× looser.
 constexpr double kThresholds[] = {0.01, 0.02, 0.05, 0.1, 0.2};
 constexpr int kNumThresholds = 5;
