@@ -134,7 +134,6 @@ TEST(NonlinearCgQuadratic, RecurrenceMatchesEvaluatedSearch_Sec2_4_2) {
   }
 }
 
-
 // SS22 (§2.5) on a quadratic Π: ∇Π(ū_k) = ∇Π(ū_{k−1}) + K(ū_k − ū_{k−1}), one K-product per
 // step (dynamic_relaxation), against the evaluating steps on the same random family of linear
 // boxes (Δt, η from estimate_dynamic_parameters). Same bounds as the nonlinear-CG test: the

@@ -94,9 +94,9 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
                                ? gamma0 * gamma0 / (work.last_alpha * work.last_gamma0)
                                : 0.0;
     const bool warm_guess = std::isfinite(guess_c) && guess_c > 0.0;
-    bool need_product = (newton && !have_product) ||
-                        (j == 0 && (opt.line_search == LineSearchKind::kSecant || warm) &&
-                         !warm_guess);
+    bool need_product =
+        (newton && !have_product) ||
+        (j == 0 && (opt.line_search == LineSearchKind::kSecant || warm) && !warm_guess);
     if (j == 0 && opt.line_search == LineSearchKind::kScaleDependentSecant) {
       // Finite-difference curvature from a gradient at α₋₁ (4.9).
       xt = x + opt.alpha_minus1 * d;

@@ -16,10 +16,10 @@ enum class BetaRule {
 
 /// Line search of §4.4.2 for the 1-D equation g(α) = (∇Π(x + αd), d) = 0.
 enum class LineSearchKind {
-  kNewton,               ///< α ← α − g/g′ with g′ = (d, K(x+αd) d): one K·d per step
-  kSecant,               ///< g′ by the secant (4.9); K·d only in the first step
+  kNewton,                ///< α ← α − g/g′ with g′ = (d, K(x+αd) d): one K·d per step
+  kSecant,                ///< g′ by the secant (4.9); K·d only in the first step
   kScaleDependentSecant,  ///< secant also in the first step, from a gradient at α₋₁ (§4.4.2)
-  kSecantWarmStart  ///< secant from a guessed first step (no K·d after the first iteration)
+  kSecantWarmStart        ///< secant from a guessed first step (no K·d after the first iteration)
 };
 
 /// Names of the β rules.
