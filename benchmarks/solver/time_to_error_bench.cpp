@@ -7,12 +7,13 @@
 /// û: truncated Newton to ‖r‖ ≤ 1e-11‖f‖ (linear: CG to 1e-13). The error is measured by the
 /// iteration observer (its cost is excluded from the solver's time; CostMeter); the time is the
 /// process CPU time (all threads) at the first iteration from which the error stays ≤ 1e-6.
-/// Counters: cpu_s (to 1e-6), iters (to 1e-6), ms_per_iter, evals_per_iter (gradient or
-/// K-product evaluations per outer iteration, from the counted flops; NCG: 1 + line-search
-/// evaluations), ls_evals_per_iter (NCG: SolverReport::inner_iterations / iterations).
-/// BM_PerIteration/<material>/<method>: CPU ms per iteration in a long run (best of batches; the
-/// per-iteration table of docs/solvers.md), BM_Evaluation: CPU ms per evaluation at û.
-/// Command: build/release/benchmarks/solver/time_to_error_bench [--benchmark_filter=...]
+/// Counters: cpu_s (to 1e-6), iters (to 1e-6), ms_per_iter, inner_per_iter
+/// (SolverReport::inner_iterations / iterations of the run up to the hit: NCG line-search
+/// evaluations, SS22 K-products of the quadratic recurrence); ncg-warm: the warm-start secant
+/// search (LineSearchKind::kSecantWarmStart). BM_PerIteration/<material>/<method>: CPU ms per
+/// iteration in a long run (best of batches; the per-iteration table of docs/solvers.md),
+/// BM_Evaluation: CPU ms per evaluation at û. Command:
+/// build/release/benchmarks/solver/time_to_error_bench [--benchmark_filter=...]
 #include <incise/fem/elastic_problem.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/generators.hpp>
@@ -64,11 +65,16 @@ Case& get_case(const std::string& material) {
   p.poisson_ratio = 0.3;
   p.density = 1000.0;
   p.gamma = material == "veronda-westmann" ? 8.0 : 0.0;
-  c.problem = std::make_unique<fem::ElasticProblem>(m, material::Material(material, p));
+  // "linear-assembled": the linear model with ElasticProblem::set_assembled_product (K·d from
+  // the assembled K, 3×3 blocks, instead of the element sweep).
+  const bool assembled = material == "linear-assembled";
+  c.problem = std::make_unique<fem::ElasticProblem>(
+      m, material::Material(assembled ? "linear" : material, p));
+  if (assembled) c.problem->set_assembled_product(true);
   c.problem->fix_nodes(fem::nodes_on_plane(m, 0, 0.0));
   c.problem->add_gravity(Vec3(0.0, 0.0, -9.8));
   c.reference = VecX::Zero(c.problem->size());
-  if (material == "linear") {
+  if (material != "veronda-westmann") {
     solver::LinearCgOptions o;
     o.stop.rule = solver::ResidualRule::kExternalForce;
     o.stop.epsilon = 1e-13;
@@ -84,7 +90,8 @@ Case& get_case(const std::string& material) {
   return cases.emplace(material, std::move(c)).first->second;
 }
 
-enum class Method { kCg, kNcg, kSs22 };
+/// kNcgWarm: nonlinear CG with the warm-start secant search (LineSearchKind::kSecantWarmStart).
+enum class Method { kCg, kNcg, kNcgWarm, kSs22 };
 
 // One solve by `method` with the options `common` (SS22: step dt, damping eta).
 template <class P>
@@ -95,9 +102,10 @@ solver::SolverReport run_method(Method method, P& p, VecX& u,
     static_cast<solver::RelaxationOptions&>(o) = common;
     return solver::linear_cg(p, u, o);
   }
-  if (method == Method::kNcg) {
+  if (method == Method::kNcg || method == Method::kNcgWarm) {
     solver::NonlinearCgOptions o;
     static_cast<solver::RelaxationOptions&>(o) = common;
+    if (method == Method::kNcgWarm) o.line_search = solver::LineSearchKind::kSecantWarmStart;
     return solver::nonlinear_cg(p, u, o);
   }
   solver::DynamicRelaxationOptions o;
@@ -127,14 +135,7 @@ void BM_TimeToError(benchmark::State& state, const std::string& material, Method
     state.counters["dt_us"] = dt * 1e6;
     state.counters["eta"] = eta;
   }
-  if (method == Method::kNcg) {  // line-search evaluations per iteration, from a short run
-    solver::NonlinearCgOptions o;
-    o.stop.epsilon = 0.0;
-    o.budget.max_iterations = 30;
-    VecX u = VecX::Zero(p.size());
-    const solver::SolverReport rep = solver::nonlinear_cg(p, u, o);
-    state.counters["ls_evals_per_iter"] = double(rep.inner_iterations) / double(rep.iterations);
-  }
+  long evaluations = 0, iterations = 0;  // line-search evaluations (NCG), K-products (SS22)
   for (auto _ : state) {
     solver::EnergyErrorTrace trace(p, c.reference);
     VecX u = VecX::Zero(p.size());
@@ -165,10 +166,21 @@ void BM_TimeToError(benchmark::State& state, const std::string& material, Method
     } catch (const std::runtime_error&) {
       // stopped 20 iterations after the level was reached and held
     }
+    if (hit > 0) {  // the same run again, stopped at the hit, for its report's counts
+      solver::RelaxationOptions upto = common;
+      upto.observer = nullptr;
+      upto.budget.max_iterations = hit;
+      VecX w = VecX::Zero(p.size());
+      const solver::SolverReport r2 = run_method(method, p, w, upto, dt, eta);
+      evaluations = r2.inner_iterations;
+      iterations = r2.iterations;
+    }
     state.counters["cpu_s"] = hit >= 0 ? hit_cpu : NAN;
     state.counters["iters"] = double(hit);
     state.counters["ms_per_iter"] = hit > 0 ? 1e3 * hit_cpu / double(hit) : NAN;
   }
+  // NCG: line-search evaluations per iteration; SS22: K-products (quadratic recurrence) per step.
+  if (iterations > 0) state.counters["inner_per_iter"] = double(evaluations) / double(iterations);
   state.counters["tets"] = double(p.num_elements());
 }
 
@@ -215,7 +227,7 @@ void BM_PerIteration(benchmark::State& state, const std::string& material, Metho
   {
     solver::NonlinearCgOptions o;
     o.stop.epsilon = 0.0;
-    o.budget.max_iterations = material == "linear" ? 60 : 300;
+    o.budget.max_iterations = material == "veronda-westmann" ? 300 : 60;
     (void)solver::nonlinear_cg(p, u0, o);
   }
   double dt = 0.0, eta = 0.0;
@@ -251,7 +263,11 @@ const bool kRegistered = [] {
   add("BM_TimeToError/linear/cg", "linear", Method::kCg);
   add("BM_TimeToError/linear/ncg", "linear", Method::kNcg);
   add("BM_TimeToError/linear/ss22", "linear", Method::kSs22);
+  add("BM_TimeToError/linear-assembled/cg", "linear-assembled", Method::kCg);
+  add("BM_TimeToError/linear-assembled/ncg", "linear-assembled", Method::kNcg);
+  add("BM_TimeToError/linear-assembled/ss22", "linear-assembled", Method::kSs22);
   add("BM_TimeToError/veronda-westmann/ncg", "veronda-westmann", Method::kNcg);
+  add("BM_TimeToError/veronda-westmann/ncg-warm", "veronda-westmann", Method::kNcgWarm);
   add("BM_TimeToError/veronda-westmann/ss22", "veronda-westmann", Method::kSs22);
   auto per_iteration = [](const std::string& name, const std::string& m, Method k) {
     benchmark::RegisterBenchmark(name.c_str(),
@@ -259,9 +275,11 @@ const bool kRegistered = [] {
         ->Iterations(1)
         ->Unit(benchmark::kMillisecond);
   };
-  for (const std::string m : {"linear", "veronda-westmann"}) {
-    if (m == "linear") per_iteration("BM_PerIteration/linear/cg", m, Method::kCg);
+  for (const std::string m : {"linear", "linear-assembled", "veronda-westmann"}) {
+    if (m != "veronda-westmann") per_iteration("BM_PerIteration/" + m + "/cg", m, Method::kCg);
     per_iteration("BM_PerIteration/" + m + "/ncg", m, Method::kNcg);
+    if (m == "veronda-westmann")
+      per_iteration("BM_PerIteration/" + m + "/ncg-warm", m, Method::kNcgWarm);
     per_iteration("BM_PerIteration/" + m + "/ss22", m, Method::kSs22);
   }
   auto eval = [](const std::string& name, const std::string& m, Eval k) {

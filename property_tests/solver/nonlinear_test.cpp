@@ -100,7 +100,9 @@ INSTANTIATE_TEST_SUITE_P(
                       NcgCase{BetaRule::kFletcherReeves, LineSearchKind::kScaleDependentSecant},
                       NcgCase{BetaRule::kPolakRibiere, LineSearchKind::kNewton},
                       NcgCase{BetaRule::kPolakRibiere, LineSearchKind::kSecant},
-                      NcgCase{BetaRule::kPolakRibiere, LineSearchKind::kScaleDependentSecant}));
+                      NcgCase{BetaRule::kPolakRibiere, LineSearchKind::kScaleDependentSecant},
+                      NcgCase{BetaRule::kFletcherReeves, LineSearchKind::kSecantWarmStart},
+                      NcgCase{BetaRule::kPolakRibiere, LineSearchKind::kSecantWarmStart}));
 
 TEST(NonlinearCg, QuadraticLikeLinearCg) {
   // On a quadratic Π the exact Newton line search makes NCG-FR linear CG: n steps at most in
@@ -128,7 +130,8 @@ TEST(NonlinearCg, InfiniteEnergyRegionNeverEnteredNoNaN) {
   f[n] = -1e4;  // pushes the free end through the clamp if unopposed
   SpringChain p(n, 100.0, 0.0, 0.01, 0.1, f);
   for (LineSearchKind ls :
-       {LineSearchKind::kNewton, LineSearchKind::kSecant, LineSearchKind::kScaleDependentSecant}) {
+       {LineSearchKind::kNewton, LineSearchKind::kSecant, LineSearchKind::kScaleDependentSecant,
+        LineSearchKind::kSecantWarmStart}) {
     VecX u = VecX::Zero(n + 1);
     NonlinearCgOptions o;
     o.line_search = ls;
@@ -171,7 +174,8 @@ TEST(NonlinearCg, IndefiniteProblemReportsStatus) {
   const Eigen::MatrixXd a = q.matrix() - 20.0 * Eigen::MatrixXd::Identity(15, 15);  // negative
   QuadraticProblem p(a, q.rhs(), std::vector<bool>(15, false), VecX::Ones(15));
   for (LineSearchKind ls :
-       {LineSearchKind::kNewton, LineSearchKind::kSecant, LineSearchKind::kScaleDependentSecant}) {
+       {LineSearchKind::kNewton, LineSearchKind::kSecant, LineSearchKind::kScaleDependentSecant,
+        LineSearchKind::kSecantWarmStart}) {
     VecX u = VecX::Zero(15);
     NonlinearCgOptions o;
     o.line_search = ls;

@@ -813,7 +813,8 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
   const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
     return sweep(true, unused, [&](const auto& el, auto& w, double& /*part*/) INCISE_LAMBDA_INLINE {
       using T = typename std::decay_t<decltype(el)>::Scalar;
-      el.gather(u.data(), w.x);
+      // The linear model's K_e does not depend on u (TetKernel::product ignores x): no gather.
+      if constexpr (!decltype(m)::kLinearGeometry) el.gather(u.data(), w.x);
       el.gather(d.data(), w.d);
       if (!TetKernel<decltype(m), T>::product(p, el.z_inv(), el.b(), w.x, w.d, w.dq)) return false;
       el.add(w.dq, dst);

@@ -25,6 +25,9 @@ struct LineSearchResult {
 /// Work vectors of the line search, kept across iterations (no allocation per iteration).
 struct LineSearchWork {
   VecX xt, s, gt;
+  /// kSecantWarmStart: the last search's accepted α and its γ₀ (α = 0: none yet, the first
+  /// step takes one K·d).
+  double last_alpha = 0.0, last_gamma0 = 0.0;
 };
 
 // §4.4.2: solve g(α) = (∇Π(x+αd), d) = 0 for α, starting at α₀ = 0 where the full gradient g0
@@ -81,10 +84,19 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
   // (Problem::gradient_energy_product), so s already holds K(x + α_j d)·d for j ≥ 1.
   const bool newton = opt.line_search == LineSearchKind::kNewton;
   bool have_product = false;
+  bool warm_start_guessed = false;  // the first trial step was the warm-start guess
+  const bool warm = opt.line_search == LineSearchKind::kSecantWarmStart;
   for (int j = 0; j < opt.j_max; ++j) {
     double c = 0.0;  // estimate of g′(α_j) = (d, K(x + α_j d) d)
+    // Warm start (Nocedal & Wright (3.60)): the first trial α = α_prev·γ₀,prev/γ₀ (the same
+    // first-order decrease as the last search), i.e. the slope c = γ₀²/(α_prev·γ₀,prev).
+    const double guess_c = warm && j == 0 && work.last_alpha > 0.0
+                               ? gamma0 * gamma0 / (work.last_alpha * work.last_gamma0)
+                               : 0.0;
+    const bool warm_guess = std::isfinite(guess_c) && guess_c > 0.0;
     bool need_product =
-        (newton && !have_product) || (j == 0 && opt.line_search == LineSearchKind::kSecant);
+        (newton && !have_product) ||
+        (j == 0 && (opt.line_search == LineSearchKind::kSecant || warm) && !warm_guess);
     if (j == 0 && opt.line_search == LineSearchKind::kScaleDependentSecant) {
       // Finite-difference curvature from a gradient at α₋₁ (4.9).
       xt = x + opt.alpha_minus1 * d;
@@ -116,7 +128,10 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
       meter.add(2 * nn);
     } else if (j > 0) {
       c = -(gamma - gamma_prev) / (alpha - alpha_prev);  // secant (4.9)
+    } else if (warm_guess) {
+      c = guess_c;
     }
+    if (j == 0) warm_start_guessed = warm_guess;
     if (!std::isfinite(c) || c <= 0.0) {
       if (j == 0) {
         res.status = std::isfinite(c) ? StopReason::kIndefinite : StopReason::kNonFinite;
@@ -127,6 +142,11 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
     const double step = gamma / c;  // −δ_j
     if (j == 0) {
       delta0 = std::abs(step);
+    } else if (j == 1 && warm_start_guessed) {
+      // The first trial was a guess: δ₀ is the first secant estimate of the minimizer, and
+      // the guess is kept when it is within epsilon_warm_start of it.
+      delta0 = std::abs(alpha + step);
+      if (std::abs(step) < opt.epsilon_warm_start * delta0) break;
     } else if (std::abs(step) < opt.epsilon_newton * delta0) {
       break;  // |δ_j| < ε_newton |δ_0|: δ_j is not added, r_j is reused
     }
@@ -164,6 +184,8 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
     meter.add(2 * nn);
   }
   if (!accepted) g_out = g0;
+  work.last_alpha = alpha;
+  work.last_gamma0 = gamma0;
   res.alpha = alpha;
   if (alpha == 0.0) res.status = StopReason::kStagnated;
   return res;
@@ -175,6 +197,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   INCISE_CHECK(u.size() == problem.size(), "nonlinear_cg: u has the wrong size");
   INCISE_CHECK_PARAM(options.j_max >= 1, "nonlinear_cg: j_max must be at least 1");
   INCISE_CHECK_PARAM(options.epsilon_newton >= 0.0, "nonlinear_cg: epsilon_newton < 0");
+  INCISE_CHECK_PARAM(options.epsilon_warm_start >= 0.0, "nonlinear_cg: epsilon_warm_start < 0");
   INCISE_CHECK_PARAM(options.alpha_minus1 != 0.0, "nonlinear_cg: alpha_minus1 must be non-zero");
   SolverReport rep;
   CostMeter meter(problem);

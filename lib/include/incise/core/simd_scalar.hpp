@@ -70,6 +70,16 @@ class Lanes4 {
     return map(a, [](double x) { return std::abs(x); });
   }
   friend Lanes4 abs2(const Lanes4& a) { return a * a; }
+  /// 2ᵏ exactly, for lanes holding integers k in [−1022, 1023] (precondition): the exponent
+  /// field written from k (k + 1.5·2⁵² carries k in its low mantissa bits), integer operations
+  /// only, so every instruction set gives the same bits.
+  friend Lanes4 pow2_int(const Lanes4& k) {
+    constexpr double kShift = 6755399441055744.0;  // 1.5·2⁵²
+    const Vec shift{kShift, kShift, kShift, kShift};
+    const Mask bias{1023, 1023, 1023, 1023};
+    const Mask e = (((Mask)(k.v_ + shift) - (Mask)shift) + bias) << 52;
+    return from((Vec)e);
+  }
 
  private:
   using Mask = long long __attribute__((vector_size(32)));

@@ -40,6 +40,12 @@ struct DynamicRelaxationOptions : RelaxationOptions {
 /// set to the last evaluated admissible point. With options.max_restarts > 0 those events (and
 /// energy growth) restart the integration at a smaller Δt instead, until the restarts are used
 /// up (then the status is the last event's, with a message naming the restarts).
+/// For a quadratic Π (Problem::energy_is_quadratic()) the gradient and energy at ū come from
+/// the previous step's by one K-product, ∇Π(ū_k) = ∇Π(ū_{k−1}) + K(ū_k − ū_{k−1}), evaluated
+/// instead every 50 steps, after a restart and whenever the recurrence residual meets the
+/// stopping rule (convergence is certified on an evaluated gradient); SolverReport::
+/// inner_iterations counts those products. Iterates differ from evaluated steps by round-off
+/// (test DynamicRelaxationQuadratic.RecurrenceMatchesEvaluatedSteps_Sec2_5).
 /// Requires lumped masses (UsageError otherwise).
 SolverReport dynamic_relaxation(Problem& problem, VecX& u, const DynamicRelaxationOptions& options);
 

@@ -100,8 +100,9 @@ struct [[nodiscard]] SolverReport
     : Outcome<StopReason, StopReason::kConverged, StopReason::kMaxIterations> {
   long iterations = 0;        ///< outer iterations (CG steps, NCG steps, Newton steps,
                               ///< time steps) completed
-  long inner_iterations = 0;  ///< inner CG steps (truncated Newton) or line-search
-                              ///< evaluations (nonlinear CG); 0 otherwise
+  long inner_iterations = 0;  ///< inner CG steps (truncated Newton), line-search
+                              ///< evaluations (nonlinear CG), K-products of the quadratic
+                              ///< recurrence (dynamic relaxation); 0 otherwise
   std::uint64_t flops = 0;    ///< counted flops: Problem::flops() delta + solver vector ops
   double seconds = 0.0;       ///< wall-clock seconds (observer time excluded)
   double cpu_seconds = 0.0;   ///< process CPU seconds, all threads (observer time excluded)
