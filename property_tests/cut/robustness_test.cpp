@@ -8,6 +8,7 @@
 #include <incise/io/read_mesh.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/mesh/quality.hpp>
+#include <incise_test/cut_components.hpp>
 #include <incise_test/seed.hpp>
 
 #include <algorithm>
@@ -53,31 +54,7 @@ Index count_components(const CutMesh& m) {
   return comps;
 }
 
-/// Whether every face-connected component holds a fixed node (O(n), the reference for the
-/// cutter's local component check).
-bool every_component_fixed(const CutMesh& m) {
-  std::vector<char> seen(static_cast<size_t>(m.element_capacity()), 0);
-  for (Index s = 0; s < m.element_capacity(); ++s) {
-    if (!m.alive(s) || seen[static_cast<size_t>(s)]) continue;
-    bool fixed = false;
-    std::vector<Index> stack{s};
-    seen[static_cast<size_t>(s)] = 1;
-    while (!stack.empty()) {
-      const Index e = stack.back();
-      stack.pop_back();
-      for (Index v : m.element(e)) fixed = fixed || m.fixed(v);
-      for (int j = 0; j < 4; ++j) {
-        const Index n = m.neighbor(e, j);
-        if (n >= 0 && !seen[static_cast<size_t>(n)]) {
-          seen[static_cast<size_t>(n)] = 1;
-          stack.push_back(n);
-        }
-      }
-    }
-    if (!fixed) return false;
-  }
-  return true;
-}
+using test::every_component_fixed;  // O(n), the reference for the local check
 
 void expect_valid(const CutMesh& m, const std::string& where) {
   const CutMeshValidation v = m.validate();
