@@ -124,15 +124,15 @@ TEST(OrganPath, Issue17CutStepNeedsNoGlobalComponentSearch3mm) {
       ASSERT_TRUE(test::every_component_fixed(mesh)) << "frame " << f;
     }
   }
-  EXPECT_GT(totals.faces_dissected, 100);  // the path cuts (measured: 198 faces)
+  EXPECT_GT(totals.faces_dissected, 100);                 // the path cuts (measured: 198 faces)
   EXPECT_GT(totals.collapses + totals.incollapsible, 0);  // and removes degenerate elements
   EXPECT_EQ(totals.free_components, fixed_on_face);
   const cut::CutMeshValidation v = mesh.validate();
   EXPECT_TRUE(v.ok()) << (v.violations.empty() ? "" : v.violations[0]);
   std::cout << "30 frames at 3 mm: " << totals.faces_dissected << " faces dissected, "
-            << totals.collapses << " collapses, " << totals.incollapsible
-            << " cut free, " << totals.free_components
-            << " free parts fixed on a face, O(n) component searches " << global << "\n";
+            << totals.collapses << " collapses, " << totals.incollapsible << " cut free, "
+            << totals.free_components << " free parts fixed on a face, O(n) component searches "
+            << global << "\n";
 }
 
 }  // namespace
