@@ -196,6 +196,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
     state.counters["mean_product_ms"] = 1e3 * product / frames;
     state.counters["mean_capfactor_ms"] = 1e3 * capfactor / frames;
     state.counters["grid_builds"] = static_cast<double>(session.cutter().grid_builds());
+    state.counters["grid_reentries"] = static_cast<double>(session.cutter().grid_reentries());
   }
 }
 
