@@ -196,6 +196,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
     state.counters["mean_product_ms"] = 1e3 * product / frames;
     state.counters["mean_capfactor_ms"] = 1e3 * capfactor / frames;
     state.counters["grid_builds"] = static_cast<double>(session.cutter().grid_builds());
+    state.counters["grid_reentries"] = static_cast<double>(session.cutter().grid_reentries());
   }
 }
 
@@ -224,6 +225,59 @@ BENCHMARK(BM_LiverScalpelPath)
     ->Args({1, 100, 100, 0, 1, 0, 1})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
+
+// The cut step alone on the path (issue 17's "cut step independent of the mesh size"): a
+// cut::Cutter with the session's cut options on the liver or the refined liver, nodes kept at
+// their reference positions (no solve, so no drift and one grid build), per-frame thread CPU of
+// the two Cutter::step calls. Separates the cost that grows with the faces the blade crosses
+// (elements tested, faces dissected: ≈ 4× on the 1→8 refined mesh, whose faces per swept area are
+// 4×) from the mesh-size cost of the deformed-configuration loop (BM_LiverScalpelPath). Args:
+// refined (0/1), blade advance per frame (0.1 mm units), frames.
+void BM_LiverCutOnly(benchmark::State& state) {
+  const incise::mesh::MeshData& body = liver(state.range(0) != 0);
+  const double advance = 1e-4 * static_cast<double>(state.range(1));
+  const int frames = static_cast<int>(state.range(2));
+  const incise::fixtures::OrganPath path = incise::fixtures::organ_path(body);
+  for (auto _ : state) {
+    incise::cut::CutMesh mesh(body);
+    for (Index v : path.fixed) mesh.set_fixed(v, true);
+    incise::cut::Cutter cutter(mesh, incise::interactive::AugmentedCutOptions{}.cut);
+    std::vector<double> cpu, cpu_per_tested, tested, dissected;
+    int full_checks = 0;
+    for (int f = 0; f < frames; ++f) {
+      const auto tris = path.frame(f, advance);
+      const double t0 = incise::thread_cpu_seconds();
+      Index te = 0, fd = 0;
+      for (int k = 0; k < 2; ++k) {
+        const incise::cut::CutStepReport r = cutter.step(tris[k][0], tris[k][1], tris[k][2]);
+        te += r.elements_tested;
+        fd += r.faces_dissected;
+        full_checks += r.full_component_check ? 1 : 0;
+      }
+      const double c = incise::thread_cpu_seconds() - t0;
+      cpu.push_back(c);
+      tested.push_back(static_cast<double>(te));
+      dissected.push_back(static_cast<double>(fd));
+      if (te > 0) cpu_per_tested.push_back(c / static_cast<double>(te));
+    }
+    const auto sc = summarize(cpu), st = summarize(tested), sd = summarize(dissected),
+               sp = summarize(cpu_per_tested);
+    state.counters["cpu_cut_med_ms"] = 1e3 * sc.median;
+    state.counters["cpu_cut_p95_ms"] = 1e3 * sc.p95;
+    state.counters["cpu_cut_max_ms"] = 1e3 * sc.max;
+    state.counters["tested_med"] = st.median;
+    state.counters["dissected_med"] = sd.median;
+    state.counters["us_per_tested_med"] = 1e6 * sp.median;
+    state.counters["grid_builds"] = static_cast<double>(cutter.grid_builds());
+    state.counters["full_component_checks"] = full_checks;
+    state.counters["tets"] = static_cast<double>(body.num_cells());
+  }
+}
+BENCHMARK(BM_LiverCutOnly)
+    ->Args({0, 30, 30})
+    ->Args({1, 30, 30})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 // The k new columns R⁻¹e of G = H R⁻¹ Hᵀ for DOFs joining 𝓛, one restricted solve each (0) or
 // one blocked pass (1, ClosureLdlSolver::solve_restricted_block), on the liver's K⁰ factor

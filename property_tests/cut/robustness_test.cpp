@@ -8,11 +8,13 @@
 #include <incise/io/read_mesh.hpp>
 #include <incise/mesh/generators.hpp>
 #include <incise/mesh/quality.hpp>
+#include <incise_test/cut_components.hpp>
 #include <incise_test/seed.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <memory>
 #include <random>
 
 namespace incise::cut {
@@ -53,31 +55,7 @@ Index count_components(const CutMesh& m) {
   return comps;
 }
 
-/// Whether every face-connected component holds a fixed node (O(n), the reference for the
-/// cutter's local component check).
-bool every_component_fixed(const CutMesh& m) {
-  std::vector<char> seen(static_cast<size_t>(m.element_capacity()), 0);
-  for (Index s = 0; s < m.element_capacity(); ++s) {
-    if (!m.alive(s) || seen[static_cast<size_t>(s)]) continue;
-    bool fixed = false;
-    std::vector<Index> stack{s};
-    seen[static_cast<size_t>(s)] = 1;
-    while (!stack.empty()) {
-      const Index e = stack.back();
-      stack.pop_back();
-      for (Index v : m.element(e)) fixed = fixed || m.fixed(v);
-      for (int j = 0; j < 4; ++j) {
-        const Index n = m.neighbor(e, j);
-        if (n >= 0 && !seen[static_cast<size_t>(n)]) {
-          seen[static_cast<size_t>(n)] = 1;
-          stack.push_back(n);
-        }
-      }
-    }
-    if (!fixed) return false;
-  }
-  return true;
-}
+using test::every_component_fixed;  // O(n), the reference for the local check
 
 void expect_valid(const CutMesh& m, const std::string& where) {
   const CutMeshValidation v = m.validate();
@@ -574,63 +552,100 @@ TEST(CutRobustness, CapAndSpindleRecipesRemoveSingleFlatElements) {
   }
 }
 
-// Issue 17: the boundary search grid is kept across bulk moves of the deformed positions
-// (CutMesh::set_deformed after each solve) and its queries widened by the drift, instead of
-// being rebuilt. Mesh A keeps its grid; mesh B is moved away and back before every step, so its
-// drift exceeds half a cell and its grid is rebuilt every step. Both see the same positions and
-// sweeps: the cuts must be identical (reports and resulting meshes), with fewer builds for A.
-TEST(CutRobustness, KeptSearchGridCutsLikeARebuiltOneUnderDeformation) {
+// Issue 17: the boundary search grid is built once and then updated, not rebuilt: after a
+// bulk move of the deformed positions (CutMesh::set_deformed after each solve) only the stars
+// of nodes that moved more than CutOptions::search_grid_slack cells from where their elements
+// were entered are entered again, and queries are widened by the remaining drift. Three
+// cutters see the same positions and random scalpel paths (fixed seed): slack 0 (every element
+// with a moved node re-entered: the grid of the current positions, as a rebuild every frame
+// would give), the default 0.25, and 4 cells (few re-entries, wide queries). The cuts must be
+// identical — reports (faces selected and dissected, changed elements, new nodes) and the
+// resulting meshes — with one build each and fewer re-entries for the larger slacks.
+TEST(CutRobustness, UpdatedSearchGridCutsLikeTheGridOfTheCurrentPositions) {
   INCISE_SEEDED_RNG(rng, 3017);
   const mesh::MeshData box = mesh::make_box(6, 6, 6, 1, 1, 1);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  Index dissected = 0;
-  for (int sequence = 0; sequence < 4; ++sequence) {
-    CutMesh a(box), b(box);
-    for (CutMesh* m : {&a, &b})
-      for (Index v = 0; v < m->num_nodes(); ++v)
-        if (m->reference(v).z() < 1e-12) m->set_fixed(v, true);
-    Cutter ca(a), cb(b);
+  Index dissected = 0, selected = 0, intersected = 0;
+  std::int64_t reentries[3] = {0, 0, 0};
+  for (int sequence = 0; sequence < 6; ++sequence) {
+    std::vector<std::unique_ptr<CutMesh>> m;
+    std::vector<std::unique_ptr<Cutter>> c;
+    for (double slack : {0.0, CutOptions{}.search_grid_slack, 4.0}) {
+      m.push_back(std::make_unique<CutMesh>(box));
+      for (Index v = 0; v < m.back()->num_nodes(); ++v)
+        if (m.back()->reference(v).z() < 1e-12) m.back()->set_fixed(v, true);
+      CutOptions o;
+      o.search_grid_slack = slack;
+      c.push_back(std::make_unique<Cutter>(*m.back(), o));
+    }
     Vec3 p(0.2 + 0.1 * u(rng), 0.2 + 0.1 * u(rng), 1.1);
-    const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, 0).normalized();
+    Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, 0).normalized();
     for (int k = 0; k < 12; ++k) {
-      // A smooth deformation of amplitude ≤ 0.02 (an eighth of the cell size 1/6 ≈ 0.17) that
-      // changes every step: bulk moves the grid must follow.
-      const double amp = 0.02 * u(rng), phase = 6.28 * u(rng);
-      Eigen::Matrix3Xd x(3, a.num_nodes());
-      for (Index v = 0; v < a.num_nodes(); ++v) {
-        const Vec3 X = a.reference(v);
+      // A smooth deformation (det F = 1) of amplitude ≤ 0.3 (≈ 1.8 of the search grid's cells,
+      // the mean longest boundary edge ≈ 0.17) that changes every step: bulk moves the grid
+      // must follow (with slack 4 the entries stay put and only the widened queries find them).
+      const double amp = 0.3 * u(rng), phase = 6.28 * u(rng);
+      Eigen::Matrix3Xd x(3, m[0]->num_nodes());
+      for (Index v = 0; v < m[0]->num_nodes(); ++v) {
+        const Vec3 X = m[0]->reference(v);
         x.col(v) = X + amp * Vec3(std::sin(3 * X.z() + phase), std::cos(2 * X.x() + phase), 0);
       }
-      a.set_deformed(x);
-      b.set_deformed(x.array() + 1.0);  // a drift of √3: B's grid is rebuilt
-      b.set_deformed(x);
+      for (auto& mesh : m) mesh->set_deformed(x);
+      // A random scalpel path: the blade turns by up to ±0.5 rad per step; every third step
+      // begins a new incision elsewhere, whose entry only the search grid can find (the
+      // remembered incomplete elements of the last incision are forgotten).
+      if (k % 3 == 2) {
+        for (auto& cutter : c) cutter->end_incision();
+        p = Vec3(0.15 + 0.7 * u(rng), 0.15 + 0.7 * u(rng), 1.1);
+      }
+      const double turn = u(rng) - 0.5;
+      dir = Vec3(std::cos(turn) * dir.x() - std::sin(turn) * dir.y(),
+                 std::sin(turn) * dir.x() + std::cos(turn) * dir.y(), 0);
       const Vec3 q = p + 0.08 * dir;
       const Vec3 top(0, 0, 0), tip(0, 0, -0.6);
-      const CutStepReport ra = ca.step(p + top, p + tip, q + tip);
-      const CutStepReport rb = cb.step(p + top, p + tip, q + tip);
-      const CutStepReport sa = ca.step(p + top, q + tip, q + top);
-      const CutStepReport sb = cb.step(p + top, q + tip, q + top);
-      for (const auto& [x1, x2] : {std::pair{&ra, &rb}, std::pair{&sa, &sb}}) {
-        ASSERT_EQ(x1->faces_selected, x2->faces_selected) << "sequence " << sequence << " k " << k;
-        ASSERT_EQ(x1->faces_dissected, x2->faces_dissected);
-        ASSERT_EQ(x1->changed_elements, x2->changed_elements);
-        ASSERT_EQ(x1->new_nodes, x2->new_nodes);
-        dissected += x1->faces_dissected;
+      for (const auto& tri : {std::array<Vec3, 3>{p + top, p + tip, q + tip},
+                              std::array<Vec3, 3>{p + top, q + tip, q + top}}) {
+        std::vector<CutStepReport> r;
+        for (auto& cutter : c) r.push_back(cutter->step(tri[0], tri[1], tri[2]));
+        for (std::size_t i = 1; i < r.size(); ++i) {
+          ASSERT_EQ(r[i].faces_selected, r[0].faces_selected)
+              << "sequence " << sequence << " k " << k << " cutter " << i;
+          ASSERT_EQ(r[i].edges_intersected, r[0].edges_intersected);
+          ASSERT_EQ(r[i].faces_dissected, r[0].faces_dissected);
+          ASSERT_EQ(r[i].changed_elements, r[0].changed_elements);
+          ASSERT_EQ(r[i].new_nodes, r[0].new_nodes);
+        }
+        dissected += r[0].faces_dissected;
+        selected += r[0].faces_selected;
+        intersected += r[0].edges_intersected;
       }
       p = q;
     }
-    ASSERT_EQ(a.num_nodes(), b.num_nodes());
-    ASSERT_EQ(a.element_capacity(), b.element_capacity());
-    for (Index e = 0; e < a.element_capacity(); ++e) {
-      ASSERT_EQ(a.alive(e), b.alive(e));
-      if (a.alive(e)) ASSERT_EQ(a.element(e), b.element(e));
+    for (std::size_t i = 1; i < m.size(); ++i) {
+      const CutMesh &a = *m[0], &b = *m[i];
+      ASSERT_EQ(a.num_nodes(), b.num_nodes());
+      ASSERT_EQ(a.element_capacity(), b.element_capacity());
+      for (Index e = 0; e < a.element_capacity(); ++e) {
+        ASSERT_EQ(a.alive(e), b.alive(e));
+        if (a.alive(e)) {
+          ASSERT_EQ(a.element(e), b.element(e));
+        }
+      }
+      for (Index v = 0; v < a.num_nodes(); ++v) ASSERT_EQ(a.reference(v), b.reference(v));
     }
-    for (Index v = 0; v < a.num_nodes(); ++v) ASSERT_EQ(a.reference(v), b.reference(v));
-    EXPECT_EQ(cb.grid_builds(), 12);  // after every bulk move (one per pair of triangles)
-    EXPECT_LT(ca.grid_builds(), cb.grid_builds());
-    expect_valid(a, "kept grid");
+    for (std::size_t i = 0; i < c.size(); ++i) {
+      EXPECT_EQ(c[i]->grid_builds(), 1);  // built at the first step, then updated
+      reentries[i] += c[i]->grid_reentries();
+    }
+    expect_valid(*m[0], "updated grid");
   }
-  EXPECT_GT(dissected, 0);  // the sweeps cut (else the comparison proves nothing)
+  EXPECT_GT(dissected, 0);                // the sweeps cut (else the comparison proves nothing)
+  EXPECT_LT(reentries[1], reentries[0]);  // the slack saves re-entries
+  EXPECT_LE(reentries[2], reentries[1]);
+  std::cout << "edges intersected " << intersected << ", faces selected " << selected
+            << ", dissected " << dissected << ", grid re-entries at slack 0 / "
+            << CutOptions{}.search_grid_slack << " / 4 cells: " << reentries[0] << " / "
+            << reentries[1] << " / " << reentries[2] << "\n";
 }
 
 }  // namespace

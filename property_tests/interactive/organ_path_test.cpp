@@ -6,10 +6,13 @@
 // run (`ctest -L slow -R organ_path`, INCISE_ORGAN_PATH_SLOW=1) 100 frames at 3 mm and 40 at
 // 10 mm.
 
+#include <incise/cut/cut_mesh.hpp>
+#include <incise/cut/cutter.hpp>
 #include <incise/fixtures/organ_path.hpp>
 #include <incise/interactive/augmented_cut_session.hpp>
 #include <incise/io/read_mesh.hpp>
 #include <incise_test/augmented_reference.hpp>
+#include <incise_test/cut_components.hpp>
 #include <incise_test/seed.hpp>
 
 #include <gtest/gtest.h>
@@ -93,6 +96,43 @@ TEST(OrganPath, Issue17RefactorEveryStepEqualsAFreshFactorization3mm) {
 TEST(OrganPath, Issue17EveryFrameEqualsAFreshFactorization10mm) {
   if (!slow()) GTEST_SKIP() << "slow: INCISE_ORGAN_PATH_SLOW=1";
   run_path(0.010, 40);
+}
+
+// The cut step alone on the path (the session's cut options, nodes at their reference
+// positions): the component check after every cut (thesis §3.3) is decided by the local search
+// from the separated faces, never by the O(n) search over the whole mesh. Before issue 17's
+// fix a separated element removed by the degeneracy removal without a stand-in (an isolated
+// element cut free) sent the step to the O(n) search (1 step of this path; 5 of 30 frames on
+// the refined liver, ≈ 100 ms each). Small parts between the cut surfaces are cut free and
+// fixed on a face (FreeComponentPolicy::kFixOnFace, the session's); after every step no
+// component may be left free (test::every_component_fixed, an independent O(n) search).
+TEST(OrganPath, Issue17CutStepNeedsNoGlobalComponentSearch3mm) {
+  const mesh::MeshData body = liver();
+  const fixtures::OrganPath path = fixtures::organ_path(body);
+  cut::CutMesh mesh(body);
+  for (Index v : path.fixed) mesh.set_fixed(v, true);
+  cut::Cutter cutter(mesh, AugmentedCutOptions{}.cut);
+  cut::CutTotals totals;
+  int global = 0, fixed_on_face = 0;
+  for (int f = 0; f < 30; ++f) {
+    for (const auto& tri : path.frame(f, 0.003)) {
+      const cut::CutStepReport r = cutter.step(tri[0], tri[1], tri[2]);
+      totals.add(r);
+      global += r.full_component_check ? 1 : 0;
+      fixed_on_face += static_cast<int>(r.components_fixed);
+      EXPECT_FALSE(r.full_component_check) << "frame " << f;
+      ASSERT_TRUE(test::every_component_fixed(mesh)) << "frame " << f;
+    }
+  }
+  EXPECT_GT(totals.faces_dissected, 100);                 // the path cuts (measured: 198 faces)
+  EXPECT_GT(totals.collapses + totals.incollapsible, 0);  // and removes degenerate elements
+  EXPECT_EQ(totals.free_components, fixed_on_face);
+  const cut::CutMeshValidation v = mesh.validate();
+  EXPECT_TRUE(v.ok()) << (v.violations.empty() ? "" : v.violations[0]);
+  std::cout << "30 frames at 3 mm: " << totals.faces_dissected << " faces dissected, "
+            << totals.collapses << " collapses, " << totals.incollapsible << " cut free, "
+            << totals.free_components << " free parts fixed on a face, O(n) component searches "
+            << global << "\n";
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // scene is rejected with a ParseError naming the JSON path and the expected form.
 
 #include <incise/core/error.hpp>
+#include <incise/interactive/augmented_cut_session.hpp>
 #include <incise/material/material.hpp>
 #include <incise/scene/delaunay_scene.hpp>
 #include <incise/scene/scene_parser.hpp>
@@ -482,10 +483,14 @@ TEST(SceneParser, RefactorAtMParses) {
   EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.refactor_at_m, 300);
 }
 
-// refactorization (docs/scenes.md; interactive/refactorization_policy.hpp): "none" by default.
+// refactorization (docs/scenes.md; interactive/refactorization_policy.hpp): by default the
+// library session's mode (continuous, issue 17); "none" turns it off.
 TEST(SceneParser, RefactorizationParses) {
   Json j = augmented_cut_scene();
-  EXPECT_FALSE(parse_scene(j.dump(), "scene.json", "").solver.refactorization.has_value());
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.refactorization,
+            incise::interactive::RefactorizationMode::kContinuous);
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.refactorization,
+            incise::interactive::AugmentedCutOptions{}.refactorization_mode);
   j["solver"]["refactorization"] = "none";
   EXPECT_FALSE(parse_scene(j.dump(), "scene.json", "").solver.refactorization.has_value());
   j["solver"]["refactorization"] = "break-even";

@@ -62,12 +62,7 @@ void CutMesh::set_position(Index v, const Vec3& X, const Vec3& x) {
 
 void CutMesh::set_deformed(const Eigen::Matrix3Xd& x) {
   INCISE_CHECK(x.cols() == num_nodes(), "deformed positions need one column per node");
-  double moved = 0;
-  for (Index i = 0; i < num_nodes(); ++i) {
-    moved = std::max(moved, (x.col(i) - def_[static_cast<size_t>(i)]).norm());
-    def_[static_cast<size_t>(i)] = x.col(i);
-  }
-  deformed_drift_ += moved;
+  for (Index i = 0; i < num_nodes(); ++i) def_[static_cast<size_t>(i)] = x.col(i);
   ++positions_version_;
 }
 

@@ -50,6 +50,8 @@ Cutter::Cutter(CutMesh& mesh, CutOptions options)
                      "degenerate_aspect_ratio must lie in [0,1)");
   INCISE_CHECK_PARAM(options_.large_dihedral_angle > 0 && options_.large_dihedral_angle < 3.15,
                      "large_dihedral_angle must lie in (0, π)");
+  INCISE_CHECK_PARAM(options_.search_grid_slack >= 0 && std::isfinite(options_.search_grid_slack),
+                     "search_grid_slack must be finite and >= 0");
 }
 
 Cutter::~Cutter() = default;
@@ -65,6 +67,24 @@ Cutter::EdgeKey Cutter::edge_key(Index a, Index b) const {
   std::uint64_t ob = static_cast<std::uint32_t>(mesh_.origin(b));
   if (oa > ob) std::swap(oa, ob);
   return (oa << 32) | ob;
+}
+
+void Cutter::grid_after_edit(const CutStepReport& r) {
+  // Keep the search grid current around the edit: changed elements, and the stars of moved
+  // and new nodes, anchored at their positions now (the invariant of Grid).
+  if (grid_version_ == ~std::uint64_t{0}) return;  // not built yet: the build sees the edit
+  if (grid_version_ != mesh_.positions_version()) grid_sync_nodes();  // (outside a step)
+  std::vector<Index> regrid = r.changed_elements;
+  grid_->anchor.resize(static_cast<size_t>(mesh_.num_nodes()));
+  for (const auto* list : {&r.moved_nodes, &r.new_nodes})
+    for (Index v : *list) {
+      grid_->anchor[static_cast<size_t>(v)] = mesh_.deformed(v);
+      for (Index e : mesh_.star(v)) regrid.push_back(e);
+    }
+  std::sort(regrid.begin(), regrid.end());
+  regrid.erase(std::unique(regrid.begin(), regrid.end()), regrid.end());
+  for (Index e : regrid) grid_insert(e);
+  grid_reentries_ += static_cast<std::int64_t>(regrid.size());
 }
 
 CutStepReport Cutter::step(const Vec3& a, const Vec3& b, const Vec3& c) {
@@ -138,13 +158,7 @@ CutStepReport Cutter::step(const Vec3& a, const Vec3& b, const Vec3& c) {
       }
     }
   }
-  // Keep the search grid current around the edit.
-  std::vector<Index> regrid = r.changed_elements;
-  for (Index v : r.moved_nodes)
-    for (Index e : mesh_.star(v)) regrid.push_back(e);
-  std::sort(regrid.begin(), regrid.end());
-  regrid.erase(std::unique(regrid.begin(), regrid.end()), regrid.end());
-  for (Index e : regrid) grid_insert(e);
+  grid_after_edit(r);
   std::sort(r.changed_elements.begin(), r.changed_elements.end());
   r.changed_elements.erase(std::unique(r.changed_elements.begin(), r.changed_elements.end()),
                            r.changed_elements.end());

@@ -109,6 +109,7 @@ void Cutter::remove_degeneracies_everywhere(CutStepReport& report) {
     if (mesh_.alive(e)) all.push_back(e);
   }
   remove_degeneracies(std::move(all), report);
+  grid_after_edit(report);
 }
 
 }  // namespace incise::cut

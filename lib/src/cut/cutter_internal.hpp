@@ -40,12 +40,21 @@ inline std::array<Index, 3> sorted_face(const Tet& t, int j, int* parity = nullp
 
 }  // namespace detail
 
-/// Uniform hash grid over elements that have a boundary face (deformed bounding boxes).
-/// Entries may be stale (moved or changed elements); queries test every candidate exactly.
+/// Uniform hash grid over elements that have a boundary face (deformed bounding boxes at the
+/// time each was entered). Invariant (cutter_select.cpp): every node w of an entered element
+/// was within `tolerance` of anchor[w] when the element was entered, so widening a query by
+/// slack = tolerance + max_w |x_w − anchor[w]| finds every boundary element the current
+/// positions would. Entries of removed or no longer boundary elements may remain; queries
+/// test every candidate exactly.
 struct Cutter::Grid {
   double h = 1.0;
   std::int64_t lo[3] = {0, 0, 0}, hi[3] = {-1, -1, -1};  ///< occupied cell range
   std::unordered_map<std::int64_t, std::vector<Index>> cells;
+  /// Per element slot: the cell range it was entered in (lo > hi: not entered).
+  std::vector<std::array<std::int64_t, 6>> range;
+  std::vector<Vec3> anchor;  ///< per node (see the invariant)
+  double tolerance = 0;      ///< CutOptions::search_grid_slack · h
+  double slack = 0;          ///< query widening after the last sync
   static std::int64_t key(std::int64_t i, std::int64_t j, std::int64_t k) {
     constexpr std::int64_t kOff = 1 << 20;
     return ((i + kOff) << 42) | ((j + kOff) << 21) | (k + kOff);

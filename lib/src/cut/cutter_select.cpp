@@ -25,13 +25,21 @@ namespace {
 /// ~1e-16 relative error of t = d_p/(d_p − d_q).
 constexpr double kHalfTie = 1e-12;
 
-/// The search grid is rebuilt once nodes may have drifted this many cells since it was built
-/// (queries are widened by the drift until then).
-constexpr double kGridRebuildSlack = 0.5;
-
 }  // namespace
 
 void Cutter::grid_insert(Index e) {
+  if (static_cast<Index>(grid_->range.size()) < mesh_.element_capacity())
+    grid_->range.resize(static_cast<size_t>(mesh_.element_capacity()), {0, 0, 0, -1, -1, -1});
+  auto& range = grid_->range[static_cast<size_t>(e)];
+  for (std::int64_t i = range[0]; i <= range[3]; ++i)  // leave the cells it was entered in
+    for (std::int64_t j = range[1]; j <= range[4]; ++j)
+      for (std::int64_t k = range[2]; k <= range[5]; ++k) {
+        auto it = grid_->cells.find(Grid::key(i, j, k));
+        if (it == grid_->cells.end()) continue;
+        auto& list = it->second;
+        list.erase(std::remove(list.begin(), list.end(), e), list.end());
+      }
+  range = {0, 0, 0, -1, -1, -1};
   if (!mesh_.alive(e)) return;
   bool boundary = false;
   for (int j = 0; j < 4 && !boundary; ++j) boundary = mesh_.neighbor(e, j) < 0;
@@ -48,24 +56,45 @@ void Cutter::grid_insert(Index e) {
     grid_->lo[d] = empty ? c0[d] : std::min(grid_->lo[d], c0[d]);
     grid_->hi[d] = empty ? c1[d] : std::max(grid_->hi[d], c1[d]);
   }
+  range = {c0[0], c0[1], c0[2], c1[0], c1[1], c1[2]};
   for (std::int64_t i = c0[0]; i <= c1[0]; ++i)
     for (std::int64_t j = c0[1]; j <= c1[1]; ++j)
       for (std::int64_t k = c0[2]; k <= c1[2]; ++k) grid_->cells[Grid::key(i, j, k)].push_back(e);
 }
 
+void Cutter::grid_sync_nodes() {
+  // Nodes that moved more than the tolerance from their anchor (or are new) are anchored at
+  // their current position and their stars entered again; the others keep the invariant of
+  // Grid, so the queries' slack is the tolerance plus the largest remaining distance. The scan
+  // is O(nodes) of arithmetic; the grid work is proportional to the elements re-entered.
+  const Index n = mesh_.num_nodes();
+  const Index old_n = static_cast<Index>(grid_->anchor.size());
+  grid_->anchor.resize(static_cast<size_t>(n));
+  std::vector<Index> reenter;
+  double remaining = 0;
+  for (Index v = 0; v < n; ++v) {
+    const Vec3& x = mesh_.deformed(v);
+    Vec3& a = grid_->anchor[static_cast<size_t>(v)];
+    const double d = v < old_n ? (x - a).norm() : std::numeric_limits<double>::infinity();
+    if (d <= grid_->tolerance) {
+      remaining = std::max(remaining, d);
+      continue;
+    }
+    a = x;
+    if (mesh_.unused(v)) continue;
+    for (Index e : mesh_.star(v)) reenter.push_back(e);
+  }
+  std::sort(reenter.begin(), reenter.end());
+  reenter.erase(std::unique(reenter.begin(), reenter.end()), reenter.end());
+  for (Index e : reenter) grid_insert(e);
+  grid_reentries_ += static_cast<std::int64_t>(reenter.size());
+  grid_->slack = grid_->tolerance + remaining;
+  grid_version_ = mesh_.positions_version();
+}
+
 void Cutter::collect_seeds(const Vec3 (&tri)[3], std::vector<Index>& seeds) {
-  // Every entry was inserted at positions from which no node has since moved by more than
-  // `slack` (CutMesh::deformed_drift), so widening the query by it finds every element the
-  // current positions would; the grid is rebuilt only once the slack reaches half a cell
-  // (a bulk move), not after every solve (issue 17: the rebuild is O(mesh)).
-  double slack = mesh_.deformed_drift() - grid_drift_;
-  const bool never_built = grid_version_ == ~std::uint64_t{0};
-  if (never_built ||
-      (grid_version_ != mesh_.positions_version() && !(slack <= kGridRebuildSlack * grid_->h))) {
-    // (Re)build: cell size = mean longest edge of the boundary elements.
-    grid_->cells.clear();
-    grid_->lo[0] = grid_->lo[1] = grid_->lo[2] = 0;
-    grid_->hi[0] = grid_->hi[1] = grid_->hi[2] = -1;
+  if (grid_version_ == ~std::uint64_t{0}) {
+    // Build once: cell size = mean longest edge of the boundary elements.
     double sum = 0;
     Index count = 0;
     for (Index e = 0; e < mesh_.element_capacity(); ++e) {
@@ -83,12 +112,18 @@ void Cutter::collect_seeds(const Vec3 (&tri)[3], std::vector<Index>& seeds) {
       ++count;
     }
     grid_->h = count > 0 && sum > 0 ? sum / count : 1.0;
+    grid_->tolerance = options_.search_grid_slack * grid_->h;
     for (Index e = 0; e < mesh_.element_capacity(); ++e) grid_insert(e);
+    grid_->anchor.resize(static_cast<size_t>(mesh_.num_nodes()));
+    for (Index v = 0; v < mesh_.num_nodes(); ++v)
+      grid_->anchor[static_cast<size_t>(v)] = mesh_.deformed(v);
+    grid_->slack = 0;
     grid_version_ = mesh_.positions_version();
-    grid_drift_ = mesh_.deformed_drift();
     ++grid_builds_;
-    slack = 0;
+  } else if (grid_version_ != mesh_.positions_version()) {
+    grid_sync_nodes();
   }
+  const double slack = grid_->slack;
   const Vec3 n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalized();
   const Vec3 lo = tri[0].cwiseMin(tri[1]).cwiseMin(tri[2]) - Vec3::Constant(slack);
   const Vec3 hi = tri[0].cwiseMax(tri[1]).cwiseMax(tri[2]) + Vec3::Constant(slack);

@@ -320,9 +320,11 @@ SolverSpec parse_solver(JsonObject o, bool slab, bool needle3d) {
     for (const std::string& n : interactive::kRefactorizationModeNames.names())
       refactorization_names.push_back(n);
     const std::string refactorization =
-        o.choice("refactorization", refactorization_names, kNoRefactorizationName);
-    if (refactorization != kNoRefactorizationName)
-      s.refactorization = interactive::kRefactorizationModeNames.find(refactorization);
+        o.choice("refactorization", refactorization_names,
+                 std::string(interactive::to_string(interactive::kDefaultRefactorizationMode)));
+    s.refactorization = refactorization == kNoRefactorizationName
+                            ? std::nullopt
+                            : interactive::kRefactorizationModeNames.find(refactorization);
     s.solve_threads = o.integer("solve_threads", 1, 64, 1);
     std::vector<std::string> schur_names = {kExplicitSchurName};
     for (const std::string& n : linalg::kSchurPreconditionerNames.names()) schur_names.push_back(n);

@@ -149,8 +149,8 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   options.update_deformed =
       spec.solver.cut_configuration == SolverSpec::CutConfiguration::kDeformed;
   options.refactor_at_m = spec.solver.refactor_at_m;
-  // Scenes keep their documented default (refactor_at_m 0, refactorization "none" = never): the
-  // session's automatic §3.6 policy only when the scene names its mode (docs/scenes.md).
+  // The session's automatic §3.6 policy in the scene's mode (default the session's, continuous);
+  // "none" = never (docs/scenes.md).
   options.automatic_refactorization = spec.solver.refactorization.has_value();
   if (spec.solver.refactorization) options.refactorization_mode = *spec.solver.refactorization;
   options.augmented.solve_threads = spec.solver.solve_threads;

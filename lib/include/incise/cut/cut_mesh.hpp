@@ -71,11 +71,6 @@ class CutMesh {
   void set_deformed(const Eigen::Matrix3Xd& x);
   /// Counter incremented whenever deformed positions change in bulk.
   std::uint64_t positions_version() const { return positions_version_; }
-  /// Σ over set_deformed() calls of max_v |x_v,new − x_v,old| (m), non-decreasing: between two
-  /// readings d₁ ≤ d₂ no node's deformed position moved by more than d₂ − d₁ through
-  /// set_deformed (set_position edits are not counted). Lets a spatial index built on deformed
-  /// positions be kept and its queries widened instead of rebuilding it after every solve.
-  double deformed_drift() const { return deformed_drift_; }
   /// Reference positions as a 3 × num_nodes matrix.
   Eigen::Matrix3Xd reference_matrix() const;
   /// Deformed positions as a 3 × num_nodes matrix.
@@ -169,7 +164,6 @@ class CutMesh {
   std::vector<char> fixed_;
   std::vector<Index> origin_;
   std::uint64_t positions_version_ = 0;
-  double deformed_drift_ = 0;
 };
 
 }  // namespace incise::cut

@@ -38,6 +38,13 @@ struct CutOptions {
   int max_degeneracy_passes = 20;  ///< bound on removal passes (thesis: while list shrinks)
   bool check_components = true;    ///< search components without fixed nodes after a cut
   FreeComponentPolicy free_components = FreeComponentPolicy::kFixOnFace;
+  /// How far (a fraction of the search grid's cell size) a node may move from the position its
+  /// elements were entered into the boundary search grid at before they are entered again
+  /// (§3.2.1 entry search; issue 17: the grid is updated, not rebuilt). Queries are widened by
+  /// the drift, so any value ≥ 0 finds the same elements; 0 re-enters every element whose node
+  /// moved at all (the grid of the current positions), larger values re-enter fewer elements
+  /// per solve and widen the queries more.
+  double search_grid_slack = 0.25;
   std::uint64_t seed = 20031107;  ///< seeds the all-edges-halved face choice (§3.3)
 };
 
@@ -125,9 +132,12 @@ class Cutter {
   /// The options in use.
   const CutOptions& options() const { return options_; }
   /// How many times the boundary search grid (deformed bounding boxes, §3.2.1 entry search)
-  /// was built: once at the first step and again only after the nodes may have drifted half a
-  /// grid cell since (CutMesh::deformed_drift; queries are widened by the drift meanwhile).
+  /// was built from the whole mesh: once, at the first step. Afterwards it is updated: the
+  /// elements changed by a cut, and those around nodes that moved more than
+  /// CutOptions::search_grid_slack cells since their elements were entered, are entered again.
   std::int64_t grid_builds() const { return grid_builds_; }
+  /// Element entries made by those updates (changed elements and moved nodes' stars) so far.
+  std::int64_t grid_reentries() const { return grid_reentries_; }
 
  private:
   struct Grid;
@@ -135,6 +145,8 @@ class Cutter {
 
   void collect_seeds(const Vec3 (&tri)[3], std::vector<Index>& seeds);
   void grid_insert(Index e);
+  void grid_sync_nodes();
+  void grid_after_edit(const CutStepReport& r);
   void select_faces(const Vec3 (&tri)[3], CutStepReport& r,
                     std::vector<std::pair<Index, int>>& faces);
   void evaluate(std::vector<Index> candidates, CutStepReport& r,
@@ -157,9 +169,8 @@ class Cutter {
   CutOptions options_;
   std::mt19937_64 rng_;
   std::unique_ptr<Grid> grid_;
-  std::uint64_t grid_version_ = ~std::uint64_t{0};
-  double grid_drift_ = 0;  // CutMesh::deformed_drift() when the grid was built
-  std::int64_t grid_builds_ = 0;
+  std::uint64_t grid_version_ = ~std::uint64_t{0};  // CutMesh::positions_version() synced
+  std::int64_t grid_builds_ = 0, grid_reentries_ = 0;
   /// First intersection of each edge (keyed by original nodes) → original of marked node.
   std::unordered_map<EdgeKey, Index> marked_;
   std::unordered_set<Index> incomplete_;

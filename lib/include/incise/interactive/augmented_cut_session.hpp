@@ -74,7 +74,7 @@ struct AugmentedCutOptions {
   /// summed extra update cost reached one factorization's (the paper's single-core argument).
   /// Measured side by side on the liver path, with augmented.prepare_swap on (the default):
   /// docs/augmented.md, "Refactorization policy". Scene key `refactorization` (docs/scenes.md).
-  RefactorizationMode refactorization_mode = RefactorizationMode::kContinuous;
+  RefactorizationMode refactorization_mode = kDefaultRefactorizationMode;
   /// Refactor every step instead of updating (the "refactor every step" strategy of
   /// docs/augmented.md, organ scale): before each solve that follows a change, the current K is
   /// factored in the calling thread and swapped in (AugmentedSystem::refactor_now(): m drops to

@@ -188,11 +188,12 @@ struct SolverSpec {
   /// replaced columns (a count) have accumulated; 0 = never. Scene key `refactor_at_m`.
   int refactor_at_m = 0;
   /// Interactive cutting run only, with refactor_at_m = 0: the automatic §3.6 policy of
-  /// interactive::AugmentedCutOptions in this mode; nullopt = none (scenes' default: m grows,
-  /// and the per-step rows do not depend on when a background job finishes). Scene key
-  /// `refactorization`: kNoRefactorizationName or a name of interactive::
-  /// kRefactorizationModeNames ("break-even", the library session's default, or "continuous").
-  std::optional<interactive::RefactorizationMode> refactorization;
+  /// interactive::AugmentedCutOptions in this mode; nullopt = none (m grows, and the per-step
+  /// rows do not depend on when a background job finishes). Scene key `refactorization`:
+  /// kNoRefactorizationName or a name of interactive::kRefactorizationModeNames; default the
+  /// session's, interactive::kDefaultRefactorizationMode ("continuous").
+  std::optional<interactive::RefactorizationMode> refactorization =
+      interactive::kDefaultRefactorizationMode;
   /// Interactive cutting run only: linalg::AugmentedOptions::solve_threads, the threads of
   /// step 3's full backward substitution (1 = serial; the result is bit-identical for any
   /// value). Scene key `solve_threads`, 1 … 64.
