@@ -16,7 +16,9 @@
 ///    extrapolate (InsertionOptions3D::extrapolate), jacobi (Preconditioner::kJacobi), aug_m
 ///    (> 0: SolvePath3D::kAugmented with refactor_at_m = aug_m; then also factorizations per
 ///    update and the mean over updates of the last solve's replaced columns m), tight (ε = 1e-9
-///    instead of the scene's 0.01: the (6.9) rule near the exact solves). Run it with
+///    instead of the scene's 0.01: the (6.9) rule near the exact solves), factor (> 0:
+///    InsertionOptions3D::factor_preconditioner with refactor_fraction = (factor − 1)/1000; then
+///    also factorizations per update). Run it with
 ///    INCISE_THREADS=1 and OPENBLAS_NUM_THREADS=1: thread-CPU time counts the calling thread only.
 ///  BM_NeedleFig6_14Linear's arguments aug_m and tight likewise.
 /// No number is asserted (docs/needle.md reports them).
@@ -115,6 +117,10 @@ void BM_NeedleLiver(benchmark::State& state) {
     o.refactor_at_m = static_cast<int>(state.range(3));
   }
   if (state.range(4) != 0) o.epsilon = 1e-9;
+  if (state.range(5) > 0) {
+    o.factor_preconditioner = true;
+    o.refactor_fraction = 0.001 * static_cast<double>(state.range(5) - 1);
+  }
   long factorizations = 0, replaced = 0;
   std::vector<double> total, refine, solve, rearrange;
   double cpu = 0.0;
@@ -150,7 +156,7 @@ void BM_NeedleLiver(benchmark::State& state) {
   state.counters["solves_per_update"] = static_cast<double>(solves) / static_cast<double>(updates);
   state.counters["cg_per_solve"] = static_cast<double>(cg) / static_cast<double>(solves);
   state.counters["final_force_x"] = force.x();
-  if (state.range(3) > 0) {
+  if (state.range(3) > 0 || state.range(5) > 0) {
     state.counters["factorizations_per_update"] =
         static_cast<double>(factorizations) / static_cast<double>(updates);
     state.counters["mean_m"] = static_cast<double>(replaced) / static_cast<double>(updates);
@@ -186,15 +192,19 @@ BENCHMARK(BM_NeedleFig6_14Linear)
     ->Unit(benchmark::kMillisecond);
 // The plain path first: force_dev_rel of the others is measured against it.
 BENCHMARK(BM_NeedleLiver)
-    ->ArgNames({"assembled", "extrapolate", "jacobi", "aug_m", "tight"})
-    ->Args({0, 0, 0, 0, 0})
-    ->Args({1, 0, 0, 0, 0})
-    ->Args({1, 1, 0, 0, 0})
-    ->Args({1, 1, 1, 0, 0})
-    ->Args({1, 0, 0, 0, 1})
-    ->Args({0, 0, 0, 200, 0})
-    ->Args({0, 0, 0, 600, 0})
-    ->Args({0, 0, 0, 2000, 0})
+    ->ArgNames({"assembled", "extrapolate", "jacobi", "aug_m", "tight", "factor"})
+    ->Args({0, 0, 0, 0, 0, 0})
+    ->Args({1, 0, 0, 0, 0, 0})
+    ->Args({1, 1, 0, 0, 0, 0})
+    ->Args({1, 1, 1, 0, 0, 0})
+    ->Args({1, 0, 0, 0, 1, 0})
+    ->Args({0, 0, 0, 200, 0, 0})
+    ->Args({0, 0, 0, 600, 0, 0})
+    ->Args({0, 0, 0, 2000, 0, 0})
+    ->Args({1, 0, 0, 0, 0, 1})
+    ->Args({1, 0, 0, 0, 0, 21})
+    ->Args({1, 0, 0, 0, 1, 21})
+
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 

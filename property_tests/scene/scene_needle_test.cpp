@@ -610,9 +610,13 @@ TEST(SceneNeedle3D, AssembledProductAndExtrapolateKeys) {
   Json j = small_needle3d_scene();
   {
     const scene::BuiltScene b = scene::build_scene(parse_scene(j.dump(), "scene.json", ""));
-    EXPECT_FALSE(b.needle3d->options().assembled_product);
+    EXPECT_TRUE(b.needle3d->options().assembled_product);  // the library's default
     EXPECT_FALSE(b.needle3d->options().extrapolate);
   }
+  j["tools"][0]["assembled_product"] = false;
+  EXPECT_FALSE(scene::build_scene(parse_scene(j.dump(), "scene.json", ""))
+                   .needle3d->options()
+                   .assembled_product);
   j["tools"][0]["assembled_product"] = true;
   j["tools"][0]["extrapolate"] = true;
   {

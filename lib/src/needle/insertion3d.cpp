@@ -5,10 +5,12 @@
 #include <incise/needle/needle_problem.hpp>
 
 #include "augmented_path.hpp"
+#include "factor_preconditioner.hpp"
 #include "stick_slip.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <string>
 #include <utility>
@@ -60,8 +62,15 @@ NeedleInsertion3D::NeedleInsertion3D(const mesh::MeshData& start,
   stop_.force_scale = material_.parameters().youngs_modulus * diameter * diameter;  // E·H²
   margins_ = {stop_.epsilon_round * stop_.force_scale, stop_.epsilon_round * diameter};
   rebuild_problem();
+  INCISE_CHECK_PARAM(
+      std::isfinite(options_.refactor_fraction) && options_.refactor_fraction >= 0.0 &&
+          options_.refactor_fraction <= 1.0,
+      "refactor_fraction must be in [0, 1], got " + std::to_string(options_.refactor_fraction));
   if (options_.solve_path == SolvePath3D::kAugmented)
     augmented_ = std::make_unique<detail::AugmentedNeedlePath>(material_);
+  else if (options_.factor_preconditioner && options_.relaxation == Relaxation::kLinearCg &&
+           material_.name() == "linear")
+    factor_ = std::make_unique<detail::FactorPreconditioner>();
   u_ = VecX::Zero(problem_->size());
   u_end_ = u_;
   increment_ = u_;
@@ -84,7 +93,8 @@ void NeedleInsertion3D::rebuild_problem() {
   for (Index v = 0; v < problem_->num_nodes(); ++v)
     if (is_fixed_vertex(v)) fixed.push_back(v);
   problem_->fix_nodes(fixed);
-  if (options_.assembled_product && material_.linear_geometry())
+  if (options_.assembled_product && material_.linear_geometry() &&
+      options_.solve_path == SolvePath3D::kRelaxation)
     problem_->set_assembled_product(true);
 }
 
@@ -275,6 +285,26 @@ bool NeedleInsertion3D::prepare_augmented(StepReport3D& rep) {
   return ok;
 }
 
+bool NeedleInsertion3D::prepare_factor(StepReport3D& rep) {
+  Timer timer;
+  NeedleProblem3D np(*problem_, pose_, nodes_, thresholds_);
+  std::string message;
+  const auto limit =
+      static_cast<Eigen::Index>(options_.refactor_fraction * static_cast<double>(np.size()));
+  bool ok = true;
+  if (!factor_->ready() || factor_->changed_dofs(np) > limit) {
+    ok = factor_->factor(np, message);
+    ++rep.factorizations;
+  }
+  ok = ok && factor_->follow(np, message);
+  rep.solve_seconds += timer.seconds();
+  if (!ok) {
+    rep.status = StepStatus::kSolverFailed;
+    rep.message = message;
+  }
+  return ok;
+}
+
 StepReport3D NeedleInsertion3D::run(StepReport3D rep) {
   Timer timer;
   for (NeedleNode3D& n : nodes_) n.anchor = n.coords.s;
@@ -282,6 +312,13 @@ StepReport3D NeedleInsertion3D::run(StepReport3D rep) {
   if (extrapolate_now_) extrapolate();
   rep.rearrange_seconds += timer.seconds();
   if (augmented_ && !prepare_augmented(rep)) return rep;
+  if (factor_ && !prepare_factor(rep)) return rep;
+  std::function<void(const VecX&, VecX&)> precondition;
+  std::function<bool()> precondition_failed;
+  if (factor_) {
+    precondition = [this](const VecX& r, VecX& z) { factor_->apply(r, z); };
+    precondition_failed = [this] { return factor_->failed(); };
+  }
   rep = detail::stick_slip_loop(
       rep, options_.max_rearrangements,
       [&](StepReport3D& r) {
@@ -289,7 +326,8 @@ StepReport3D NeedleInsertion3D::run(StepReport3D rep) {
           return augmented_->solve(*problem_, pose_, nodes_, thresholds_, mesh_->points(), u_,
                                    last_gradient_, r);
         return detail::solve<3>(*problem_, pose_, nodes_, thresholds_, options_, stop_,
-                                mesh_->points(), u_, last_gradient_, r);
+                                mesh_->points(), u_, last_gradient_, r, precondition,
+                                precondition_failed);
       },
       [&] {
         return detail::rearrange<3>(nodes_, thresholds_, friction_.static_factor, last_gradient_,

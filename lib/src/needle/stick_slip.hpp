@@ -14,6 +14,7 @@
 #include <algorithm>
 
 #include <cmath>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -125,11 +126,16 @@ bool conclude_solve(NeedleProblemT<D>& np, const typename NeedleSpace<D>::Pose& 
 // success), then refreshes the needle nodes' coordinates from the deformed positions
 // (`points`: 3 × n reference positions) and stores the rotated gradient at the solution in
 // `gradient`. Fills the solve counts of rep; false (status kSolverFailed) on failure.
+// `precondition` (linear CG only), when set, is the operator preconditioner of the CG run
+// (solver::LinearCgOptions::apply_preconditioner) instead of options.preconditioner;
+// `precondition_failed` then says whether it failed during the run (a failed solve).
 template <int D, class Report>
 bool solve(typename NeedleSpace<D>::Base& base, const typename NeedleSpace<D>::Pose& pose,
            std::vector<typename NeedleSpace<D>::Node>& nodes, const std::vector<double>& friction,
            const InsertionOptions& options, const solver::StoppingRule& stop,
-           const Eigen::Matrix3Xd& points, VecX& u, VecX& gradient, Report& rep) {
+           const Eigen::Matrix3Xd& points, VecX& u, VecX& gradient, Report& rep,
+           const std::function<void(const VecX&, VecX&)>& precondition = {},
+           const std::function<bool()>& precondition_failed = {}) {
   NeedleProblemT<D> np(base, pose, nodes, friction);
   VecX ur = np.to_rotated(u);
   solver::SolverReport sr;
@@ -137,7 +143,8 @@ bool solve(typename NeedleSpace<D>::Base& base, const typename NeedleSpace<D>::P
     solver::LinearCgOptions o;
     o.stop = stop;
     o.budget.max_iterations = options.max_iterations;
-    o.preconditioner = options.preconditioner;
+    o.preconditioner = precondition ? solver::Preconditioner::kNone : options.preconditioner;
+    o.apply_preconditioner = precondition;
     sr = solver::linear_cg(np, ur, o);
   } else {
     solver::NonlinearCgOptions o;
@@ -153,6 +160,12 @@ bool solve(typename NeedleSpace<D>::Base& base, const typename NeedleSpace<D>::P
   if (!sr.ok()) {
     rep.status = StepStatus::kSolverFailed;
     rep.message = "solve " + std::to_string(rep.solves) + ": " + sr.brief();
+    return false;
+  }
+  if (precondition_failed && precondition_failed()) {
+    rep.status = StepStatus::kSolverFailed;
+    rep.message = "solve " + std::to_string(rep.solves) +
+                  ": the factor preconditioner's triangular solve failed";
     return false;
   }
   return conclude_solve<D>(np, pose, nodes, points, ur, u, gradient, rep);

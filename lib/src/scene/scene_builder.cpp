@@ -447,7 +447,7 @@ BuiltScene build_needle3d_scene(const SceneSpec& spec) {
   o.max_rearrangements = tool.max_rearrangements;
   o.relocate = tool.relocate;
   o.preconditioner = spec.solver.preconditioner;
-  o.assembled_product = tool.assembled_product;
+  if (tool.assembled_product) o.assembled_product = *tool.assembled_product;
   o.extrapolate = tool.extrapolate;
   if (spec.solver.method == SolverSpec::Method::kAugmented) {
     o.solve_path = needle::SolvePath3D::kAugmented;

@@ -398,7 +398,7 @@ void parse_needle(JsonObject& o, ToolSpec& t, bool slab) {
     t.radius = o.number("radius", detail::positive());
     t.h_shaft = o.number("h_shaft", detail::positive(), 2.0 * t.radius);
     t.max_elements = o.integer("max_elements", 1, std::numeric_limits<Index>::max(), 1000000);
-    t.assembled_product = o.boolean("assembled_product", false);
+    if (o.has("assembled_product")) t.assembled_product = o.boolean("assembled_product", true);
     t.extrapolate = o.boolean("extrapolate", false);
   }
   if (o.has("friction")) {
@@ -635,12 +635,12 @@ void check_needle3d(const SceneSpec& s, const std::string& file) {
          "got " +
              std::to_string(s.tools.size()) + " tools");
   const ToolSpec& t = s.tools[0];
-  if (t.assembled_product && s.material.model != "linear")
+  if (t.assembled_product.value_or(false) && s.material.model != "linear")
     fail(file, t.path_json + "/assembled_product",
          "the assembled product needs the \"linear\" material (its stiffness does not change "
          "with u), got \"" +
              s.material.model + "\"");
-  if (t.assembled_product && s.solver.method == SolverSpec::Method::kAugmented)
+  if (t.assembled_product.value_or(false) && s.solver.method == SolverSpec::Method::kAugmented)
     fail(file, t.path_json + "/assembled_product",
          "the assembled product speeds up CG's K·d; the \"augmented\" solver factors K instead");
   if (t.extrapolate && s.solver.method != SolverSpec::Method::kCG)

@@ -62,6 +62,15 @@ JacobiDiagonal jacobi_inverse_diagonal(Problem& problem, const VecX& u) {
 
 SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options) {
   INCISE_CHECK(u.size() == problem.size(), "linear_cg: u has the wrong size");
+  INCISE_CHECK(
+      !options.apply_preconditioner || options.preconditioner == Preconditioner::kNone,
+      "linear_cg: apply_preconditioner and a Preconditioner other than kNone are both set");
+  // z = B r for the operator preconditioner, projected; D⁻¹ r or r otherwise.
+  const auto precondition = [&](const VecX& inv_diag, const VecX& r, VecX& z) {
+    if (!options.apply_preconditioner) return incise::solver::precondition(inv_diag, r, z);
+    options.apply_preconditioner(r, z);
+    problem.project(z);
+  };
   SolverReport rep;
   CostMeter meter(problem);
   const FixedDofs fixed_dofs(problem);

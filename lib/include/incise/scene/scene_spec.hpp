@@ -265,8 +265,10 @@ struct ToolSpec {
   /// 3D needle only: refinement budget in tetrahedra (InsertionOptions3D::max_elements).
   Index max_elements = 1000000;
   /// 3D needle, linear material only: K·d from the stiffness assembled once per refinement
-  /// (InsertionOptions3D::assembled_product; key `assembled_product`, default false).
-  bool assembled_product = false;
+  /// (InsertionOptions3D::assembled_product; key `assembled_product`). Unset: the library's
+  /// default (on; ignored for other materials); an explicit true is refused where it does not
+  /// apply (another material, the "augmented" solver).
+  std::optional<bool> assembled_product;
   /// 3D needle, solver "cg" only: warm start advanced by the previous update's increment
   /// (InsertionOptions3D::extrapolate; key `extrapolate`, default false).
   bool extrapolate = false;

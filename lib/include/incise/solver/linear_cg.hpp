@@ -52,6 +52,10 @@ struct LinearCgOptions : RelaxationOptions {
   bool recompute_residual = true;
   /// When non-null, cleared and filled with α_k, β_k of every step (for condition estimates).
   CgCoefficients* coefficients = nullptr;
+  /// When set, the preconditioner z = B r (B symmetric positive definite on the free DOFs, e.g.
+  /// a factor of a nearby stiffness) instead of `preconditioner`, which must then be kNone
+  /// (UsageError otherwise). linear_cg projects z after the call (fixed DOFs of z are zeroed).
+  std::function<void(const VecX& r, VecX& z)> apply_preconditioner;
 };
 
 /// Minimizes the quadratic model Π(u₀) + ∇Π(u₀)·x + ½ xᵀK(u₀)x over x with Px = x, i.e. solves
