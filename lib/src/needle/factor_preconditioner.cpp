@@ -71,8 +71,8 @@ bool FactorPreconditioner::follow(NeedleProblem3D& np, std::string& message) {
   for (Eigen::Index i = nm; i < n; ++i) {
     const double d = diag[i];
     if (!(std::isfinite(d) && d > 0.0)) {
-      message = "the stiffness diagonal at new DOF " + std::to_string(i) +
-                " is not positive and finite";
+      message =
+          "the stiffness diagonal at new DOF " + std::to_string(i) + " is not positive and finite";
       return false;
     }
     inverse_diagonal_[i - nm] = 1.0 / d;
