@@ -112,6 +112,7 @@ solver::SolverReport run_method(Method method, P& p, VecX& u,
   static_cast<solver::RelaxationOptions&>(o) = common;
   o.time_step = dt;
   o.damping = eta;
+  o.gradient_recurrence = true;  // the third pass's figures (docs/solvers.md)
   return solver::dynamic_relaxation(p, u, o);
 }
 

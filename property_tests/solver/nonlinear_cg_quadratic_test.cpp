@@ -164,6 +164,7 @@ TEST(DynamicRelaxationQuadratic, RecurrenceMatchesEvaluatedSteps_Sec2_5) {
     ASSERT_TRUE(dp.ok()) << dp.brief();
 
     DynamicRelaxationOptions o;
+    o.gradient_recurrence = true;
     o.stop.rule = ResidualRule::kExternalForce;
     o.stop.epsilon = kEpsilon;
     o.time_step = dp.time_step;

@@ -47,7 +47,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   // matrix-free product, which skips the kinematics). As nonlinear_cg's recurrence: evaluated
   // every kReplaceEvery steps, after a restart, and whenever the recurrence residual meets the
   // stopping rule, so convergence is certified on an evaluated gradient.
-  const bool quadratic = problem.energy_is_quadratic();
+  const bool quadratic = options.gradient_recurrence && problem.energy_is_quadratic();
   constexpr long kReplaceEvery = 50;
   long since_evaluated = 0;
   bool have_previous = false;  // last_good, g and energy hold the previous step's ū, ∇Π, Π

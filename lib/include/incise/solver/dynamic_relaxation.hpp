@@ -29,6 +29,11 @@ struct DynamicRelaxationOptions : RelaxationOptions {
   /// SolverReport::time_step say so.
   int max_restarts = 0;
   double restart_reduction = 0.7;  ///< Δt factor per restart, in (0, 1)
+  /// For a quadratic Π: the gradient recurrence below instead of a gradient+energy sweep per
+  /// step. Off by default: it pays only where a K-product is cheaper than the sweep (an
+  /// assembled K); it changes the flops a step costs and with them the §4.5.4 flop ratios that
+  /// verification/papers/nienhuys2003_ch4 reproduces.
+  bool gradient_recurrence = false;
 };
 
 /// Runs SS22 from rest at u (updated in place). One step (2.56)–(2.60) with θ₁ = ½, θ₂ = 0:
@@ -40,7 +45,8 @@ struct DynamicRelaxationOptions : RelaxationOptions {
 /// set to the last evaluated admissible point. With options.max_restarts > 0 those events (and
 /// energy growth) restart the integration at a smaller Δt instead, until the restarts are used
 /// up (then the status is the last event's, with a message naming the restarts).
-/// For a quadratic Π (Problem::energy_is_quadratic()) the gradient and energy at ū come from
+/// With options.gradient_recurrence and a quadratic Π (Problem::energy_is_quadratic()) the
+/// gradient and energy at ū come from
 /// the previous step's by one K-product, ∇Π(ū_k) = ∇Π(ū_{k−1}) + K(ū_k − ū_{k−1}), evaluated
 /// instead every 50 steps, after a restart and whenever the recurrence residual meets the
 /// stopping rule (convergence is certified on an evaluated gradient); SolverReport::
