@@ -42,10 +42,10 @@ TEST(Outcome, BriefIsTheStatusNameAndTheMessageWhenThereIsOne) {
 
 // True when R derives from some Outcome<S, ok, initial> (deduced from the base).
 template <class S, S kOk, S kInitial>
-std::true_type derives_from_outcome(const Outcome<S, kOk, kInitial>*) {
+[[maybe_unused]] std::true_type derives_from_outcome(const Outcome<S, kOk, kInitial>*) {
   return {};
 }
-std::false_type derives_from_outcome(...) {
+[[maybe_unused]] std::false_type derives_from_outcome(...) {
   return {};
 }
 template <class R>

@@ -51,7 +51,7 @@ TEST(AugmentedReports, SingularPreconditionerIsReportedAsDropped) {
   k(2, 2) = 0;
   const Eigen::VectorXd expected = k.fullPivLu().solve(f);
   // Dense LU of a 5×5 with κ ≈ 10: round-off only.
-  constexpr double kSolveTol = 1e-12;
+  constexpr double kLuSolveTol = 1e-12;
   for (SchurPreconditioner pc :
        {SchurPreconditioner::kDiagonal, SchurPreconditioner::kTridiagonalSpai}) {
     SCOPED_TRACE(linalg::to_string(pc));
@@ -67,7 +67,7 @@ TEST(AugmentedReports, SingularPreconditionerIsReportedAsDropped) {
     EXPECT_TRUE(rep.preconditioner_dropped);
     EXPECT_FALSE(rep.preconditioner_rcond > linalg::kMinPreconditionerRcond);  // 0 or NaN
     EXPECT_TRUE(rep.message.empty());
-    EXPECT_LE((a - expected).norm(), kSolveTol * expected.norm());
+    EXPECT_LE((a - expected).norm(), kLuSolveTol * expected.norm());
   }
   // A healthy change keeps the preconditioner; kNone builds none (rcond NaN).
   for (SchurPreconditioner pc : {SchurPreconditioner::kDiagonal, SchurPreconditioner::kNone}) {
@@ -119,12 +119,12 @@ TEST(AugmentedReports, DroppedPreconditionerIsNamedInAFailureMessage) {
 // warn_amplification nothing is flagged, between the two bounds the solve is ok with the
 // accuracy warning, above max_amplification (1e12) it is a singular system, outputs zeroed.
 TEST(AugmentedReports, AmplifiedSolutionsAreWarnedOrRejected) {
-  struct Case {
+  struct AmplifiedCase {
     double s;
     bool ok, warning;
   };
-  for (const Case& c :
-       {Case{1e-3, true, false}, Case{1e-10, true, true}, Case{1e-13, false, true}}) {
+  for (const AmplifiedCase& c : {AmplifiedCase{1e-3, true, false}, AmplifiedCase{1e-10, true, true},
+                                 AmplifiedCase{1e-13, false, true}}) {
     SCOPED_TRACE(c.s);
     Eigen::MatrixXd k = Eigen::MatrixXd::Identity(2, 2);
     k(1, 1) = c.s;  // pivot ratio ≥ 1e-13 passes CholmodOptions::min_pivot_ratio = 1e-14

@@ -103,8 +103,9 @@ std::pair<int, int> expect_friction_inequalities(NeedleInsertion3D& sim, const S
     EXPECT_LE(n.coords.s, sim.pose().length);
   }
   // Same gradient summed in another order (before release only): rounding of O(1 N) sums.
-  if (rep.released == 0)
+  if (rep.released == 0) {
     EXPECT_LT((rep.needle_force - needle).norm(), 1e-9 * (1.0 + needle.norm()));
+  }
   return counts;
 }
 

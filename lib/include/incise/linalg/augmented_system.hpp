@@ -345,7 +345,6 @@ class AugmentedSystem {
   bool snapshot_active_ = false;
   std::future<std::unique_ptr<Base>> job_;
   bool job_preparing_ = false;  // job_ is the prepare_swap stage (G of a finished factor)
-  std::uint64_t pattern_version_ = 1;
   FactorStatus last_refactor_status_ = FactorStatus::kOk;
   double diag_scale_ = 1;  // max |K⁰_ii|: entries below 1e-13·diag_scale_ count as zero
   // SchurSolver::kDirectCached: G = (R⁻¹) on the base DOFs of 𝓛 of the last solve, kept while
