@@ -297,14 +297,16 @@ BENCHMARK(BM_LiverCutOnly)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 
-// The k new columns R⁻¹e of G = H R⁻¹ Hᵀ for DOFs joining 𝓛, one restricted solve each (0) or
-// one blocked pass (1, ClosureLdlSolver::solve_restricted_block), on the liver's K⁰ factor
+// The k new columns R⁻¹e of G = H R⁻¹ Hᵀ for DOFs joining 𝓛, one restricted solve each (0), one
+// blocked pass entry by entry (1) or with its supernode blocks through dgemm/dtrsm (2; both
+// ClosureLdlSolver::solve_restricted_block), on the liver's K⁰ factor
 // (METIS; simplicial LDLᵀ, or supernodal as the session's defaults — linalg::interactive_options —
 // whose LDLᵀ copy has the wide supernodes the blocked pass hands to dgemm/dtrsm): 𝓛 = the DOFs of
 // the 300 nodes nearest the path's first blade position (m = 900), k of them joining. CPU time is
-// the measure. Args: blocked, refined liver, supernodal (0/1), k (default 40).
+// the measure. Args: single / blocked / blocked dense (0/1/2), refined liver, supernodal (0/1), k.
 void BM_NewColumnsOfG(benchmark::State& state) {
   const bool blocked = state.range(0) != 0;
+  const bool dense = state.range(0) == 2;
   const incise::mesh::MeshData& body = liver(state.range(1) != 0);
   const incise::fixtures::OrganPath path = incise::fixtures::organ_path(body);
   incise::interactive::AugmentedCutOptions opt;
@@ -341,7 +343,7 @@ void BM_NewColumnsOfG(benchmark::State& state) {
   for (auto _ : state) {
     if (blocked) {
       Eigen::MatrixXd y;
-      solver.solve_restricted_block(joining, solver.closure(joining), closure_y, l, y);
+      solver.solve_restricted_block(joining, solver.closure(joining), closure_y, l, y, dense);
       checksum += y(0, 0);
     } else {
       std::vector<double> y;
@@ -361,12 +363,16 @@ void BM_NewColumnsOfG(benchmark::State& state) {
 BENCHMARK(BM_NewColumnsOfG)
     ->Args({0, 0, 0, 40})
     ->Args({1, 0, 0, 40})
+    ->Args({2, 0, 0, 40})
     ->Args({0, 1, 0, 40})
     ->Args({1, 1, 0, 40})
+    ->Args({2, 1, 0, 40})
     ->Args({0, 0, 1, 40})
     ->Args({1, 0, 1, 40})
+    ->Args({2, 0, 1, 40})
     ->Args({0, 0, 1, 150})
     ->Args({1, 0, 1, 150})
+    ->Args({2, 0, 1, 150})
     ->Unit(benchmark::kMillisecond);
 
 // The capacitance matrix's dense LU (linalg::DenseLu, the kernel of CapacitanceFactor's fresh
