@@ -27,6 +27,7 @@
 #include <incise/fixtures/organ_path.hpp>
 #include <incise/interactive/augmented_cut_session.hpp>
 #include <incise/io/read_mesh.hpp>
+#include <incise/linalg/capacitance_factor.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
 #include <incise/linalg/dense_blas.hpp>
 #include <incise/linalg/ldl_closure_solver.hpp>
@@ -397,6 +398,27 @@ void BM_CapacitanceLu(benchmark::State& state) {
   benchmark::DoNotOptimize(checksum);
   state.counters["lapack"] = lu.uses_blas() ? 1 : 0;
 }
+// A fresh CapacitanceFactor::update (force_fresh) on the same matrices: equilibration, the LU
+// and Hager's condition estimate (≤ 5 iterations of two solves) — what a capacitance refresh
+// costs a frame beside the bare LU above. Args: m, LAPACK (1) or Eigen (0).
+void BM_CapacitanceFresh(benchmark::State& state) {
+  const auto m = static_cast<Eigen::Index>(state.range(0));
+  const Eigen::MatrixXd a =
+      Eigen::MatrixXd::Identity(m, m) +
+      Eigen::MatrixXd::Random(m, m) * (0.5 / static_cast<double>(m));  // Eigen's fixed seed
+  std::vector<int> labels(static_cast<std::size_t>(m));
+  for (std::size_t i = 0; i < labels.size(); ++i) labels[i] = static_cast<int>(i);
+  incise::linalg::CapacitanceFactor factor(1.0, state.range(1) != 0);
+  double checksum = 0;
+  for (auto _ : state) checksum += factor.update(a, labels, /*force_fresh=*/true).rcond;
+  benchmark::DoNotOptimize(checksum);
+}
+BENCHMARK(BM_CapacitanceFresh)
+    ->Args({1000, 0})
+    ->Args({1000, 1})
+    ->Args({1500, 1})
+    ->Unit(benchmark::kMillisecond);
+
 BENCHMARK(BM_CapacitanceLu)
     ->Args({500, 0})
     ->Args({500, 1})
