@@ -15,9 +15,10 @@
 /// Args: refined (0/1), blade advance per frame (0.1 mm units), frames, refactor_at_m (0: the
 /// automatic §3.6 policy), capacitance updated (1) or refactored at every solve (0), and the
 /// automatic policy's mode (0 continuous, the default; 1 break-even;
-/// interactive/refactorization_policy.hpp), and AugmentedOptions::prepare_swap (1, the default).
-/// chg_* counters: frames that solved (the others reuse the last solution and cost the cut);
-/// bg_cpu_*: CPU of the background factorizations that were swapped in (their own thread).
+/// interactive/refactorization_policy.hpp), AugmentedOptions::prepare_swap (1, the default), and
+/// AugmentedOptions::blas_kernels (1, the default; 0: Eigen's LU and entry-by-entry blocked
+/// solves). chg_* counters: frames that solved (the others reuse the last solution and cost the
+/// cut); bg_cpu_*: CPU of the background factorizations that were swapped in (their own thread).
 /// With INCISE_ORGAN_TRACE=<dir> the per-frame numbers go to <dir>/<benchmark args>.csv.
 
 #include <benchmark/benchmark.h>
@@ -26,7 +27,9 @@
 #include <incise/fixtures/organ_path.hpp>
 #include <incise/interactive/augmented_cut_session.hpp>
 #include <incise/io/read_mesh.hpp>
+#include <incise/linalg/capacitance_factor.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
+#include <incise/linalg/dense_blas.hpp>
 #include <incise/linalg/ldl_closure_solver.hpp>
 #include <incise/material/material.hpp>
 #include <incise/mesh/quality.hpp>
@@ -73,6 +76,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
   opt.refactor_at_m = static_cast<int>(state.range(3));
   opt.augmented.update_capacitance = state.range(4) != 0;
   opt.augmented.prepare_swap = state.range(6) != 0;
+  opt.augmented.blas_kernels = state.range(7) != 0;
   opt.refactorization_mode = state.range(5) == 0
                                  ? incise::interactive::RefactorizationMode::kContinuous
                                  : incise::interactive::RefactorizationMode::kBreakEven;
@@ -90,15 +94,17 @@ void BM_LiverScalpelPath(benchmark::State& state) {
     std::ofstream trace;
     if (const char* dir = std::getenv("INCISE_ORGAN_TRACE")) {
       std::string name = std::string(dir) + "/scalpel";
-      for (int a = 0; a < 7; ++a) name += "_" + std::to_string(state.range(a));
+      for (int a = 0; a < 8; ++a) name += "_" + std::to_string(state.range(a));
       trace.open(name + ".csv");
       trace << "frame,cut_cpu_ms,update_cpu_ms,m_before,m_after,swapped,started,new_columns,"
-               "newcol_ms,capfactor_ms,cap_fresh,bg_cpu_ms,dirichlet\n";
+               "newcol_ms,capfactor_ms,cap_fresh,bg_cpu_ms,dirichlet,product_ms,setup_ms,step1_ms,"
+               "step2_ms,step3_ms,swap_ms,gmres_iterations,cap_rank\n";
     }
     for (int f = 0; f < frames; ++f) {
       const auto tris = path.frame(f, advance);
-      double c = 0, u = 0, cc = 0, uc = 0, nc = 0, ncs = 0, cf = 0, bgc = 0;
-      int mb = 0, ma = 0, sw = 0, st = 0, fresh = 0, dir = 0;
+      double c = 0, u = 0, cc = 0, uc = 0, nc = 0, ncs = 0, cf = 0, bgc = 0, pr = 0, su = 0, s1 = 0,
+             s2 = 0, s3 = 0, swp = 0;
+      int mb = 0, ma = 0, sw = 0, st = 0, fresh = 0, dir = 0, git = 0, rank = 0;
       bool solved = false;
       for (int k = 0; k < 2; ++k) {
         const incise::interactive::AugmentedCutStepReport r = session.step(tris[k]);
@@ -111,6 +117,14 @@ void BM_LiverScalpelPath(benchmark::State& state) {
           ncs += r.solve.seconds_new_columns;
           cf += r.solve.seconds_capacitance_factor;
           fresh += r.solve.capacitance_refreshed ? 1 : 0;
+          pr += r.solve.seconds_capacitance_product;
+          su += r.solve.seconds_setup;
+          s1 += r.solve.seconds_step1;
+          s2 += r.solve.seconds_step2;
+          s3 += r.solve.seconds_step3;
+          swp += r.solve.seconds_swap;
+          git += r.solve.gmres.iterations;
+          rank = std::max(rank, r.solve.capacitance_rank);
           st += r.refactorization_started ? 1 : 0;
         }
         if (r.refactorization_swapped) {
@@ -150,7 +164,9 @@ void BM_LiverScalpelPath(benchmark::State& state) {
       if (trace.is_open())
         trace << f << ',' << 1e3 * cc << ',' << 1e3 * uc << ',' << mb << ',' << ma << ',' << sw
               << ',' << st << ',' << nc << ',' << 1e3 * ncs << ',' << 1e3 * cf << ',' << fresh
-              << ',' << 1e3 * bgc << ',' << dir << '\n';
+              << ',' << 1e3 * bgc << ',' << dir << ',' << 1e3 * pr << ',' << 1e3 * su << ','
+              << 1e3 * s1 << ',' << 1e3 * s2 << ',' << 1e3 * s3 << ',' << 1e3 * swp << ',' << git
+              << ',' << rank << '\n';
     }
     const auto schg = summarize(chg_frame_cpu), sm = summarize(m_after);
     state.counters["chg_frames"] = static_cast<double>(chg_frame_cpu.size());
@@ -204,25 +220,28 @@ void BM_LiverScalpelPath(benchmark::State& state) {
 // §3.6 policy, capacitance updated); at 3 mm also the capacitance LU made afresh at every solve
 // (before issue 17) for the ratio in one run. The refined liver takes minutes per path.
 BENCHMARK(BM_LiverScalpelPath)
-    ->Args({0, 10, 100, 0, 1, 0, 1})
-    ->Args({0, 10, 100, 0, 1, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 1, 1})
-    ->Args({0, 30, 100, 0, 0, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 1, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 1, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 1, 0})
-    ->Args({0, 30, 30, 0, 1, 0, 1})
-    ->Args({1, 30, 30, 0, 1, 0, 1})
-    ->Args({1, 10, 100, 0, 1, 0, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1})
-    ->Args({1, 30, 100, 0, 0, 0, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 0})
+    ->Args({0, 10, 100, 0, 1, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 0, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 1, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 1, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 1, 0, 1})
+    ->Args({0, 30, 30, 0, 1, 0, 1, 1})
+    ->Args({1, 30, 30, 0, 1, 0, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1})
+    ->Args({1, 30, 100, 0, 0, 0, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 
@@ -279,13 +298,16 @@ BENCHMARK(BM_LiverCutOnly)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 
-// The k new columns R⁻¹e of G = H R⁻¹ Hᵀ for DOFs joining 𝓛, one restricted solve each (0) or
-// one blocked pass (1, ClosureLdlSolver::solve_restricted_block), on the liver's K⁰ factor
-// (METIS, simplicial LDLᵀ as the session's solves use): 𝓛 = the DOFs of the 300 nodes nearest
-// the path's first blade position (m = 900), k = 40 of them joining. CPU time is the measure.
-// Args: blocked, refined liver.
+// The k new columns R⁻¹e of G = H R⁻¹ Hᵀ for DOFs joining 𝓛, one restricted solve each (0), one
+// blocked pass entry by entry (1) or with its supernode blocks through dgemm/dtrsm (2; both
+// ClosureLdlSolver::solve_restricted_block), on the liver's K⁰ factor
+// (METIS; simplicial LDLᵀ, or supernodal as the session's defaults — linalg::interactive_options —
+// whose LDLᵀ copy has the wide supernodes the blocked pass hands to dgemm/dtrsm): 𝓛 = the DOFs of
+// the 300 nodes nearest the path's first blade position (m = 900), k of them joining. CPU time is
+// the measure. Args: single / blocked / blocked dense (0/1/2), refined liver, supernodal (0/1), k.
 void BM_NewColumnsOfG(benchmark::State& state) {
   const bool blocked = state.range(0) != 0;
+  const bool dense = state.range(0) == 2;
   const incise::mesh::MeshData& body = liver(state.range(1) != 0);
   const incise::fixtures::OrganPath path = incise::fixtures::organ_path(body);
   incise::interactive::AugmentedCutOptions opt;
@@ -293,8 +315,11 @@ void BM_NewColumnsOfG(benchmark::State& state) {
   incise::interactive::AugmentedCutSession session(body, incise::fixtures::organ_material(),
                                                    path.fixed, path.forces, opt);
   const incise::linalg::SparseMatrix k0 = session.system().current_matrix();
-  incise::linalg::CholmodFactor factor(
-      {incise::linalg::CholmodKind::kSimplicialLdl, incise::linalg::CholmodOrdering::kMetis});
+  incise::linalg::CholmodFactor factor({state.range(2) != 0
+                                            ? incise::linalg::CholmodKind::kSupernodal
+                                            : incise::linalg::CholmodKind::kSimplicialLdl,
+                                        incise::linalg::CholmodOrdering::kMetis});
+  const auto joining_count = static_cast<std::size_t>(state.range(3) > 0 ? state.range(3) : 40);
   if (factor.compute(k0, 1) != incise::linalg::FactorStatus::kOk) {
     state.SkipWithError("factorization failed");
     return;
@@ -311,14 +336,15 @@ void BM_NewColumnsOfG(benchmark::State& state) {
       l.push_back(session.dof(near[static_cast<std::size_t>(i)].second) + c);
   std::sort(l.begin(), l.end());
   std::vector<int> joining;
-  for (std::size_t i = 0; i < l.size() && joining.size() < 40; i += l.size() / 40)
+  for (std::size_t i = 0; i < l.size() && joining.size() < joining_count;
+       i += std::max<std::size_t>(1, l.size() / joining_count))
     joining.push_back(l[i]);
   const std::vector<int> closure_y = solver.closure(l);
   double checksum = 0;
   for (auto _ : state) {
     if (blocked) {
       Eigen::MatrixXd y;
-      solver.solve_restricted_block(joining, solver.closure(joining), closure_y, l, y);
+      solver.solve_restricted_block(joining, solver.closure(joining), closure_y, l, y, dense);
       checksum += y(0, 0);
     } else {
       std::vector<double> y;
@@ -336,10 +362,70 @@ void BM_NewColumnsOfG(benchmark::State& state) {
   state.counters["nnz_l"] = static_cast<double>(factor.extract_ldl()->nnz_l());
 }
 BENCHMARK(BM_NewColumnsOfG)
-    ->Args({0, 0})
-    ->Args({1, 0})
-    ->Args({0, 1})
-    ->Args({1, 1})
+    ->Args({0, 0, 0, 40})
+    ->Args({1, 0, 0, 40})
+    ->Args({2, 0, 0, 40})
+    ->Args({0, 1, 0, 40})
+    ->Args({1, 1, 0, 40})
+    ->Args({2, 1, 0, 40})
+    ->Args({0, 0, 1, 40})
+    ->Args({1, 0, 1, 40})
+    ->Args({2, 0, 1, 40})
+    ->Args({0, 0, 1, 150})
+    ->Args({1, 0, 1, 150})
+    ->Args({2, 0, 1, 150})
+    ->Unit(benchmark::kMillisecond);
+
+// The capacitance matrix's dense LU (linalg::DenseLu, the kernel of CapacitanceFactor's fresh
+// factorization) at the m the liver path reaches: LAPACK's dgetrf of the loaded BLAS vs Eigen's
+// PartialPivLU (SSE2 in this build), factorization + one solve with 100 right-hand sides (the
+// W columns of an update). A random well-conditioned matrix (identity + coupling of norm ≤ 0.5).
+// CPU time is the measure. Args: m, LAPACK (1) or Eigen (0).
+void BM_CapacitanceLu(benchmark::State& state) {
+  const auto m = static_cast<Eigen::Index>(state.range(0));
+  const Eigen::MatrixXd a =
+      Eigen::MatrixXd::Identity(m, m) +
+      Eigen::MatrixXd::Random(m, m) * (0.5 / static_cast<double>(m));  // Eigen's fixed seed
+  const Eigen::MatrixXd b = Eigen::MatrixXd::Random(m, 100);
+  incise::linalg::DenseLu lu(state.range(1) != 0);
+  double checksum = 0;
+  for (auto _ : state) {
+    lu.compute(a);
+    Eigen::MatrixXd x = b;
+    lu.solve_in_place(x);
+    checksum += x(0, 0);
+  }
+  benchmark::DoNotOptimize(checksum);
+  state.counters["lapack"] = lu.uses_blas() ? 1 : 0;
+}
+// A fresh CapacitanceFactor::update (force_fresh) on the same matrices: equilibration, the LU
+// and Hager's condition estimate (≤ 5 iterations of two solves) — what a capacitance refresh
+// costs a frame beside the bare LU above. Args: m, LAPACK (1) or Eigen (0).
+void BM_CapacitanceFresh(benchmark::State& state) {
+  const auto m = static_cast<Eigen::Index>(state.range(0));
+  const Eigen::MatrixXd a =
+      Eigen::MatrixXd::Identity(m, m) +
+      Eigen::MatrixXd::Random(m, m) * (0.5 / static_cast<double>(m));  // Eigen's fixed seed
+  std::vector<int> labels(static_cast<std::size_t>(m));
+  for (std::size_t i = 0; i < labels.size(); ++i) labels[i] = static_cast<int>(i);
+  incise::linalg::CapacitanceFactor factor(1.0, state.range(1) != 0);
+  double checksum = 0;
+  for (auto _ : state) checksum += factor.update(a, labels, /*force_fresh=*/true).rcond;
+  benchmark::DoNotOptimize(checksum);
+}
+BENCHMARK(BM_CapacitanceFresh)
+    ->Args({1000, 0})
+    ->Args({1000, 1})
+    ->Args({1500, 1})
+    ->Unit(benchmark::kMillisecond);
+
+BENCHMARK(BM_CapacitanceLu)
+    ->Args({500, 0})
+    ->Args({500, 1})
+    ->Args({1000, 0})
+    ->Args({1000, 1})
+    ->Args({1500, 0})
+    ->Args({1500, 1})
     ->Unit(benchmark::kMillisecond);
 
 // ---------------------------------------------------------------------------------------------

@@ -173,7 +173,8 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
   return base;
 }
 
-AugmentedSystem::AugmentedSystem(AugmentedOptions options) : options_(options) {
+AugmentedSystem::AugmentedSystem(AugmentedOptions options)
+    : options_(options), capacitance_(1.0, options.blas_kernels) {
   INCISE_CHECK_PARAM(options_.solve_threads >= 1, "AugmentedOptions::solve_threads must be >= 1");
   INCISE_CHECK_PARAM(options_.max_amplification > 0 && options_.warn_amplification > 0,
                      "AugmentedOptions::max_amplification and warn_amplification must be > 0");
@@ -415,10 +416,11 @@ bool AugmentedSystem::start_preparing(std::unique_ptr<Base>& base) {
   if (keep.empty()) return false;
   std::vector<int> l(keep.begin(), keep.end());
   job_preparing_ = true;
-  job_ = std::async(std::launch::async, [b = std::move(base), l = std::move(l)]() mutable {
+  job_ = std::async(std::launch::async, [b = std::move(base), l = std::move(l),
+                                         dense = options_.blas_kernels]() mutable {
     ClosureLdlSolver& solver = *b->solver;
     const std::vector<int> closure = solver.closure(l);
-    solver.solve_restricted_block(l, closure, closure, l, b->g);
+    solver.solve_restricted_block(l, closure, closure, l, b->g, dense);
     b->g_l = std::move(l);
     return std::move(b);
   });
@@ -711,8 +713,8 @@ Eigen::MatrixXd AugmentedSystem::hsj_matrix(const Augmentation& aug) const {
 // Entries of E in rows outside 𝓛 (possible only if K lost its exact symmetry) are left out:
 // the matrix is then an approximation, which as GMRES's preconditioner costs iterations, not
 // accuracy.
-Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const Augmentation& aug, int& solves,
-                                                    AugmentedReport& report) {
+const Eigen::MatrixXd& AugmentedSystem::capacitance_matrix(const Augmentation& aug, int& solves,
+                                                           AugmentedReport& report) {
   const std::vector<int>& l_base = aug.l_base;
   const int m = aug.m();
   const int nb = n_base_;
@@ -745,7 +747,8 @@ Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const Augmentation& aug, int
   }
   if (!fresh_k.empty()) {
     Eigen::MatrixXd y;
-    solver.solve_restricted_block(fresh_dofs, solver.closure(fresh_dofs), aug.closure_y, l_base, y);
+    solver.solve_restricted_block(fresh_dofs, solver.closure(fresh_dofs), aug.closure_y, l_base, y,
+                                  options_.blas_kernels);
     solves = static_cast<int>(fresh_k.size());
     for (std::size_t c = 0; c < fresh_k.size(); ++c) {
       const int k = fresh_k[c];
@@ -764,25 +767,16 @@ Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const Augmentation& aug, int
   // Φ + G Ψ, column by column: for each entry (𝓛 position p, value v) of Ψ_{*k}, add v·G_{*p}.
   // 𝓛 is sorted, so its base DOFs (< n_base) are its first mb entries and G is block diagonal:
   // g on them, the identity on the new DOFs.
-  Eigen::MatrixXd s = Eigen::MatrixXd::Zero(m, m);
-  auto add_g_column = [&](int k, int p, double v) {
-    if (p < mb) {
-      s.col(k).head(mb) += v * g_.col(p);
-    } else {
-      s(p, k) += v;
-    }
-  };
+  // Ψ_{*k} as (label, value) pairs, in the order the column's entries are summed.
+  std::vector<std::vector<std::pair<int, double>>> psi(static_cast<std::size_t>(m));
   for (int k = 0; k < m; ++k) {
     const int j = aug.l[k];
-    if (aug.is_dirichlet[k]) {
-      add_g_column(k, k, 1.0);
-      continue;
-    }
-    s(k, k) += 1.0;
+    auto& col = psi[static_cast<std::size_t>(k)];
+    if (aug.is_dirichlet[k]) continue;  // Ψ_{*k} = e_k (marked by an empty list and the flag)
     // E_k = K_{*j} − R_{*j}: merge the stored column with the base column (both sorted).
     const Column& kc = *aug.j_cols[k];
     auto add_e = [&](int row, double v) {
-      if (v != 0 && pos_in_l_[row] >= 0) add_g_column(k, pos_in_l_[row], v);
+      if (v != 0 && pos_in_l_[row] >= 0) col.emplace_back(row, v);
     };
     size_t a = 0;
     if (j < nb) {
@@ -801,8 +795,75 @@ Eigen::MatrixXd AugmentedSystem::capacitance_matrix(const Augmentation& aug, int
       for (const auto& [row, v] : kc) add_e(row, row == j ? v - 1.0 : v);
     }
   }
+  // Columns whose Ψ (and Dirichlet flag) are those of the last solve on the same G keep their
+  // values on the rows of the labels that were in 𝓛 then; only the new labels' rows are summed.
+  // The sums run in the same order as a full recomputation, so the matrix is bitwise the same;
+  // a frame then costs O(mb·nnz) for the changed columns only (issue 17).
+  std::vector<int> prev(static_cast<std::size_t>(m), -1);  // position in the last solve's 𝓛
+  if (product_generation_ == base_generation_) {
+    size_t q = 0;
+    for (int i = 0; i < m; ++i) {
+      while (q < product_l_.size() && product_l_[q] < aug.l[i]) ++q;
+      if (q < product_l_.size() && product_l_[q] == aug.l[i]) prev[i] = static_cast<int>(q);
+    }
+  }
+  std::vector<int> fresh_rows;
+  for (int i = 0; i < m; ++i)
+    if (prev[i] < 0) fresh_rows.push_back(i);
+  Eigen::MatrixXd s(m, m);
+  auto g_entry = [&](int i, int p) -> double {  // G(i, p) on 𝓛 positions
+    if (i < mb && p < mb) return g_(i, p);
+    return i == p ? 1.0 : 0.0;
+  };
+  int kept = 0;
+  for (int k = 0; k < m; ++k) {
+    const auto& col = psi[static_cast<std::size_t>(k)];
+    const int pk = prev[k];
+    const bool same = pk >= 0 &&
+                      product_dirichlet_[static_cast<std::size_t>(pk)] == aug.is_dirichlet[k] &&
+                      product_psi_[static_cast<std::size_t>(pk)] == col;
+    if (same) {
+      ++kept;
+      for (int i = 0; i < m; ++i)
+        if (prev[i] >= 0) s(i, k) = product_(prev[i], pk);
+      for (int i : fresh_rows) {
+        double v = 0;
+        if (aug.is_dirichlet[k]) {
+          v = g_entry(i, k);
+        } else {
+          for (const auto& [row, e] : col) v += e * g_entry(i, pos_in_l_[row]);
+        }
+        s(i, k) = v;
+      }
+      continue;
+    }
+    s.col(k).setZero();
+    if (aug.is_dirichlet[k]) {
+      if (k < mb) {
+        s.col(k).head(mb) += g_.col(k);
+      } else {
+        s(k, k) += 1.0;
+      }
+      continue;
+    }
+    s(k, k) += 1.0;
+    for (const auto& [row, e] : col) {
+      const int p = pos_in_l_[row];
+      if (p < mb) {
+        s.col(k).head(mb) += e * g_.col(p);
+      } else {
+        s(p, k) += e;
+      }
+    }
+  }
+  report.capacitance_columns_kept = kept;
+  product_generation_ = base_generation_;
+  product_l_ = aug.l;
+  product_psi_ = std::move(psi);
+  product_dirichlet_ = aug.is_dirichlet;
+  product_ = std::move(s);
   report.seconds_capacitance_product = product.seconds();
-  return s;
+  return product_;
 }
 
 // Step 1 (§3.2; eqs. 18, 19): rhs = H R⁻¹ f̂, the right-hand side of eq. 17. Forward
@@ -849,7 +910,7 @@ Eigen::VectorXd AugmentedSystem::solve_schur_system(Augmentation& aug, const Eig
     if (options_.update_capacitance) {
       // Updated, not refactored (CapacitanceFactor); fresh for a new factor of R.
       const bool fresh = capacitance_generation_ != base_generation_;
-      const Eigen::MatrixXd s = capacitance_matrix(aug, report.schur_solves, report);
+      const Eigen::MatrixXd& s = capacitance_matrix(aug, report.schur_solves, report);
       const Timer factor;
       const CapacitanceUpdate u = capacitance_.update(s, aug.l, fresh);
       report.seconds_capacitance_factor = factor.seconds();
@@ -865,7 +926,7 @@ Eigen::VectorXd AugmentedSystem::solve_schur_system(Augmentation& aug, const Eig
         };
       }
     } else {
-      const Eigen::MatrixXd s = capacitance_matrix(aug, report.schur_solves, report);
+      const Eigen::MatrixXd& s = capacitance_matrix(aug, report.schur_solves, report);
       const Timer factor;
       direct.factor(s, /*equilibrate=*/true);
       report.seconds_capacitance_factor = factor.seconds();

@@ -15,7 +15,8 @@ bool strictly_increasing(const std::vector<int>& v) {
 
 }  // namespace
 
-CapacitanceFactor::CapacitanceFactor(double refresh_ratio) : refresh_ratio_(refresh_ratio) {
+CapacitanceFactor::CapacitanceFactor(double refresh_ratio, bool use_blas)
+    : refresh_ratio_(refresh_ratio), use_blas_(use_blas), lu0_(use_blas), k_lu_(use_blas) {
   INCISE_CHECK_PARAM(refresh_ratio > 0, "CapacitanceFactor: refresh_ratio must be > 0");
 }
 
@@ -69,7 +70,7 @@ Eigen::VectorXd CapacitanceFactor::solve0_transposed(const Eigen::VectorXd& b) c
   Eigen::VectorXd r(static_cast<Eigen::Index>(ref_labels_.size()));
   for (std::size_t u = 0; u < union_.size(); ++u)
     if (ref_pos_[u] >= 0) r(ref_pos_[u]) = b(static_cast<Eigen::Index>(u));
-  if (r.size() > 0) r = lu0_.transpose().solve(r);
+  if (r.size() > 0) r = lu0_.solve(r, /*transposed=*/true);
   for (std::size_t u = 0; u < union_.size(); ++u)
     if (ref_pos_[u] >= 0) x(static_cast<Eigen::Index>(u)) = r(ref_pos_[u]);
   return x;
@@ -78,14 +79,14 @@ Eigen::VectorXd CapacitanceFactor::solve0_transposed(const Eigen::VectorXd& b) c
 // Ŝ⁻¹ b = Ŝ₀⁻¹ b − W K⁻¹ Vᵀ Ŝ₀⁻¹ b (Sherman–Morrison–Woodbury).
 Eigen::VectorXd CapacitanceFactor::apply_inverse(const Eigen::VectorXd& b) const {
   Eigen::VectorXd y = solve0(b);
-  if (w_.cols() > 0) y -= w_ * k_lu_.solve(vt_ * y);
+  if (w_.cols() > 0) y -= w_ * k_lu_.solve(Eigen::VectorXd(vt_ * y));
   return y;
 }
 
 // Ŝ⁻ᵀ b = Ŝ₀⁻ᵀ (b − V K⁻ᵀ Wᵀ b): the transpose of the expression above.
 Eigen::VectorXd CapacitanceFactor::apply_inverse_transposed(const Eigen::VectorXd& b) const {
   if (w_.cols() == 0) return solve0_transposed(b);
-  const Eigen::VectorXd z = k_lu_.transpose().solve(w_.transpose() * b);
+  const Eigen::VectorXd z = k_lu_.solve(Eigen::VectorXd(w_.transpose() * b), /*transposed=*/true);
   return solve0_transposed(b - vt_.transpose() * z);
 }
 
@@ -231,41 +232,60 @@ CapacitanceUpdate CapacitanceFactor::update(const Eigen::MatrixXd& s,
   if (update_flops > refresh_ratio_ * fresh_flops) return fresh_report();
 
   // U = [D_{*,𝓠}, E_𝓡], W = Ŝ₀⁻¹ U (columns cached by label), Vᵀ = [E_𝓠ᵀ; D̃_{𝓡,*}].
+  // The cache misses are solved together: one LU solve with many right-hand sides (BLAS-3,
+  // dense_blas.hpp) instead of one triangular pair per column.
+  {
+    std::vector<Eigen::Index> miss_q;  // t of the 𝓠 columns whose D column changed
+    std::vector<int> miss_r;           // union positions of the 𝓡 rows without Ŝ₀⁻¹ e_u
+    for (Eigen::Index t = 0; t < nq; ++t) {
+      const auto it =
+          w_cache_.find(uni[static_cast<std::size_t>(qcols[static_cast<std::size_t>(t)])]);
+      if (it == w_cache_.end() || it->second.first != parts[static_cast<std::size_t>(t)])
+        miss_q.push_back(t);
+    }
+    for (int u : rrows)
+      if (ref_pos[static_cast<std::size_t>(u)] >= 0 &&
+          w_cache_.count(-1 - uni[static_cast<std::size_t>(u)]) == 0)
+        miss_r.push_back(u);
+    const auto nmq = static_cast<Eigen::Index>(miss_q.size());
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(m0, nmq + static_cast<Eigen::Index>(miss_r.size()));
+    for (Eigen::Index c = 0; c < nmq; ++c)
+      rhs.col(c) = parts[static_cast<std::size_t>(miss_q[static_cast<std::size_t>(c)])];
+    for (std::size_t c = 0; c < miss_r.size(); ++c)
+      rhs(ref_pos[static_cast<std::size_t>(miss_r[c])], nmq + static_cast<Eigen::Index>(c)) = 1.0;
+    if (m0 > 0) lu0_.solve_in_place(rhs);
+    for (Eigen::Index c = 0; c < nmq; ++c) {
+      const auto t = static_cast<std::size_t>(miss_q[static_cast<std::size_t>(c)]);
+      w_cache_.insert_or_assign(
+          uni[static_cast<std::size_t>(qcols[t])],
+          std::make_pair(parts[t], m0 > 0 ? Eigen::VectorXd(rhs.col(c)) : Eigen::VectorXd()));
+    }
+    for (std::size_t c = 0; c < miss_r.size(); ++c)
+      w_cache_.insert_or_assign(
+          -1 - uni[static_cast<std::size_t>(miss_r[c])],
+          std::make_pair(Eigen::VectorXd(),
+                         Eigen::VectorXd(rhs.col(nmq + static_cast<Eigen::Index>(c)))));
+    out.new_solves = static_cast<int>(rhs.cols());
+  }
   w_.resize(nu, rank);
   vt_ = Eigen::MatrixXd::Zero(rank, nu);
   for (Eigen::Index t = 0; t < nq; ++t) {
     const int u = qcols[static_cast<std::size_t>(t)];
-    const int label = uni[static_cast<std::size_t>(u)];
-    auto it = w_cache_.find(label);
-    if (it == w_cache_.end() || it->second.first != parts[static_cast<std::size_t>(t)]) {
-      Eigen::VectorXd sol = m0 > 0 ? Eigen::VectorXd(lu0_.solve(parts[static_cast<std::size_t>(t)]))
-                                   : Eigen::VectorXd();
-      it = w_cache_.insert_or_assign(label, std::make_pair(parts[static_cast<std::size_t>(t)], sol))
-               .first;
-      ++out.new_solves;
-    }
+    const auto& sol = w_cache_.at(uni[static_cast<std::size_t>(u)]).second;
     for (Eigen::Index q = 0; q < nu; ++q) {
       const int rq = ref_pos[static_cast<std::size_t>(q)];
-      w_(q, t) = rq >= 0 ? it->second.second(rq) : d(q, u);  // identity off 𝓛₀
+      w_(q, t) = rq >= 0 ? sol(rq) : d(q, u);  // identity off 𝓛₀
     }
     vt_(t, u) = 1.0;
   }
   for (Eigen::Index t = 0; t < nr; ++t) {
     const int u = rrows[static_cast<std::size_t>(t)];
-    const int label = uni[static_cast<std::size_t>(u)];
     w_.col(nq + t).setZero();
     if (ref_pos[static_cast<std::size_t>(u)] >= 0) {  // the 𝓛₀ column of S₀⁻¹
-      auto e = w_cache_.find(-1 - label);
-      if (e == w_cache_.end()) {
-        Eigen::VectorXd unit = Eigen::VectorXd::Zero(m0);
-        unit(ref_pos[static_cast<std::size_t>(u)]) = 1.0;
-        Eigen::VectorXd sol = lu0_.solve(unit);
-        e = w_cache_.insert_or_assign(-1 - label, std::make_pair(Eigen::VectorXd(), sol)).first;
-        ++out.new_solves;
-      }
+      const auto& sol = w_cache_.at(-1 - uni[static_cast<std::size_t>(u)]).second;
       for (Eigen::Index q = 0; q < nu; ++q) {
         const int rq = ref_pos[static_cast<std::size_t>(q)];
-        if (rq >= 0) w_(q, nq + t) = e->second.second(rq);
+        if (rq >= 0) w_(q, nq + t) = sol(rq);
       }
     } else {
       w_(u, nq + t) = 1.0;
@@ -273,8 +293,18 @@ CapacitanceUpdate CapacitanceFactor::update(const Eigen::MatrixXd& s,
     vt_.row(nq + t) = d.row(u);
     for (int qc : qcols) vt_(nq + t, qc) = 0.0;  // D̃: the 𝓠 columns are in D_{*,𝓠} E_𝓠ᵀ
   }
+  // K = I + Vᵀ W: the 𝓠 rows of Vᵀ are unit rows (rows of W); the 𝓡 rows one product.
   const Eigen::Index c = rank;
-  const Eigen::MatrixXd k = Eigen::MatrixXd::Identity(c, c) + vt_ * w_;
+  Eigen::MatrixXd k(c, c);
+  for (Eigen::Index t = 0; t < nq; ++t) k.row(t) = w_.row(qcols[static_cast<std::size_t>(t)]);
+  if (use_blas_) {
+    dense_gemm(false, false, static_cast<int>(nr), static_cast<int>(c), static_cast<int>(nu), 1.0,
+               vt_.data() + nq, static_cast<int>(c), w_.data(), static_cast<int>(nu), 0.0,
+               k.data() + nq, static_cast<int>(c));
+  } else {
+    k.bottomRows(nr).noalias() = vt_.bottomRows(nr) * w_;
+  }
+  k.diagonal().array() += 1.0;
   k_lu_.compute(k);
   union_ = std::move(uni);
   ref_pos_ = std::move(ref_pos);

@@ -1,14 +1,18 @@
 #include <incise/core/error.hpp>
 #include <incise/core/parallel.hpp>
+#include <incise/linalg/blas_threads.hpp>
+#include <incise/linalg/dense_blas.hpp>
 #include <incise/linalg/ldl_closure_solver.hpp>
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstring>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 #include <functional>
+#include <iterator>
 #include <utility>
 
 namespace incise::linalg {
@@ -317,18 +321,23 @@ void ClosureLdlSolver::solve_restricted_block(const std::vector<int>& columns,
                                               const std::vector<int>& forward_closure,
                                               const std::vector<int>& backward_closure,
                                               const std::vector<int>& wanted,
-                                              Eigen::MatrixXd& x_wanted) {
+                                              Eigen::MatrixXd& x_wanted, bool dense_kernels) {
   const LdlFactorData& f = *factor_;
   const auto k = static_cast<Eigen::Index>(columns.size());
+  const int kk = static_cast<int>(k);
   x_wanted.resize(static_cast<Eigen::Index>(wanted.size()), k);
   if (k == 0) return;
   if (slot_.empty()) slot_.assign(static_cast<size_t>(f.n), -1);
-  // Block rows for the positions of both closures (each a row of k contiguous values).
-  int rows = 0;
-  for (const auto* list : {&forward_closure, &backward_closure})
-    for (int j : *list)
-      if (slot_[static_cast<size_t>(j)] < 0) slot_[static_cast<size_t>(j)] = rows++;
-  std::vector<double> y(static_cast<size_t>(rows) * static_cast<size_t>(k), 0.0);
+  // Block rows for the positions of both closures, in ascending position order (each a row of
+  // k contiguous values), so that the columns of a supernode in a closure — a suffix j … j₁ —
+  // are consecutive rows: the k × (j₁ − j + 1) block the dense kernels work on.
+  std::vector<int> positions;
+  positions.reserve(forward_closure.size() + backward_closure.size());
+  std::set_union(forward_closure.begin(), forward_closure.end(), backward_closure.begin(),
+                 backward_closure.end(), std::back_inserter(positions));
+  for (size_t t = 0; t < positions.size(); ++t)
+    slot_[static_cast<size_t>(positions[t])] = static_cast<int>(t);
+  std::vector<double> y(positions.size() * static_cast<size_t>(k), 0.0);
   auto row = [&](int j) {
     return y.data() + static_cast<size_t>(slot_[static_cast<size_t>(j)]) * k;
   };
@@ -337,14 +346,55 @@ void ClosureLdlSolver::solve_restricted_block(const std::vector<int>& columns,
   const int* cp = f.col_ptr.data();
   const int* ri = f.row_idx.data();
   const double* lv = f.values.data();
+  // Supernode suffix j … j₁ (s columns) with row set R = pattern(j₁) (r rows): column c holds
+  // rows c+1 … j₁ (the unit-lower triangle L_SS), then R (the block L_RS, r × s). Blocks with
+  // at least kMinDenseWork multiply-adds go through dgemm/dtrsm (dense_blas.hpp) on copies of
+  // L_SS and L_RS; smaller ones stay entry by entry (a BLAS call costs about as much).
+  const double min_dense_work = dense_kernels ? 4096.0 : HUGE_VAL;
+  std::vector<double> lss, lrs, tmp;
+  auto copy_blocks = [&](int j, int j1) {
+    const int s = j1 - j + 1, r = cp[j1 + 1] - cp[j1];
+    lss.assign(static_cast<size_t>(s) * static_cast<size_t>(s), 0.0);
+    lrs.resize(static_cast<size_t>(r) * static_cast<size_t>(s));
+    for (int c = j; c <= j1; ++c) {
+      const int a = c - j, w = j1 - c;
+      const double* v = lv + cp[c];
+      std::copy(v, v + w, lss.begin() + static_cast<std::ptrdiff_t>(a * s + a + 1));
+      std::copy(v + w, v + w + r, lrs.begin() + static_cast<std::ptrdiff_t>(a) * r);
+    }
+  };
+  const ScopedBlasThreads one_thread(1);
+  last_dense_blocks_ = 0;
   // Forward: L z = b over the closure (ascending; the rows of column j are its ancestors, so in
   // the closure), then z ← D⁻¹ z.
-  for (int j : forward_closure) {
-    const double* zj = row(j);
-    for (int p = cp[j]; p < cp[j + 1]; ++p) {
-      double* zi = row(ri[p]);
-      const double l = lv[p];
-      for (Eigen::Index c = 0; c < k; ++c) zi[c] -= l * zj[c];
+  for (size_t t = 0; t < forward_closure.size();) {
+    const int j = forward_closure[t];
+    const int j1 = super_last_[j];
+    while (t < forward_closure.size() && forward_closure[t] <= j1) ++t;
+    const int s = j1 - j + 1, r = cp[j1 + 1] - cp[j1];
+    if (static_cast<double>(k) * s * (s + r) < min_dense_work) {
+      for (int c = j; c <= j1; ++c) {
+        const double* zc = row(c);
+        for (int p = cp[c]; p < cp[c + 1]; ++p) {
+          double* zi = row(ri[p]);
+          const double l = lv[p];
+          for (Eigen::Index q = 0; q < k; ++q) zi[q] -= l * zc[q];
+        }
+      }
+      continue;
+    }
+    copy_blocks(j, j1);
+    ++last_dense_blocks_;
+    double* zs = row(j);                                              // k × s, leading dimension k
+    dense_trsm_right_unit_lower(true, kk, s, lss.data(), s, zs, kk);  // Zᵀ_S ← Bᵀ_S L_SS⁻ᵀ
+    if (r == 0) continue;
+    tmp.resize(static_cast<size_t>(r) * static_cast<size_t>(k));
+    dense_gemm(false, true, kk, r, s, 1.0, zs, kk, lrs.data(), r, 0.0, tmp.data(), kk);
+    const int* rows = ri + cp[j1];
+    for (int i = 0; i < r; ++i) {
+      double* zi = row(rows[i]);
+      const double* ti = tmp.data() + static_cast<size_t>(i) * k;
+      for (Eigen::Index q = 0; q < k; ++q) zi[q] -= ti[q];
     }
   }
   for (int j : forward_closure) {
@@ -354,21 +404,42 @@ void ClosureLdlSolver::solve_restricted_block(const std::vector<int>& columns,
   }
   // Backward: Lᵀ x = z over the backward closure (descending); positions outside the forward
   // closure hold z = 0, the exact forward result there (Thm. 1).
-  for (size_t t = backward_closure.size(); t-- > 0;) {
-    const int j = backward_closure[t];
-    double* xj = row(j);
-    for (int p = cp[j]; p < cp[j + 1]; ++p) {
-      const double* xi = row(ri[p]);
-      const double l = lv[p];
-      for (Eigen::Index c = 0; c < k; ++c) xj[c] -= l * xi[c];
+  for (size_t t = backward_closure.size(); t > 0;) {
+    const int j1 = backward_closure[t - 1];
+    INCISE_ASSERT(super_last_[j1] == j1, "closure not ancestor-closed");
+    size_t first = t - 1;
+    while (first > 0 && super_last_[backward_closure[first - 1]] == j1) --first;
+    const int j = backward_closure[first];
+    t = first;
+    const int s = j1 - j + 1, r = cp[j1 + 1] - cp[j1];
+    if (static_cast<double>(k) * s * (s + r) < min_dense_work) {
+      for (int c = j1; c >= j; --c) {
+        double* xc = row(c);
+        for (int p = cp[c]; p < cp[c + 1]; ++p) {
+          const double* xi = row(ri[p]);
+          const double l = lv[p];
+          for (Eigen::Index q = 0; q < k; ++q) xc[q] -= l * xi[q];
+        }
+      }
+      continue;
     }
+    copy_blocks(j, j1);
+    ++last_dense_blocks_;
+    double* xs = row(j);
+    if (r > 0) {
+      tmp.resize(static_cast<size_t>(r) * static_cast<size_t>(k));
+      const int* rows = ri + cp[j1];
+      for (int i = 0; i < r; ++i)
+        std::copy_n(row(rows[i]), k, tmp.data() + static_cast<size_t>(i) * k);
+      dense_gemm(false, false, kk, s, r, -1.0, tmp.data(), kk, lrs.data(), r, 1.0, xs, kk);
+    }
+    dense_trsm_right_unit_lower(false, kk, s, lss.data(), s, xs, kk);  // Xᵀ_S ← Zᵀ_S L_SS⁻¹
   }
   for (size_t w = 0; w < wanted.size(); ++w) {
     const double* xw = row(f.inverse_perm[wanted[w]]);
     for (Eigen::Index c = 0; c < k; ++c) x_wanted(static_cast<Eigen::Index>(w), c) = xw[c];
   }
-  for (const auto* list : {&forward_closure, &backward_closure})
-    for (int j : *list) slot_[static_cast<size_t>(j)] = -1;
+  for (int j : positions) slot_[static_cast<size_t>(j)] = -1;
 }
 
 void ClosureLdlSolver::solve_sparse_rhs(const std::vector<int>& b_indices,

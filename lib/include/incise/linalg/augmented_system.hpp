@@ -115,6 +115,14 @@ struct AugmentedOptions {
   /// 150–470 ms swap frames of docs/augmented.md, "Refactorization policy"). Off here;
   /// AugmentedCutOptions turns it on. wait_for_refactorization() prepares and swaps in one call.
   bool prepare_swap = false;
+  /// SchurSolver::kDirectCached: the dense work of a frame through the BLAS/LAPACK the process
+  /// loads (dense_blas.hpp; OpenBLAS here): the capacitance LU and its many-right-hand-side
+  /// solves (LAPACK dgetrf/dgetrs), and the new columns of G blocked per supernode (dgemm/dtrsm
+  /// in ClosureLdlSolver::solve_restricted_block). False: Eigen's LU and entry-by-entry loops
+  /// (compiled for baseline x86-64: SSE2), kept for the comparison of docs/augmented.md,
+  /// "Frame maximum (issue 17)". The solutions agree to round-off (GMRES on the exact operator
+  /// either way).
+  bool blas_kernels = true;
   /// Threads of step 3's full backward substitution (ClosureLdlSolver): 1 = serial, ≥ 1. The
   /// pass streams all of L and is memory-bound, so extra threads help as far as a core adds
   /// memory bandwidth (docs/augmented.md). The result is bit-identical for any value. Leave at
@@ -176,13 +184,15 @@ struct [[nodiscard]] AugmentedReport
   double seconds_step2 = 0;
   double seconds_step3 = 0;
   double seconds_total = 0;
-  double seconds_swap = 0;
+  double seconds_swap = 0;  ///< §3.6: swapping a finished background factor in (incl. in total)
   // Of seconds_step2 with kDirectCached: the restricted solves R⁻¹e for new columns of G, the
   // product Φ + GΨ, and the capacitance factorization (fresh or updated).
   double seconds_new_columns = 0;
   double seconds_capacitance_product = 0;
-  double seconds_capacitance_factor =
-      0;                     ///< §3.6: swapping a finished background factor in (incl. in total)
+  double seconds_capacitance_factor = 0;
+  /// kDirectCached: columns of Φ + GΨ kept from the last solve (same Ψ column and G: only the
+  /// rows of labels new in 𝓛 summed); the others are made afresh
+  int capacitance_columns_kept = 0;
   double amplification = 0;  ///< see AugmentedOptions::max_amplification
   /// amplification > AugmentedOptions::warn_amplification: digits may be lost, even when ok()
   bool amplification_warning = false;
@@ -280,6 +290,9 @@ class AugmentedSystem {
   std::vector<int> replaced_columns() const;
   /// Number of replaced columns m = |𝓛|.
   int num_replaced() const;
+  /// SchurSolver::kDirectCached: the capacitance matrix Φ + GΨ = H R⁻¹ J (up to round-off) of
+  /// the last solve, rows and columns in the order of 𝓛 at that solve (empty before the first).
+  const Eigen::MatrixXd& last_capacitance_matrix() const { return product_; }
   /// The current stiffness K (n × n, both triangles), assembled from the base and changes.
   SparseMatrix current_matrix() const;
 
@@ -325,7 +338,8 @@ class AugmentedSystem {
   void find_closures(Augmentation& aug, AugmentedReport& report);
   Eigen::MatrixXd hsj_matrix(const Augmentation& aug) const;
   Eigen::VectorXd schur_rhs(const Augmentation& aug);
-  Eigen::MatrixXd capacitance_matrix(const Augmentation& aug, int& solves, AugmentedReport& report);
+  const Eigen::MatrixXd& capacitance_matrix(const Augmentation& aug, int& solves,
+                                            AugmentedReport& report);
   Eigen::VectorXd solve_schur_system(Augmentation& aug, const Eigen::VectorXd& rhs,
                                      const SchurLu& hsj, AugmentedReport& report);
   void back_substitute(Augmentation& aug, const Eigen::VectorXd& a2, Eigen::VectorXd& displacement);
@@ -353,6 +367,14 @@ class AugmentedSystem {
   std::uint64_t g_generation_ = 0;     // base_generation_ g_ was computed with (0: none)
   std::vector<int> g_l_;               // its DOFs (sorted)
   Eigen::MatrixXd g_;
+  // kDirectCached: the last capacitance matrix Φ + GΨ with its 𝓛, Ψ columns ((row, value) in
+  // summation order) and Dirichlet flags, reused for the columns whose Ψ is the same on the same
+  // G (capacitance_matrix()).
+  std::uint64_t product_generation_ = 0;
+  std::vector<int> product_l_;
+  std::vector<std::vector<std::pair<int, double>>> product_psi_;
+  std::vector<char> product_dirichlet_;
+  Eigen::MatrixXd product_;
   // update_capacitance: the kept factorization of H R⁻¹ J and the base generation it is of.
   CapacitanceFactor capacitance_;
   std::uint64_t capacitance_generation_ = 0;

@@ -17,6 +17,8 @@
 /// 1-norm estimator (Higham, "Accuracy and Stability of Numerical Algorithms", 2nd ed., §15.3,
 /// Alg. 15.4) on the updated operator.
 
+#include <incise/linalg/dense_blas.hpp>
+
 #include <Eigen/Dense>
 
 #include <cstdint>
@@ -37,8 +39,10 @@ struct CapacitanceUpdate {
 class CapacitanceFactor {
  public:
   /// `refresh_ratio`: refactor when the predicted update cost exceeds this × a fresh
-  /// factorization's (flop counts; > 0). 1 = whichever is cheaper.
-  explicit CapacitanceFactor(double refresh_ratio = 1.0);
+  /// factorization's (flop counts; > 0). 1 = whichever is cheaper. `use_blas`: the LUs, their
+  /// many-right-hand-side solves and VᵀW through LAPACK/BLAS (dense_blas.hpp) when the process
+  /// has them; false: Eigen's kernels (the comparison of docs/augmented.md).
+  explicit CapacitanceFactor(double refresh_ratio = 1.0, bool use_blas = true);
   /// Makes the operator of `s` (square, size labels.size()) whose rows and columns are labelled
   /// `labels` (strictly increasing): updates the kept factorization, or refactors (first call,
   /// `force_fresh`, or the cost rule). Throws UsageError on mismatched sizes or unsorted labels.
@@ -67,11 +71,12 @@ class CapacitanceFactor {
   double estimate_rcond(const Eigen::MatrixXd& shat) const;
 
   double refresh_ratio_;
+  bool use_blas_;
   std::int64_t fresh_count_ = 0;
   // Fresh state.
-  std::vector<int> ref_labels_;  // 𝓛₀ (sorted)
-  Eigen::MatrixXd s0_;           // equilibrated S₀
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu0_;
+  std::vector<int> ref_labels_;                               // 𝓛₀ (sorted)
+  Eigen::MatrixXd s0_;                                        // equilibrated S₀
+  DenseLu lu0_;                                               // LAPACK (dense_blas.hpp)
   std::unordered_map<int, std::pair<double, double>> scale_;  // label → (row, column) scale
   // Last update.
   std::vector<int> union_;    // 𝓤 (sorted)
@@ -79,7 +84,7 @@ class CapacitanceFactor {
   std::vector<int> cur_pos_;  // per current label: position in 𝓤
   Eigen::MatrixXd w_;         // Ŝ₀⁻¹ U (|𝓤| × 2|𝓒|)
   Eigen::MatrixXd vt_;        // Vᵀ (2|𝓒| × |𝓤|)
-  Eigen::PartialPivLU<Eigen::MatrixXd> k_lu_;
+  DenseLu k_lu_;
   Eigen::VectorXd row_scale_, col_scale_;  // per current label
   // Cache of Ŝ₀⁻¹ d for the D columns, by label: the 𝓛₀ part of d and of Ŝ₀⁻¹ d.
   std::unordered_map<int, std::pair<Eigen::VectorXd, Eigen::VectorXd>> w_cache_;

@@ -59,12 +59,17 @@ class ClosureLdlSolver {
   /// `forward_closure` (⊇ closure(columns)) and one backward pass over `backward_closure`
   /// (⊇ closure(wanted)) carry all k right-hand sides, so each entry of L is read once per pass
   /// and applied to k contiguous values (issue 17: the new columns of G = H R⁻¹ Hᵀ joining 𝓛 in
-  /// one pass instead of k). Equal to k calls of solve_restricted up to the order of the
-  /// floating-point sums. Cost O(k·Σ_{j∈closures} |L_{*j}|) flops, O(Σ |L_{*j}|) reads of L.
+  /// one pass instead of k). A supernode's part of a closure (a suffix of its columns) is one
+  /// dense block: with enough work (k·s·(s + r) ≥ 4096 multiply-adds for s columns and r rows
+  /// below) it goes through BLAS-3 (dtrsm on the diagonal triangle, dgemm on the rows below;
+  /// dense_blas.hpp), smaller ones entry by entry. Equal to k calls of solve_restricted up to
+  /// the order of the floating-point sums. Cost O(k·Σ_{j∈closures} |L_{*j}|) flops, O(Σ |L_{*j}|)
+  /// reads of L. `dense_kernels` false: every block entry by entry (for comparison).
   void solve_restricted_block(const std::vector<int>& columns,
                               const std::vector<int>& forward_closure,
                               const std::vector<int>& backward_closure,
-                              const std::vector<int>& wanted, Eigen::MatrixXd& x_wanted);
+                              const std::vector<int>& wanted, Eigen::MatrixXd& x_wanted,
+                              bool dense_kernels = true);
 
   /// Sparse-RHS solve with a full result: restricted forward substitution on
   /// `forward_closure` (⊇ closure(b_indices)), then a full backward substitution (§3.3,
@@ -78,6 +83,10 @@ class ClosureLdlSolver {
 
   /// Dense solve A x = b (full forward and backward substitution).
   void solve_dense(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+
+  /// Supernode blocks the last solve_restricted_block() passed to the dense kernels (forward
+  /// and backward passes counted separately).
+  int last_block_dense_supernodes() const { return last_dense_blocks_; }
 
   /// Number of fundamental supernodes of L (maximal chains of columns j, j+1, … with
   /// pattern(L_{*j}) = {j+1} ∪ pattern(L_{*,j+1})), detected at construction. The triangular
@@ -115,6 +124,7 @@ class ClosureLdlSolver {
   std::vector<int> super_rows_;  // row set of each supernode (at its last column), concatenated
   std::vector<std::int64_t> super_row_ptr_;  // column j₁ → start in super_rows_ (size n + 1)
   int num_supernodes_ = 0;
+  int last_dense_blocks_ = 0;  // solve_restricted_block: blocks through dgemm/dtrsm
   // Threaded full backward pass: positions processed serially first (ascending; walked
   // descending), then one list of position ranges [first, last] (whole subtrees) per thread.
   std::vector<int> serial_;
