@@ -334,5 +334,62 @@ TEST(DynamicRelaxation, StableRunIsUnchangedByTheRestartCheck) {
   EXPECT_EQ(a, b);  // bitwise: the check only reads the state
 }
 
+// energy_every (issue 19; docs/solvers.md, "Fourth pass"): Π on every 4th step only leaves the
+// trajectory bitwise unchanged (SS22 reads only ∇Π, (2.58)), records Π on those steps and NaN on
+// the others, evaluates Π at the returned point, and still catches the energy growth of a too
+// large Δt and restarts, as with Π on every step.
+TEST(DynamicRelaxation, EnergyEveryKthStepSameTrajectoryAndStillRestarts_Sec4_4_1) {
+  INCISE_SEEDED_RNG(rng, 68);
+  DynamicsSetup s = make_setup(rng);
+  DynamicRelaxationOptions o = dr_options(s.dt, critical_damping(s.lam[0]));
+  o.max_restarts = 3;
+  VecX a = VecX::Zero(24), b = VecX::Zero(24);
+  const SolverReport ra = dynamic_relaxation(s.p, a, o);
+  o.energy_every = 4;
+  const SolverReport rb = dynamic_relaxation(s.p, b, o);
+  ASSERT_TRUE(ra.ok() && rb.ok()) << ra.brief() << " / " << rb.brief();
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(ra.iterations, rb.iterations);
+  EXPECT_EQ(ra.residual_history, rb.residual_history);
+  ASSERT_EQ(ra.energy_history.size(), rb.energy_history.size());
+  const std::size_t steps = rb.energy_history.size();
+  ASSERT_GT(steps, 8u);
+  // Π by Problem::energy (the converged step, when it skipped Π) and by the gradient's fused
+  // energy may differ in the last bits: 1e-12 relative.
+  const auto near = [](double x, double y) { return std::abs(x - y) <= 1e-12 * std::abs(y); };
+  for (std::size_t i = 0; i < steps; ++i) {
+    if (i % 4 == 0)
+      EXPECT_EQ(rb.energy_history[i], ra.energy_history[i]) << i;
+    else if (i + 1 == steps)
+      EXPECT_TRUE(near(rb.energy_history[i], ra.energy_history[i])) << i;
+    else
+      EXPECT_TRUE(std::isnan(rb.energy_history[i])) << i;
+  }
+  EXPECT_TRUE(near(rb.energy, ra.energy)) << rb.energy << " " << ra.energy;
+  // A budget that stops on a step without Π: the report's energy is evaluated at the returned u.
+  o.budget.max_iterations = 6;
+  VecX c = VecX::Zero(24);
+  const SolverReport rc = dynamic_relaxation(s.p, c, o);
+  EXPECT_EQ(rc.status, StopReason::kMaxIterations);
+  double e = 0.0;
+  ASSERT_EQ(s.p.energy(c, e), EvalStatus::kOk);
+  EXPECT_TRUE(near(rc.energy, e)) << rc.energy << " " << e;
+  // 1.3× the critical step: the growth is caught, one restart, converged, either way.
+  const double dt_crit = 2.0 / std::sqrt(s.lam[s.lam.size() - 1]);
+  o = dr_options(1.3 * dt_crit, critical_damping(s.lam[0]));
+  o.max_restarts = 3;
+  for (int every : {1, 4}) {
+    o.energy_every = every;
+    VecX u = VecX::Zero(24);
+    const SolverReport rep = dynamic_relaxation(s.p, u, o);
+    ASSERT_TRUE(rep.ok()) << every << ": " << rep.brief();
+    EXPECT_EQ(rep.restarts, 1) << every;
+    EXPECT_LE((u - s.p.direct_solution()).norm(), 1e-6 * s.p.direct_solution().norm()) << every;
+  }
+  o.energy_every = 0;
+  VecX u = VecX::Zero(24);
+  EXPECT_THROW((void)dynamic_relaxation(s.p, u, o), ParameterError);
+}
+
 }  // namespace
 }  // namespace incise::solver
