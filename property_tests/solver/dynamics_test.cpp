@@ -334,6 +334,33 @@ TEST(DynamicRelaxation, StableRunIsUnchangedByTheRestartCheck) {
   EXPECT_EQ(a, b);  // bitwise: the check only reads the state
 }
 
+// The Ritz residual of θ₁ that lanczos_spectrum checks (β_k|s_k|, s_k from the eigenvalues of
+// T_k and T_{k−1} since issue 19's fourth pass) bounds θ₁'s distance to the nearest eigenvalue
+// of M⁻¹PKP (Parlett Thm. 13.1.1 in the M inner product). Stopped at its first check after k
+// steps (any change counts as calm, any residual is accepted), for k = 2 … 12 where θ₁ is still
+// far from λ₁: some generalized eigenvalue lies within smallest_residual·θ₁ of θ₁ (1e-8
+// relative and 1e-12·λ_n absolute for round-off; no reorthogonalization is needed this early).
+TEST(EigenEstimates, LanczosRitzResidualBoundsTheDistanceToAnEigenvalue_Sec4_1) {
+  INCISE_SEEDED_RNG(rng, 69);
+  QuadraticProblem p = separated_problem(rng, 30);
+  const VecX lam = dense_generalized_eigenvalues(p);
+  LanczosOptions o;
+  o.tolerance = 1e300;
+  o.window = 1;
+  o.residual_tolerance = 1e300;
+  for (long k = 2; k <= 12; ++k) {
+    o.min_steps = o.max_steps = k;
+    const SpectrumEstimate e = lanczos_spectrum(p, VecX::Zero(30), VecX(), o);
+    ASSERT_EQ(e.status, StopReason::kConverged) << k;
+    ASSERT_EQ(e.steps, k);
+    ASSERT_TRUE(std::isfinite(e.smallest_residual)) << k;
+    const double distance = (lam.array() - e.smallest).abs().minCoeff();
+    EXPECT_LE(distance, e.smallest_residual * e.smallest * (1 + 1e-8) + 1e-12 * lam[lam.size() - 1])
+        << "k = " << k << ", theta_1 = " << e.smallest << ", lambda_1 = " << lam[0];
+    EXPECT_GT(e.smallest_residual, 0.0) << k;
+  }
+}
+
 // energy_every (issue 19; docs/solvers.md, "Fourth pass"): Π on every 4th step only leaves the
 // trajectory bitwise unchanged (SS22 reads only ∇Π, (2.58)), records Π on those steps and NaN on
 // the others, evaluates Π at the returned point, and still catches the energy growth of a too
