@@ -10,7 +10,8 @@
 /// Counters: cpu_s (to 1e-6), iters (to 1e-6), ms_per_iter, inner_per_iter
 /// (SolverReport::inner_iterations / iterations of the run up to the hit: NCG line-search
 /// evaluations, SS22 K-products of the quadratic recurrence); ncg-warm: the warm-start secant
-/// search (LineSearchKind::kSecantWarmStart). BM_PerIteration/<material>/<method>: CPU ms per
+/// search (LineSearchKind::kSecantWarmStart); ss22-energy4: SS22 with Π on every 4th step only
+/// (DynamicRelaxationOptions::energy_every = 4). BM_PerIteration/<material>/<method>: CPU ms per
 /// iteration in a long run (best of batches; the per-iteration table of docs/solvers.md),
 /// BM_Evaluation: CPU ms per evaluation at û. Command:
 /// build/release/benchmarks/solver/time_to_error_bench [--benchmark_filter=...]
@@ -90,8 +91,9 @@ Case& get_case(const std::string& material) {
   return cases.emplace(material, std::move(c)).first->second;
 }
 
-/// kNcgWarm: nonlinear CG with the warm-start secant search (LineSearchKind::kSecantWarmStart).
-enum class Method { kCg, kNcg, kNcgWarm, kSs22 };
+/// kNcgWarm: nonlinear CG with the warm-start secant search (LineSearchKind::kSecantWarmStart);
+/// kSs22Energy4: SS22 with Π on every 4th step only (DynamicRelaxationOptions::energy_every).
+enum class Method { kCg, kNcg, kNcgWarm, kSs22, kSs22Energy4 };
 
 // One solve by `method` with the options `common` (SS22: step dt, damping eta).
 template <class P>
@@ -113,6 +115,7 @@ solver::SolverReport run_method(Method method, P& p, VecX& u,
   o.time_step = dt;
   o.damping = eta;
   o.gradient_recurrence = true;  // the third pass's figures (docs/solvers.md)
+  if (method == Method::kSs22Energy4) o.energy_every = 4;
   return solver::dynamic_relaxation(p, u, o);
 }
 
@@ -120,8 +123,9 @@ void BM_TimeToError(benchmark::State& state, const std::string& material, Method
   Case& c = get_case(material);
   fem::ElasticProblem& p = *c.problem;
   double dt = 0.0, eta = 0.0;
+  const bool ss22 = method == Method::kSs22 || method == Method::kSs22Energy4;
 #ifndef INCISE_TTE_BASELINE
-  if (method == Method::kSs22) {
+  if (ss22) {
     const solver::DynamicParameterEstimate dp =
         solver::estimate_dynamic_parameters(p, VecX::Zero(p.size()));
     dt = dp.time_step;
@@ -132,7 +136,7 @@ void BM_TimeToError(benchmark::State& state, const std::string& material, Method
   dt = material == "linear" ? INCISE_TTE_DT_LINEAR : INCISE_TTE_DT_VW;
   eta = material == "linear" ? INCISE_TTE_ETA_LINEAR : INCISE_TTE_ETA_VW;
 #endif
-  if (method == Method::kSs22) {
+  if (ss22) {
     state.counters["dt_us"] = dt * 1e6;
     state.counters["eta"] = eta;
   }
@@ -232,7 +236,7 @@ void BM_PerIteration(benchmark::State& state, const std::string& material, Metho
     (void)solver::nonlinear_cg(p, u0, o);
   }
   double dt = 0.0, eta = 0.0;
-  if (method == Method::kSs22) {
+  if (method == Method::kSs22 || method == Method::kSs22Energy4) {
     const solver::DynamicParameterEstimate dp =
         solver::estimate_dynamic_parameters(p, VecX::Zero(p.size()));
     dt = dp.time_step;
@@ -270,6 +274,7 @@ const bool kRegistered = [] {
   add("BM_TimeToError/veronda-westmann/ncg", "veronda-westmann", Method::kNcg);
   add("BM_TimeToError/veronda-westmann/ncg-warm", "veronda-westmann", Method::kNcgWarm);
   add("BM_TimeToError/veronda-westmann/ss22", "veronda-westmann", Method::kSs22);
+  add("BM_TimeToError/veronda-westmann/ss22-energy4", "veronda-westmann", Method::kSs22Energy4);
   auto per_iteration = [](const std::string& name, const std::string& m, Method k) {
     benchmark::RegisterBenchmark(name.c_str(),
                                  [m, k](benchmark::State& s) { BM_PerIteration(s, m, k); })
@@ -282,6 +287,8 @@ const bool kRegistered = [] {
     if (m == "veronda-westmann")
       per_iteration("BM_PerIteration/" + m + "/ncg-warm", m, Method::kNcgWarm);
     per_iteration("BM_PerIteration/" + m + "/ss22", m, Method::kSs22);
+    if (m == "veronda-westmann")
+      per_iteration("BM_PerIteration/" + m + "/ss22-energy4", m, Method::kSs22Energy4);
   }
   auto eval = [](const std::string& name, const std::string& m, Eval k) {
     benchmark::RegisterBenchmark(name.c_str(), [m, k](benchmark::State& s) {

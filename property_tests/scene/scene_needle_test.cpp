@@ -636,6 +636,15 @@ TEST(SceneNeedle3D, AssembledProductAndExtrapolateKeys) {
   Json s = small_needle_scene();
   s["tools"][0]["assembled_product"] = true;
   expect_error(s, "/tools/0/assembled_product", "not allowed here: a needle in a slab2d scene");
+  // The relaxation scenes' solver key (docs/scenes.md, `solver`) is not the needle's: refused
+  // in both needle scenes, pointing the 3D one at its tool key.
+  Json k = small_needle3d_scene();
+  k["solver"]["assembled_product"] = true;
+  expect_error(k, "/solver/assembled_product",
+               "sets it on its needle (/tools/0/assembled_product)");
+  Json ks = small_needle_scene();
+  ks["solver"]["assembled_product"] = false;
+  expect_error(ks, "/solver/assembled_product", "not allowed here: a slab2d needle scene");
   j["tools"][0]["extrapolate"] = "yes";
   expect_error(j, "/tools/0/extrapolate", "");
 }

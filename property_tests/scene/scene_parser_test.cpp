@@ -221,6 +221,51 @@ TEST(SceneParserBad, NonlinearCgVariantKeys) {
       << e;
 }
 
+// Issue 19: the assembled K·d of relaxation scenes (`solver.assembled_product`): unset is the
+// default (scene::kDefaultAssembledProduct, applied by the builder), an explicit value is kept.
+TEST(SceneParser, AssembledProductKey) {
+  Json j = valid_scene();
+  for (const char* method : {"cg", "nonlinear-cg", "newton", "dynamic-ss22"}) {
+    j["solver"]["method"] = method;
+    j["material"]["rho"] = 1000;  // dynamic-ss22 needs a density
+    EXPECT_FALSE(parse_scene(j.dump(), "scene.json", "").solver.assembled_product.has_value());
+    for (bool on : {false, true}) {
+      j["solver"]["assembled_product"] = on;
+      const auto s = parse_scene(j.dump(), "scene.json", "");
+      ASSERT_TRUE(s.solver.assembled_product.has_value()) << method;
+      EXPECT_EQ(*s.solver.assembled_product, on) << method;
+    }
+    j["solver"].erase("assembled_product");
+  }
+}
+
+// Refused, with the file, line and key, where it does not apply: a material whose K depends on
+// u (an explicit false is harmless there), the "augmented" solver, a non-boolean value.
+TEST(SceneParserBad, AssembledProductWhereItDoesNotApply) {
+  Json j = valid_scene();
+  j["material"] = {{"model", "veronda-westmann"}, {"E", 1e4}, {"nu", 0.3}, {"gamma", 8.0}};
+  j["solver"]["method"] = "nonlinear-cg";
+  j["solver"]["assembled_product"] = true;
+  std::string e = error_of(j);
+  EXPECT_EQ(e.rfind("scene.json:", 0), 0u) << e;
+  EXPECT_NE(e.find(": /solver/assembled_product: the assembled product needs the \"linear\" "
+                   "material"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find("\"veronda-westmann\""), std::string::npos) << e;
+  j["solver"]["assembled_product"] = false;
+  EXPECT_EQ(error_of(j), "<no error>");
+  Json a = valid_scene();
+  a["solver"] = {{"method", "augmented"}, {"assembled_product", true}};
+  e = error_of(a);
+  EXPECT_NE(e.find(": /solver/assembled_product: not allowed here:"), std::string::npos) << e;
+  EXPECT_NE(e.find("the \"augmented\" solver factors K instead"), std::string::npos) << e;
+  Json b = valid_scene();
+  b["solver"]["assembled_product"] = "yes";
+  e = error_of(b);
+  EXPECT_NE(e.find(": /solver/assembled_product: "), std::string::npos) << e;
+}
+
 TEST(SceneParserBad, MissingRequiredKey) {
   Json j = valid_scene();
   j["material"].erase("E");

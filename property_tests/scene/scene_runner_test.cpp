@@ -10,6 +10,8 @@
 #include <incise/solver/eigen_estimates.hpp>
 
 #include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCore>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -164,6 +166,83 @@ TEST(SceneReference, RelativeEnergyErrorPerIterationAgainstAnEarlierRun) {
   VecX nan = ref.u;
   nan[0] = std::nan("");
   EXPECT_THROW(scene::write_solution(path, nan), ParameterError);
+}
+
+// Issue 19: relaxation scenes of the linear material multiply by the assembled K unless the scene
+// says "assembled_product": false (docs/scenes.md, `solver`); SS22 then runs the gradient
+// recurrence (one K·d per step). Both ways converge, to the same solution within the bound
+// the stopping rule gives: ‖r‖ ≤ ε‖f‖ for each, so ‖u_a − u_m‖ ≤ 2ε‖f‖/λ_min(K) (λ_min from a
+// dense eigensolve of K with the fixed DOFs as identity rows, which can only lower it).
+TEST(SceneAssembledProduct, DefaultForLinearRelaxationSameSolutionAsMatrixFree) {
+  constexpr double kEps = 1e-9;
+  for (const char* method : {"cg", "nonlinear-cg", "newton", "dynamic-ss22"}) {
+    Json j = dynamic_beam();
+    j["solver"] = {{"method", method}, {"tolerance", kEps}, {"max_iterations", 200000}};
+    scene::BuiltScene assembled = build(j);
+    EXPECT_TRUE(assembled.problem->assembled_product()) << method;
+    j["solver"]["assembled_product"] = false;
+    scene::BuiltScene matrix_free = build(j);
+    EXPECT_FALSE(matrix_free.problem->assembled_product()) << method;
+    bool noted = false;
+    for (const std::string& s : matrix_free.not_built)
+      noted |= contains(s, "\"assembled_product\": false");
+    EXPECT_TRUE(noted) << method;
+    const scene::SceneRunResult a = scene::run_scene(assembled);
+    const scene::SceneRunResult m = scene::run_scene(matrix_free);
+    ASSERT_TRUE(a.report.ok()) << method << ": " << a.report.brief();
+    ASSERT_TRUE(m.report.ok()) << method << ": " << m.report.brief();
+    if (std::string(method) == "dynamic-ss22") {
+      EXPECT_GT(a.report.inner_iterations, 0) << "K-products of the recurrence";
+      EXPECT_EQ(m.report.inner_iterations, 0);
+      EXPECT_TRUE(contains(a.method_detail, "gradient recurrence on the assembled K"))
+          << a.method_detail;
+    }
+    Eigen::SparseMatrix<double> k;
+    ASSERT_EQ(matrix_free.problem->tangent(VecX::Zero(matrix_free.problem->size()), k),
+              EvalStatus::kOk);
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig{Eigen::MatrixXd(k)};
+    const double lambda_min = eig.eigenvalues().minCoeff();
+    ASSERT_GT(lambda_min, 0.0);
+    const double bound = 2.0 * kEps * matrix_free.problem->external_force_norm() / lambda_min;
+    EXPECT_LE((a.u - m.u).norm(), bound) << method << ", |u| = " << m.u.norm();
+  }
+  // Not for the nonlinear materials (their K depends on u): matrix-free, nothing noted.
+  Json vw = dynamic_beam();
+  vw["material"] = {
+      {"model", "veronda-westmann"}, {"E", 1e4}, {"nu", 0.3}, {"rho", 1000}, {"gamma", 8.0}};
+  vw["solver"] = {{"method", "nonlinear-cg"}};
+  EXPECT_FALSE(build(vw).problem->assembled_product());
+}
+
+// Over the memory budget the default falls back to matrix-free products (noted), an explicit
+// true is refused with the file, line and key. On the 8³ Kuhn box (729 nodes, 3072 tets, 4184
+// edges) mesh and problem take ≈ 0.7 MiB and the assembled K ≈ 1.85 MiB more, so a 1 MiB budget
+// separates them and 3 MiB holds both.
+TEST(SceneAssembledProduct, OverTheMemoryBudgetDefaultFallsBackExplicitIsRefused) {
+  Json j = dynamic_beam();
+  j["mesh"] = Json::parse(
+      R"({"type": "box", "nx": 8, "ny": 8, "nz": 8, "lx": 1, "ly": 1, "lz": 1, "split": "kuhn"})");
+  j["solver"] = {{"method", "cg"}};
+  j["limits"] = {{"memory_mb", 1}};
+  scene::BuiltScene b = build(j);
+  EXPECT_FALSE(b.problem->assembled_product());
+  bool noted = false;
+  for (const std::string& s : b.not_built) noted |= contains(s, "would exceed the memory budget");
+  EXPECT_TRUE(noted);
+  j["limits"]["memory_mb"] = 3;  // fits: the default is on again
+  EXPECT_TRUE(build(j).problem->assembled_product());
+  j["limits"]["memory_mb"] = 1;
+  j["solver"]["assembled_product"] = true;
+  try {
+    (void)build(j);
+    ADD_FAILURE() << "an explicit assembled_product over the budget was accepted";
+  } catch (const ParseError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("scene.json:", 0), 0u) << what;
+    EXPECT_TRUE(contains(what, ": /solver/assembled_product: the assembled K needs an estimated"))
+        << what;
+    EXPECT_TRUE(contains(what, "more than the memory budget of 1 MiB")) << what;
+  }
 }
 
 }  // namespace

@@ -334,5 +334,89 @@ TEST(DynamicRelaxation, StableRunIsUnchangedByTheRestartCheck) {
   EXPECT_EQ(a, b);  // bitwise: the check only reads the state
 }
 
+// The Ritz residual of θ₁ that lanczos_spectrum checks (β_k|s_k|, s_k from the eigenvalues of
+// T_k and T_{k−1} since issue 19's fourth pass) bounds θ₁'s distance to the nearest eigenvalue
+// of M⁻¹PKP (Parlett Thm. 13.1.1 in the M inner product). Stopped at its first check after k
+// steps (any change counts as calm, any residual is accepted), for k = 2 … 12 where θ₁ is still
+// far from λ₁: some generalized eigenvalue lies within smallest_residual·θ₁ of θ₁ (1e-8
+// relative and 1e-12·λ_n absolute for round-off; no reorthogonalization is needed this early).
+TEST(EigenEstimates, LanczosRitzResidualBoundsTheDistanceToAnEigenvalue_Sec4_1) {
+  INCISE_SEEDED_RNG(rng, 69);
+  QuadraticProblem p = separated_problem(rng, 30);
+  const VecX lam = dense_generalized_eigenvalues(p);
+  LanczosOptions o;
+  o.tolerance = 1e300;
+  o.window = 1;
+  o.residual_tolerance = 1e300;
+  for (long k = 2; k <= 12; ++k) {
+    o.min_steps = o.max_steps = k;
+    const SpectrumEstimate e = lanczos_spectrum(p, VecX::Zero(30), VecX(), o);
+    ASSERT_EQ(e.status, StopReason::kConverged) << k;
+    ASSERT_EQ(e.steps, k);
+    ASSERT_TRUE(std::isfinite(e.smallest_residual)) << k;
+    const double distance = (lam.array() - e.smallest).abs().minCoeff();
+    EXPECT_LE(distance, e.smallest_residual * e.smallest * (1 + 1e-8) + 1e-12 * lam[lam.size() - 1])
+        << "k = " << k << ", theta_1 = " << e.smallest << ", lambda_1 = " << lam[0];
+    EXPECT_GT(e.smallest_residual, 0.0) << k;
+  }
+}
+
+// energy_every (issue 19; docs/solvers.md, "Fourth pass"): Π on every 4th step only leaves the
+// trajectory bitwise unchanged (SS22 reads only ∇Π, (2.58)), records Π on those steps and NaN on
+// the others, evaluates Π at the returned point, and still catches the energy growth of a too
+// large Δt and restarts, as with Π on every step.
+TEST(DynamicRelaxation, EnergyEveryKthStepSameTrajectoryAndStillRestarts_Sec4_4_1) {
+  INCISE_SEEDED_RNG(rng, 68);
+  DynamicsSetup s = make_setup(rng);
+  DynamicRelaxationOptions o = dr_options(s.dt, critical_damping(s.lam[0]));
+  o.max_restarts = 3;
+  VecX a = VecX::Zero(24), b = VecX::Zero(24);
+  const SolverReport ra = dynamic_relaxation(s.p, a, o);
+  o.energy_every = 4;
+  const SolverReport rb = dynamic_relaxation(s.p, b, o);
+  ASSERT_TRUE(ra.ok() && rb.ok()) << ra.brief() << " / " << rb.brief();
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(ra.iterations, rb.iterations);
+  EXPECT_EQ(ra.residual_history, rb.residual_history);
+  ASSERT_EQ(ra.energy_history.size(), rb.energy_history.size());
+  const std::size_t steps = rb.energy_history.size();
+  ASSERT_GT(steps, 8u);
+  // Π by Problem::energy (the converged step, when it skipped Π) and by the gradient's fused
+  // energy may differ in the last bits: 1e-12 relative.
+  const auto near = [](double x, double y) { return std::abs(x - y) <= 1e-12 * std::abs(y); };
+  for (std::size_t i = 0; i < steps; ++i) {
+    if (i % 4 == 0)
+      EXPECT_EQ(rb.energy_history[i], ra.energy_history[i]) << i;
+    else if (i + 1 == steps)
+      EXPECT_TRUE(near(rb.energy_history[i], ra.energy_history[i])) << i;
+    else
+      EXPECT_TRUE(std::isnan(rb.energy_history[i])) << i;
+  }
+  EXPECT_TRUE(near(rb.energy, ra.energy)) << rb.energy << " " << ra.energy;
+  // A budget that stops on a step without Π: the report's energy is evaluated at the returned u.
+  o.budget.max_iterations = 6;
+  VecX c = VecX::Zero(24);
+  const SolverReport rc = dynamic_relaxation(s.p, c, o);
+  EXPECT_EQ(rc.status, StopReason::kMaxIterations);
+  double e = 0.0;
+  ASSERT_EQ(s.p.energy(c, e), EvalStatus::kOk);
+  EXPECT_TRUE(near(rc.energy, e)) << rc.energy << " " << e;
+  // 1.3× the critical step: the growth is caught, one restart, converged, either way.
+  const double dt_crit = 2.0 / std::sqrt(s.lam[s.lam.size() - 1]);
+  o = dr_options(1.3 * dt_crit, critical_damping(s.lam[0]));
+  o.max_restarts = 3;
+  for (int every : {1, 4}) {
+    o.energy_every = every;
+    VecX u = VecX::Zero(24);
+    const SolverReport rep = dynamic_relaxation(s.p, u, o);
+    ASSERT_TRUE(rep.ok()) << every << ": " << rep.brief();
+    EXPECT_EQ(rep.restarts, 1) << every;
+    EXPECT_LE((u - s.p.direct_solution()).norm(), 1e-6 * s.p.direct_solution().norm()) << every;
+  }
+  o.energy_every = 0;
+  VecX u = VecX::Zero(24);
+  EXPECT_THROW((void)dynamic_relaxation(s.p, u, o), ParameterError);
+}
+
 }  // namespace
 }  // namespace incise::solver

@@ -62,6 +62,30 @@ std::uint64_t problem_bytes(std::uint64_t points, std::uint64_t cells) {
          3 * points * (3 * sizeof(double) + 1);
 }
 
+// Bytes of the assembled K of fem::ElasticProblem::set_assembled_product on `m`: per coupled
+// node pair (every node with itself, both orders of each distinct edge) the raw tangent's 9
+// values and row indices (both triangles stored) and the 3×3 block copy's 9 values and node
+// index; per element the 20-int scatter map; per DOF a column start and a diagonal index.
+std::uint64_t assembled_product_bytes(const mesh::MeshData& m) {
+  std::vector<std::uint64_t> edges;
+  edges.reserve(6 * static_cast<std::size_t>(m.num_cells()));
+  for (Index e = 0; e < m.num_cells(); ++e)
+    for (int a = 0; a < 4; ++a)
+      for (int c = a + 1; c < 4; ++c) {
+        const auto p = static_cast<std::uint64_t>(std::min(m.cells(a, e), m.cells(c, e)));
+        const auto q = static_cast<std::uint64_t>(std::max(m.cells(a, e), m.cells(c, e)));
+        edges.push_back(p << 32 | q);
+      }
+  std::sort(edges.begin(), edges.end());
+  const auto distinct =
+      static_cast<std::uint64_t>(std::unique(edges.begin(), edges.end()) - edges.begin());
+  const auto points = static_cast<std::uint64_t>(m.num_points());
+  const std::uint64_t pairs = points + 2 * distinct;
+  return pairs * (9 * (sizeof(double) + sizeof(int)) + 9 * sizeof(double) + sizeof(int)) +
+         static_cast<std::uint64_t>(m.num_cells()) * 20 * sizeof(int) +
+         3 * points * 2 * sizeof(int);
+}
+
 std::string mib(std::uint64_t bytes) {
   std::ostringstream os;
   os.precision(4);
@@ -639,6 +663,44 @@ BuiltScene build_scene(const SceneSpec& spec) {
     Timer tp;
     b.problem = std::make_unique<fem::ElasticProblem>(b.mesh, make_material(spec.material));
     if (spec.solver.threads > 0) b.problem->set_threads(spec.solver.threads);
+    using Method = SolverSpec::Method;
+    const Method method = spec.solver.method;
+    if (spec.material.model == material::LinearElastic::kName && method != Method::kAugmented) {
+      // The assembled K·d (SolverSpec::assembled_product): on unless the scene says false, and
+      // by default only when K in node blocks fits the memory budget beside mesh and problem.
+      const bool wanted = spec.solver.assembled_product.value_or(kDefaultAssembledProduct);
+      Timer ta;
+      const std::uint64_t kbytes = wanted ? assembled_product_bytes(b.mesh) : 0;
+      const std::uint64_t others =
+          mesh_bytes(static_cast<std::uint64_t>(n),
+                     4 * static_cast<std::uint64_t>(b.mesh.num_cells()), 0, 0) +
+          problem_bytes(static_cast<std::uint64_t>(n),
+                        static_cast<std::uint64_t>(b.mesh.num_cells()));
+      const std::uint64_t budget = memory_budget_bytes(spec);
+      if (wanted && others + kbytes > budget && spec.solver.assembled_product)
+        throw ParseError(spec.file, spec.lines.line("/solver/assembled_product"),
+                         "/solver/assembled_product: the assembled K needs an estimated " +
+                             mib(kbytes) + " beside the mesh and problem's " + mib(others) +
+                             ", more than the memory budget of " + mib(budget) + " (" +
+                             memory_budget_origin(spec) + "); set it to false for K·d matrix-free");
+      if (wanted && others + kbytes <= budget) {
+        b.problem->set_assembled_product(true);
+        b.record(
+            "K·d from the assembled K in 3x3 node blocks (solver.assembled_product; "
+            "assembled at the first product" +
+                std::string(method == Method::kDynamicSS22
+                                ? "; SS22 by the gradient recurrence, one K·d per step"
+                                : "") +
+                "; its memory estimated from the mesh's edges)",
+            ta.seconds(), kbytes);
+      } else {
+        b.not_built.push_back(
+            wanted ? "assembled K for K·d: an estimated " + mib(kbytes) +
+                         " would exceed the memory budget of " + mib(budget) + " (K·d matrix-free)"
+                   : std::string("assembled K for K·d: \"assembled_product\": false (K·d "
+                                 "matrix-free)"));
+      }
+    }
     b.problem->fix_nodes(b.fixed_nodes);
     for (Index i = 0; i < n; ++i) {
       const Vec3 f = b.external_force.segment<3>(3 * i);

@@ -254,6 +254,9 @@ SolverSpec parse_solver(JsonObject o, bool slab, bool needle3d) {
              "a needle scene rebuilds its problem at every update with the default thread count");
     for (const char* key : {"cut_configuration", "solve_threads", "schur_preconditioner"})
       o.forbid(key, "it belongs to the interactive cutting run's augmented solver");
+    o.forbid("assembled_product",
+             "the augmented needle solve factors K; the needle tool's own assembled_product "
+             "(/tools/0/assembled_product) is for its CG path");
     s.refactor_at_m = o.integer("refactor_at_m", 1, std::numeric_limits<int>::max(),
                                 needle::InsertionOptions3D{}.refactor_at_m);
     o.finish();
@@ -280,6 +283,20 @@ SolverSpec parse_solver(JsonObject o, bool slab, bool needle3d) {
              "(6.9) stopping rule; this scene stops by (6.8), ||r|| <= tol ||f_ext||");
   }
   const bool dynamic = s.method == SolverSpec::Method::kDynamicSS22;
+  if (slab) {
+    o.forbid("assembled_product",
+             needle3d ? "a 3D needle scene sets it on its needle (/tools/0/assembled_product): "
+                        "the needle rebuilds its problem at every refinement"
+                      : "a slab2d needle scene solves the plane-stress problem (6.7) matrix-free");
+  } else if (s.method == SolverSpec::Method::kAugmented) {
+    o.forbid("assembled_product",
+             "the assembled product speeds up the K·d of \"cg\", \"nonlinear-cg\", \"newton\" "
+             "and \"dynamic-ss22\"; the \"augmented\" solver factors K instead");
+  } else if (o.has("assembled_product")) {
+    s.assembled_product = o.boolean("assembled_product", kDefaultAssembledProduct);
+  } else {
+    (void)o.get("assembled_product");  // known (listed as allowed); unset: the default
+  }
   if (slab && s.method != SolverSpec::Method::kCG) {
     o.forbid("preconditioner",
              "in a needle scene only \"cg\" takes a preconditioner (\"jacobi\": the diagonal of "
@@ -709,6 +726,12 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
     fail(file, "/solver/method",
          "\"augmented\" factorizes the constant linear stiffness; material \"" + s.material.model +
              "\" is nonlinear");
+  if (s.solver.assembled_product.value_or(false) &&
+      s.material.model != material::LinearElastic::kName)
+    fail(file, "/solver/assembled_product",
+         "the assembled product needs the \"linear\" material (its stiffness K does not change "
+         "with u; fem::ElasticProblem::set_assembled_product), got \"" +
+             s.material.model + "\": its K·d stays matrix-free");
 
   const Json* fixed = root.array("fixed", "an array of region objects", false);
   for (std::size_t i = 0; i < fixed->size(); ++i) {

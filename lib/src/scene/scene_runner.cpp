@@ -647,7 +647,8 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
       solver::LinearCgOptions o;
       static_cast<solver::RelaxationOptions&>(o) = common;
       o.preconditioner = s.preconditioner;
-      detail << "linear CG (matrix-free), preconditioner " << solver::to_string(s.preconditioner);
+      detail << "linear CG (" << (p.assembled_product() ? "assembled K" : "matrix-free")
+             << "), preconditioner " << solver::to_string(s.preconditioner);
       res.report = solver::linear_cg(p, res.u, o);
       break;
     }
@@ -686,8 +687,12 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
       o.time_step = dp.time_step;
       o.damping = dp.damping;
       o.max_restarts = kMaxRestarts;
+      // With the assembled K a product costs about half a gradient sweep (docs/solvers.md,
+      // "Fourth pass"): the quadratic Π's gradient by recurrence, one K·d per step.
+      o.gradient_recurrence = p.assembled_product();
       detail << "dynamic relaxation SS22, dt = " << dp.time_step << " s (" << dp.time_step_origin
-             << "), eta = " << dp.damping << " 1/s (" << dp.damping_origin << ")";
+             << "), eta = " << dp.damping << " 1/s (" << dp.damping_origin << ")"
+             << (o.gradient_recurrence ? ", gradient recurrence on the assembled K" : "");
       res.report = solver::dynamic_relaxation(p, res.u, o);
       if (res.report.restarts > 0)
         detail << "; " << res.report.restarts << " restart(s) after unstable steps, dt lowered to "

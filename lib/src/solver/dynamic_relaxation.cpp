@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -35,6 +36,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   INCISE_CHECK_PARAM(options.max_restarts >= 0, "dynamic_relaxation: max_restarts must be >= 0");
   INCISE_CHECK_PARAM(options.restart_reduction > 0.0 && options.restart_reduction < 1.0,
                      "dynamic_relaxation: restart_reduction must lie in (0, 1)");
+  INCISE_CHECK_PARAM(options.energy_every >= 1, "dynamic_relaxation: energy_every must be >= 1");
   double dt = options.time_step;
   // 1/((1 + ½Δtη) m_i): the diagonal of (M + θ₁Δt C)⁻¹ of (2.58) with θ₁ = ½, θ₂ = 0.
   VecX inv_mass = (m * (1.0 + 0.5 * dt * eta)).cwiseInverse();
@@ -63,6 +65,13 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   StopReason reason = StopReason::kConverged;
   std::string event;  // what made the last restart necessary
   bool have_residual = false;
+  // ū of the next step, computed by the update pass of the step before (the same operations as
+  // (2.56) on the updated u and u̇; false at the start and after a restart).
+  bool ubar_ready = false;
+  // Π on every options.energy_every-th step only (the others: gradient-only sweeps, energy NaN).
+  constexpr double kNoEnergy = std::numeric_limits<double>::quiet_NaN();
+  long since_energy = 0;              // steps since the last one that evaluated Π
+  bool last_good_has_energy = false;  // `energy` belongs to last_good
   // An unstable step: restart from the lowest-energy state with a smaller Δt when allowed.
   auto restart = [&](StopReason why, const std::string& what) {
     reason = why;
@@ -78,11 +87,13 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
     v.setZero();
     have_e = false;
     have_previous = false;  // E at the new Δt is measured afresh from the resumed state
+    ubar_ready = false;
     meter.add(4 * nn);
     return true;
   };
   while (true) {
-    ubar = u + (0.5 * dt) * v;  // (2.56), θ₁ = ½
+    if (!ubar_ready) ubar = u + (0.5 * dt) * v;  // (2.56), θ₁ = ½
+    ubar_ready = false;
     bool recurrence = false;
     if (quadratic && have_previous && since_evaluated < kReplaceEvery) {
       delta = ubar - last_good;
@@ -98,20 +109,30 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
       ++rep.inner_iterations;
     }
     EvalStatus st = EvalStatus::kOk;
+    bool has_energy = true;  // Π(ū) of this step is known
     if (!recurrence) {
-      st = problem.gradient(ubar, g, &energy);
+      const bool want_energy = quadratic || options.energy_every <= 1 || k == 0 ||
+                               (restartable && !have_e) || since_energy + 1 >= options.energy_every;
+      if (want_energy) {
+        st = problem.gradient(ubar, g, &energy);
+      } else {
+        st = problem.gradient(ubar, g);
+        energy = kNoEnergy;
+      }
+      has_energy = want_energy;
       since_evaluated = 0;
     } else {
       ++since_evaluated;
     }
-    if (st != EvalStatus::kOk || !g.allFinite() || !std::isfinite(energy)) {
+    since_energy = has_energy ? 0 : since_energy + 1;
+    if (st != EvalStatus::kOk || !g.allFinite() || (has_energy && !std::isfinite(energy))) {
       const StopReason why =
           st == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
       if (restart(why, why == StopReason::kInverted ? "inverted element" : "non-finite value"))
         continue;
       break;
     }
-    if (restartable) {
+    if (restartable && has_energy) {
       // Total energy at ū (kinetic from u̇ of this step), 3n flops.
       const double e = energy + 0.5 * v.dot(m.cwiseProduct(v));
       meter.add(3 * nn);
@@ -147,9 +168,14 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
       rnorm = acc.norm();
       threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
     }
+    if (!has_energy && rnorm <= threshold) {  // the converged point carries Π
+      has_energy = problem.energy(ubar, energy) == EvalStatus::kOk && std::isfinite(energy);
+      if (!has_energy) energy = kNoEnergy;
+    }
     last_good.swap(ubar);  // ū of this step (ubar is rewritten before its next use)
     have_previous = true;
-    last_energy = energy;
+    last_good_has_energy = has_energy;
+    if (has_energy) last_energy = energy;
     have_residual = true;
     rep.residual_history.push_back(rnorm);
     rep.energy_history.push_back(energy);
@@ -164,20 +190,28 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
     if (reason != StopReason::kConverged) break;
     // a = (r − ηMv) ⊙ (M + ½ΔtηM)⁻¹ (v is projected already: P(r − ηMv) = r − ηMv), then
     // u += Δt v + ½Δt² a (2.59) and v += Δt a (2.60), in one pass; each entry is computed with
-    // the operations, in the order, of the former separate vector expressions (same bits).
+    // the operations, in the order, of the former separate vector expressions (same bits). The
+    // same pass forms the next step's ū = u + ½Δt u̇ (2.56), with (2.56)'s operations.
     {
       const double h2 = 0.5 * dt * dt;
+      const double half_dt = 0.5 * dt;
       const double* mi = m.data();
       const double* wi = inv_mass.data();
       const double* ai = acc.data();
       double* ui = u.data();
       double* vi = v.data();
+      ubar.resize(n);
+      double* bi = ubar.data();
       for (Eigen::Index i = 0; i < n; ++i) {
         const double a = (ai[i] - eta * (mi[i] * vi[i])) * wi[i];
-        ui[i] += dt * vi[i] + h2 * a;
-        vi[i] += dt * a;
+        const double un = ui[i] + (dt * vi[i] + h2 * a);
+        const double vn = vi[i] + dt * a;
+        ui[i] = un;
+        vi[i] = vn;
+        bi[i] = un + half_dt * vn;
       }
     }
+    ubar_ready = true;
     meter.add(16 * nn);
     ++k;
     t += dt;
@@ -187,8 +221,13 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
       break;
     }
   }
-  // Hand back the last evaluated admissible point: its residual is the one reported.
+  // Hand back the last evaluated admissible point: its residual is the one reported, and its
+  // energy (evaluated now when its step skipped Π).
   u = last_good;
+  if (have_residual && !last_good_has_energy) {
+    double e = 0.0;
+    if (problem.energy(last_good, e) == EvalStatus::kOk && std::isfinite(e)) last_energy = e;
+  }
   rep.status = reason;
   rep.time_step = dt;
   if (!rep.ok() && restartable && !event.empty()) {

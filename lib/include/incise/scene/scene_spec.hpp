@@ -166,6 +166,15 @@ struct SolverSpec {
   /// default_thread_count() (INCISE_THREADS, else all cores). Scene key `threads`.
   int threads = 0;
   double time_budget = 0.0;  ///< wall-clock budget (s); 0 = unlimited
+  /// Linear material, methods "cg", "nonlinear-cg", "newton", "dynamic-ss22" (scene key
+  /// `assembled_product`): K·d from the stiffness assembled once in 3×3 node blocks
+  /// (fem::ElasticProblem::set_assembled_product) instead of element products; with
+  /// "dynamic-ss22" also the gradient recurrence (solver::DynamicRelaxationOptions::
+  /// gradient_recurrence: one K·d per step instead of a gradient sweep). Unset: on for the
+  /// linear material when the assembled K fits the memory budget (kDefaultAssembledProduct),
+  /// off otherwise; an explicit true is refused for another material, the "augmented" solver,
+  /// needle scenes (their needle tool has the key) and when it does not fit the budget.
+  std::optional<bool> assembled_product;
   /// CG and Newton's inner CG (scene key `preconditioner`).
   solver::Preconditioner preconditioner = solver::Preconditioner::kNone;
   double time_step = 0.0;  ///< dynamic: Δt (s); 0 → 0.9 × critical step 2/√λ_max (§4.1)
@@ -207,6 +216,12 @@ struct SolverSpec {
   /// Used when schur_solver is kGmres.
   linalg::SchurPreconditioner schur_preconditioner = linalg::SchurPreconditioner::kDiagonal;
 };
+
+/// Whether a relaxation scene of the linear material multiplies by the assembled K when the
+/// scene does not say (SolverSpec::assembled_product unset): the same default as the 3D
+/// needle's (needle::InsertionOptions3D::assembled_product); measured in docs/solvers.md,
+/// "Fourth pass".
+inline constexpr bool kDefaultAssembledProduct = true;
 
 /// Names of SolverSpec::Method (scene key `method`).
 inline constexpr NameTable<SolverSpec::Method, 5> kMethodNames{{{
