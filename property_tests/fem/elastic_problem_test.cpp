@@ -387,6 +387,26 @@ TEST(ElasticProblem, AssembledProductEqualsMatrixFreeForLinearMaterial) {
     // A linear K does not depend on u: the matrix assembled at the first product is reused.
     ASSERT_EQ(p.hessian_product(VecX(VecX::Zero(p.size())), d, again), EvalStatus::kOk);
     EXPECT_EQ(again, kd_assembled);
+    // One thread reads K half-stored, several threads (or set_half_stored_product(false)) the
+    // full blocks: bitwise the same product (the same products summed in the same order;
+    // off-diagonal node blocks are exact mirrors).
+    p.set_half_stored_product(false);
+    ASSERT_EQ(p.hessian_product(u, d, again), EvalStatus::kOk);
+    EXPECT_EQ(again, kd_assembled);
+    p.set_half_stored_product(true);
+    p.set_threads(1);
+    ASSERT_EQ(p.hessian_product(u, d, again), EvalStatus::kOk);
+    EXPECT_EQ(again, kd_assembled);
+    p.set_threads(threads);
+    // Rows of fixed DOFs included: the product of a unit vector e_c is row c of K (the product
+    // sums K(r, c)·d_r down column c; K is symmetric up to rounding inside node blocks).
+    const Eigen::SparseMatrix<double> kt = p.tangent_matrix().transpose();
+    for (const incise::Index node : {incise::Index(0), incise::Index(p.num_nodes() - 1)}) {
+      VecX e = VecX::Zero(p.size());
+      e[3 * node + 1] = 1.0;
+      ASSERT_EQ(p.hessian_product(u, e, again), EvalStatus::kOk);
+      EXPECT_EQ(again, VecX(kt.col(3 * node + 1)));
+    }
     p.set_assembled_product(false);
     ASSERT_EQ(p.hessian_product(u, d, again), EvalStatus::kOk);
     EXPECT_EQ(again, kd);

@@ -182,10 +182,15 @@ class ElasticProblem : public Problem {
   /// `on` makes hessian_product() multiply by the raw tangent (kKeep) assembled once, at the
   /// first product after the call (a problem's mesh and material never change), instead of the
   /// matrix-free element products: the same K·d up to rounding, fewer flops (2 per stored entry)
-  /// — worth it when many products follow (docs/needle.md "Fig. 6.14 and speed"). Throws
+  /// — worth it when many products follow (docs/needle.md "Fig. 6.14 and speed"). On one thread
+  /// K is read half-stored (diagonal blocks and the blocks above), with a result bitwise equal
+  /// to the full product of several threads (docs/needle.md "Half-stored K·d"). Throws
   /// UsageError for any other material. Default off (matrix-free, §3.1).
   void set_assembled_product(bool on);
   bool assembled_product() const { return assembled_product_; }
+  /// On one thread, whether the assembled product reads K half-stored (default true) or, as on
+  /// several threads, full (the same result bitwise; false is for benchmarks of the two).
+  void set_half_stored_product(bool on) { half_stored_ = on; }
   /// Elastic forces only: f_int = Σ q_τ(u) (N).
   [[nodiscard]] EvalStatus internal_forces(const VecX& u, VecX& f_int);
 
@@ -260,11 +265,17 @@ class ElasticProblem : public Problem {
   std::uint64_t flops_ = 0;
   Eigen::SparseMatrix<double> k_;
   bool assembled_product_ = false;
+  bool half_stored_ = true;
   // K for the assembled product in 3×3 node blocks (empty until used): node b's blocks are
   // block_start_[b] .. block_start_[b + 1] − 1, block t couples node block_node_[t], its values
-  // block_value_[9t + 3j + i] = K(3·block_node_[t] + i, 3b + j).
+  // block_value_[9t + 3j + i] = K(3·block_node_[t] + i, 3b + j). Full storage (every
+  // neighbour), built for threads_ > 1 only.
   std::vector<int> block_start_, block_node_;
   std::vector<double> block_value_;
+  // The same blocks half-stored (always built): node b's diagonal block at half_start_[b], then
+  // its blocks with neighbours a > b in increasing a.
+  std::vector<int> half_start_, half_node_;
+  std::vector<double> half_value_;
   std::vector<int> scatter_;  ///< per element: 16 block value indices, 4 column lengths
   std::vector<int> diag_;     ///< value index of each diagonal entry
   int threads_ = 1;
