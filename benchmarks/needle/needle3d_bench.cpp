@@ -187,10 +187,11 @@ void BM_NeedleLiver(benchmark::State& state) {
   state.counters["rearrange_worst_s"] = *std::max_element(rearrange.begin(), rearrange.end());
 }
 
-/// K·d on the liver scene's body after its 91 updates (refined around the needle), half-stored
-/// (the one-thread default) and full (the gather of several threads), alternating in one process
-/// on one thread: thread-CPU per product of each, their ratio; SkipWithError when the two
-/// products differ in any bit (they must not: fem/elastic_problem.hpp).
+/// K·d on the liver scene's body after its 91 updates (refined around the needle), one thread,
+/// the assembled product's three layouts alternating in one process: full blocks and half-stored
+/// (baseline ISA), and the AVX gather of the full blocks (where the CPU has AVX): thread-CPU per
+/// product (median); SkipWithError when the products differ in any bit (they must not:
+/// fem/elastic_problem.hpp).
 void BM_NeedleLiverProduct(benchmark::State& state) {
   incise::io::ReadOptions ro;
   ro.scale = 0.001;
@@ -216,31 +217,35 @@ void BM_NeedleLiverProduct(benchmark::State& state) {
   incise::fem::ElasticProblem& pb = sim.problem();
   pb.set_threads(1);
   const incise::VecX u = sim.displacement();
-  incise::VecX d = u, half, full;
+  incise::VecX d = u;
   for (Eigen::Index i = 0; i < d.size(); ++i) d[i] = std::sin(0.37 * static_cast<double>(i));
   constexpr int kProducts = 50;
-  std::vector<double> t_half, t_full;
+  // 0: baseline ISA, full blocks (the kernel before issue 21's last session); 1: baseline,
+  // half-stored; 2: AVX gather of the full blocks (the default where the CPU has AVX).
+  const bool avx = incise::fem::kernel_isa_available(incise::fem::KernelIsa::kAvx);
+  std::vector<double> t[3];
+  incise::VecX out[3];
   bool equal = true;
   for (auto _ : state) {
-    for (int half_stored : {1, 0}) {
-      pb.set_half_stored_product(half_stored != 0);
-      incise::VecX& out = half_stored ? half : full;
-      (void)pb.hessian_product(u, d, out);  // builds the storage outside the timing
+    for (int kernel = 0; kernel < (avx ? 3 : 2); ++kernel) {
+      pb.set_kernel_isa(kernel == 2 ? incise::fem::KernelIsa::kAvx
+                                    : incise::fem::KernelIsa::kBaseline);
+      pb.set_half_stored_product(kernel == 1);
+      (void)pb.hessian_product(u, d, out[kernel]);  // builds the layout outside the timing
       const double t0 = incise::thread_cpu_seconds();
       for (int r = 0; r < kProducts; ++r) {
-        (void)pb.hessian_product(u, d, out);
-        benchmark::DoNotOptimize(out.data());
+        (void)pb.hessian_product(u, d, out[kernel]);
+        benchmark::DoNotOptimize(out[kernel].data());
       }
-      (half_stored ? t_half : t_full).push_back((incise::thread_cpu_seconds() - t0) / kProducts);
+      t[kernel].push_back((incise::thread_cpu_seconds() - t0) / kProducts);
     }
-    equal = equal && half == full;
+    equal = equal && out[1] == out[0] && (!avx || out[2] == out[0]);
   }
-  pb.set_half_stored_product(true);
-  if (!equal) state.SkipWithError("half-stored and full K·d differ");
+  if (!equal) state.SkipWithError("the product layouts differ");
   state.counters["dofs"] = static_cast<double>(pb.size());
-  state.counters["half_ms"] = 1e3 * median(t_half);
-  state.counters["full_ms"] = 1e3 * median(t_full);
-  state.counters["full_over_half"] = median(t_full) / median(t_half);
+  state.counters["full_ms"] = 1e3 * median(t[0]);
+  state.counters["half_ms"] = 1e3 * median(t[1]);
+  if (avx) state.counters["avx_ms"] = 1e3 * median(t[2]);
 }
 
 }  // namespace

@@ -10,6 +10,11 @@
 #include <limits>
 #include <sstream>
 
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
+    !defined(INCISE_SANITIZED_BUILD)
+#include <immintrin.h>  // the AVX block gather of the assembled product (INCISE_AVX_KERNELS)
+#endif
+
 namespace incise::fem {
 
 namespace {
@@ -554,6 +559,33 @@ __attribute__((target("avx"))) void sweep_chunk_avx(const ChunkArgs& a, Visit& v
 }
 #endif
 
+#if INCISE_AVX_KERNELS
+/// Node rows [first, last) of the assembled product K·d from full 3×3 node blocks stored as
+/// padded columns (block t: c[4i + j] = K(3a + i, 3b + j), a = node[t], c[4i + 3] = 0): the
+/// gather of hessian_product() with the three rows of a node in one 256-bit register — per row
+/// the same products summed in the same order (no FMA), so bitwise the scalar gather's.
+__attribute__((target("avx"))) void block_gather_avx(Index first, Index last, const int* start,
+                                                     const int* node, const double* val4,
+                                                     const double* src, double* dst) {
+  for (Index b = first; b < last; ++b) {
+    __m256d s = _mm256_setzero_pd();
+    for (int t = start[b]; t < start[b + 1]; ++t) {
+      const double* x = src + 3 * node[t];
+      const double* c = val4 + 12 * t;
+      __m256d p = _mm256_mul_pd(_mm256_loadu_pd(c), _mm256_broadcast_sd(x));
+      p = _mm256_add_pd(p, _mm256_mul_pd(_mm256_loadu_pd(c + 4), _mm256_broadcast_sd(x + 1)));
+      p = _mm256_add_pd(p, _mm256_mul_pd(_mm256_loadu_pd(c + 8), _mm256_broadcast_sd(x + 2)));
+      s = _mm256_add_pd(s, p);
+    }
+    alignas(32) double out[4];
+    _mm256_store_pd(out, s);
+    dst[3 * b] = out[0];
+    dst[3 * b + 1] = out[1];
+    dst[3 * b + 2] = out[2];
+  }
+}
+#endif
+
 }  // namespace
 
 bool kernel_isa_available(KernelIsa isa) {
@@ -743,26 +775,43 @@ void ElasticProblem::set_assembled_product(bool on) {
   assembled_product_ = on;
 }
 
+ElasticProblem::ProductKernel ElasticProblem::product_kernel() const {
+#if INCISE_AVX_KERNELS
+  if (isa_ == KernelIsa::kAvx) return ProductKernel::kFullAvx;
+#endif
+  return threads_ == 1 && half_stored_ ? ProductKernel::kHalf : ProductKernel::kFull;
+}
+
 EvalStatus ElasticProblem::assemble_product_matrix(const VecX& u) {
-  const bool full = threads_ > 1 || !half_stored_;
-  if (!half_start_.empty() && (!full || !block_start_.empty())) return EvalStatus::kOk;
-  if (half_start_.empty()) {
+  const ProductKernel kernel = product_kernel();
+  const bool need_half = kernel == ProductKernel::kHalf && half_start_.empty();
+  const bool need_full = kernel == ProductKernel::kFull && block_value_.empty();
+  const bool need_avx = kernel == ProductKernel::kFullAvx && block_value4_.empty();
+  if (!need_half && !need_full && !need_avx) return EvalStatus::kOk;
+  if (assembled_diag_.size() == 0) {
     const EvalStatus s = assemble_tangent(u, FixedDofTreatment::kKeep);
     if (s != EvalStatus::kOk) return s;
+    assembled_diag_.resize(size());
+    for (Eigen::Index c = 0; c < size(); ++c)
+      assembled_diag_[c] = k_.valuePtr()[diag_[static_cast<std::size_t>(c)]];
+  } else if (assemble_tangent(u, FixedDofTreatment::kKeep) != EvalStatus::kOk) {
+    return EvalStatus::kInverted;  // another layout of K after a change of threads or ISA
   }
   // Copy K into 3×3 node blocks: build_pattern() gives the three columns of node b one row
   // pattern of whole node triples, so block k of node b (neighbour a = inner[outer[3b] + 3k] / 3)
-  // holds K(3a + i, 3b + j) at value index outer[3b + j] + 3k + i; stored at 9k' + 3j + i.
+  // holds K(3a + i, 3b + j) at value index outer[3b + j] + 3k + i.
   const int* outer = k_.outerIndexPtr();
   const int* inner = k_.innerIndexPtr();
   const double* val = k_.valuePtr();
   const auto nodes = static_cast<std::size_t>(num_nodes());
-  const auto copy_block = [&](std::size_t b, int k, double* dst) {
+  // Stored at dst[3j + i] (rows of the gather), or at dst[4i + j] (padded columns, AVX).
+  const auto copy_block = [&](std::size_t b, int k, double* dst, bool padded) {
     for (int j = 0; j < 3; ++j)
       for (int i = 0; i < 3; ++i)
-        dst[3 * j + i] = val[outer[3 * b + static_cast<std::size_t>(j)] + 3 * k + i];
+        dst[padded ? 4 * i + j : 3 * j + i] =
+            val[outer[3 * b + static_cast<std::size_t>(j)] + 3 * k + i];
   };
-  if (half_start_.empty()) {
+  if (need_half) {
     // Half storage: node b's diagonal block first, then its blocks with neighbours a > b.
     half_start_.assign(nodes + 1, 0);
     for (std::size_t b = 0; b < nodes; ++b) {
@@ -780,22 +829,28 @@ EvalStatus ElasticProblem::assemble_product_matrix(const VecX& u) {
         if (a < static_cast<int>(b)) continue;
         const std::size_t at = a == static_cast<int>(b) ? half_start_[b] : blk++;
         half_node_[at] = a;
-        copy_block(b, k, half_value_.data() + 9 * at);
+        copy_block(b, k, half_value_.data() + 9 * at, false);
       }
     }
   }
-  if (full && block_start_.empty()) {
+  if ((need_full || need_avx) && block_start_.empty()) {
     block_start_.assign(nodes + 1, 0);
     for (std::size_t b = 0; b < nodes; ++b)
       block_start_[b + 1] = block_start_[b] + (outer[3 * b + 1] - outer[3 * b]) / 3;
     block_node_.resize(static_cast<std::size_t>(block_start_[nodes]));
-    block_value_.resize(9 * block_node_.size());
     for (std::size_t b = 0; b < nodes; ++b)
-      for (int k = 0; k < block_start_[b + 1] - block_start_[b]; ++k) {
-        const auto blk = static_cast<std::size_t>(block_start_[b] + k);
-        block_node_[blk] = inner[outer[3 * b] + 3 * k] / 3;
-        copy_block(b, k, block_value_.data() + 9 * blk);
-      }
+      for (int k = 0; k < block_start_[b + 1] - block_start_[b]; ++k)
+        block_node_[static_cast<std::size_t>(block_start_[b] + k)] =
+            inner[outer[3 * b] + 3 * k] / 3;
+  }
+  if (need_full || need_avx) {
+    std::vector<double>& dst = need_avx ? block_value4_ : block_value_;
+    const std::size_t stride = need_avx ? 12 : 9;
+    dst.assign(stride * block_node_.size(), 0.0);
+    for (std::size_t b = 0; b < nodes; ++b)
+      for (int k = 0; k < block_start_[b + 1] - block_start_[b]; ++k)
+        copy_block(b, k, dst.data() + stride * static_cast<std::size_t>(block_start_[b] + k),
+                   need_avx);
   }
   return EvalStatus::kOk;
 }
@@ -809,7 +864,8 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
     const double* src = d.data();
     double* dst = out.data();
     const Index nodes = num_nodes();
-    if (threads_ == 1 && half_stored_) {
+    const ProductKernel kernel = product_kernel();
+    if (kernel == ProductKernel::kHalf) {
       // One thread: the half-stored K. Node b's row sums are, in increasing neighbour order,
       // the scatters of the nodes a < b (done when a was visited, a ascending), its diagonal
       // block, and the gathers of its neighbours a > b — the order and the products of the
@@ -854,11 +910,19 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
     const int* start = block_start_.data();
     const int* node = block_node_.data();
     const double* val = block_value_.data();
+    const double* val4 = block_value4_.data();
     constexpr Index kNodes = 512;
     const Index chunks = (nodes + kNodes - 1) / kNodes;
     std::atomic<Index> next{0};
     run_parallel(threads_, [&] {
-      for (Index k = next++; k < chunks; k = next++)
+      for (Index k = next++; k < chunks; k = next++) {
+#if INCISE_AVX_KERNELS
+        if (kernel == ProductKernel::kFullAvx) {
+          block_gather_avx(k * kNodes, std::min(nodes, (k + 1) * kNodes), start, node, val4, src,
+                           dst);
+          continue;
+        }
+#endif
         for (Index b = k * kNodes, end = std::min(nodes, b + kNodes); b < end; ++b) {
           double s0 = 0.0, s1 = 0.0, s2 = 0.0;
           for (int t = start[b]; t < start[b + 1]; ++t) {
@@ -872,7 +936,9 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
           dst[3 * b + 1] = s1;
           dst[3 * b + 2] = s2;
         }
+      }
     });
+    (void)val4;
     flops_ += 18 * static_cast<std::uint64_t>(block_node_.size());
     return out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
   }
@@ -918,13 +984,9 @@ bool ElasticProblem::tangent_sweep(const VecX& u, Sink&& sink) const {
 bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
   INCISE_CHECK(u.size() == size(), "hessian_diagonal: u has the wrong size");
   diag.setZero(size());
-  if (assembled_product_) {  // from the diagonal node blocks, first of each node's half
+  if (assembled_product_) {  // K's diagonal, kept when the product's blocks were built
     if (assemble_product_matrix(u) != EvalStatus::kOk) return false;
-    for (Index b = 0; b < num_nodes(); ++b)
-      for (int j = 0; j < 3; ++j)
-        diag[3 * b + j] =
-            half_value_[9 * static_cast<std::size_t>(half_start_[static_cast<std::size_t>(b)]) +
-                        static_cast<std::size_t>(4 * j)];
+    diag = assembled_diag_;
     for (Eigen::Index i = 0; i < diag.size(); ++i)
       if (fixed_[static_cast<std::size_t>(i)]) diag[i] = 1.0;
     return diag.allFinite();
