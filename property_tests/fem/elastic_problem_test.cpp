@@ -387,16 +387,25 @@ TEST(ElasticProblem, AssembledProductEqualsMatrixFreeForLinearMaterial) {
     // A linear K does not depend on u: the matrix assembled at the first product is reused.
     ASSERT_EQ(p.hessian_product(VecX(VecX::Zero(p.size())), d, again), EvalStatus::kOk);
     EXPECT_EQ(again, kd_assembled);
-    // One thread reads K half-stored, several threads (or set_half_stored_product(false)) the
-    // full blocks: bitwise the same product (the same products summed in the same order;
-    // off-diagonal node blocks are exact mirrors).
-    p.set_half_stored_product(false);
-    ASSERT_EQ(p.hessian_product(u, d, again), EvalStatus::kOk);
-    EXPECT_EQ(again, kd_assembled);
+    // Every layout of the assembled product gives bitwise the same K·d (the same products
+    // summed in the same order; off-diagonal node blocks are exact mirrors): baseline ISA
+    // half-stored (one thread) and full (several threads, or set_half_stored_product(false)),
+    // and the AVX gather where available.
+    for (const auto isa : {incise::fem::KernelIsa::kBaseline, incise::fem::KernelIsa::kAvx}) {
+      if (!incise::fem::kernel_isa_available(isa)) continue;
+      p.set_kernel_isa(isa);
+      for (const bool half : {true, false})
+        for (const int t : {1, threads}) {
+          SCOPED_TRACE(std::string(incise::fem::to_string(isa)) + (half ? " half" : " full") +
+                       " threads " + std::to_string(t));
+          p.set_half_stored_product(half);
+          p.set_threads(t);
+          ASSERT_EQ(p.hessian_product(u, d, again), EvalStatus::kOk);
+          EXPECT_EQ(again, kd_assembled);
+        }
+    }
+    p.set_kernel_isa(incise::fem::best_kernel_isa());
     p.set_half_stored_product(true);
-    p.set_threads(1);
-    ASSERT_EQ(p.hessian_product(u, d, again), EvalStatus::kOk);
-    EXPECT_EQ(again, kd_assembled);
     p.set_threads(threads);
     // Rows of fixed DOFs included: the product of a unit vector e_c is row c of K (the product
     // sums K(r, c)·d_r down column c; K is symmetric up to rounding inside node blocks).
