@@ -425,6 +425,50 @@ TEST(ElasticProblem, AssembledProductEqualsMatrixFreeForLinearMaterial) {
   EXPECT_THROW(nh.set_assembled_product(true), incise::UsageError);
 }
 
+// build_pattern(): the assembled tangent's columns 3b + j hold exactly the rows 3a + i of the
+// nodes a sharing an element with b (b included), sorted — on a box whose vertices are
+// relabelled at random, so that neighbour lists are not runs of consecutive numbers. The
+// values (the scatter map) are checked by AssembledProductEqualsMatrixFreeForLinearMaterial.
+TEST(ElasticProblem, TangentPatternIsTheNodeAdjacency) {
+  INCISE_SEEDED_RNG(rng, 612);
+  incise::mesh::MeshData mesh = small_box(incise::mesh::CubeSplit::kFive);
+  const auto nodes = static_cast<std::size_t>(mesh.points.cols());
+  std::vector<incise::Index> label(nodes);
+  for (std::size_t v = 0; v < nodes; ++v) label[v] = static_cast<incise::Index>(v);
+  std::shuffle(label.begin(), label.end(), rng);
+  Eigen::Matrix3Xd points(3, mesh.points.cols());
+  for (std::size_t v = 0; v < nodes; ++v)
+    points.col(label[v]) = mesh.points.col(static_cast<Eigen::Index>(v));
+  mesh.points = points;
+  for (Eigen::Index e = 0; e < mesh.cells.cols(); ++e)
+    for (int i = 0; i < 4; ++i)
+      mesh.cells(i, e) = label[static_cast<std::size_t>(mesh.cells(i, e))];
+  ElasticProblem p(mesh, Material("linear", incise::test::fem_test_parameters()));
+  ASSERT_EQ(p.assemble_tangent(VecX::Zero(p.size()), FixedDofTreatment::kKeep), EvalStatus::kOk);
+  std::vector<std::vector<int>> adjacent(nodes);
+  for (Eigen::Index e = 0; e < mesh.cells.cols(); ++e)
+    for (int i = 0; i < 4; ++i)
+      for (int k = 0; k < 4; ++k)
+        adjacent[static_cast<std::size_t>(mesh.cells(i, e))].push_back(
+            static_cast<int>(mesh.cells(k, e)));
+  const Eigen::SparseMatrix<double>& k = p.tangent_matrix();
+  for (std::size_t b = 0; b < nodes; ++b) {
+    std::vector<int>& a = adjacent[b];
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+    for (int j = 0; j < 3; ++j) {
+      const auto c = static_cast<Eigen::Index>(3 * b) + j;
+      std::vector<int> rows;
+      for (Eigen::SparseMatrix<double>::InnerIterator it(k, c); it; ++it)
+        rows.push_back(static_cast<int>(it.row()));
+      std::vector<int> expected;
+      for (const int n : a)
+        for (int i = 0; i < 3; ++i) expected.push_back(3 * n + i);
+      EXPECT_EQ(rows, expected) << "column " << c;
+    }
+  }
+}
+
 TEST(NodeSelection, PlaneAndBox) {
   const auto mesh = incise::mesh::make_box(2, 2, 2, 1.0, 1.0, 1.0);
   EXPECT_EQ(incise::fem::nodes_on_plane(mesh, 0, 1.0).size(), 9u);
