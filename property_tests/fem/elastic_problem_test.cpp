@@ -387,6 +387,35 @@ TEST(ElasticProblem, AssembledProductEqualsMatrixFreeForLinearMaterial) {
     // A linear K does not depend on u: the matrix assembled at the first product is reused.
     ASSERT_EQ(p.hessian_product(VecX(VecX::Zero(p.size())), d, again), EvalStatus::kOk);
     EXPECT_EQ(again, kd_assembled);
+    // Every layout of the assembled product gives bitwise the same K·d (the same products
+    // summed in the same order; off-diagonal node blocks are exact mirrors): baseline ISA
+    // half-stored (one thread) and full (several threads, or set_half_stored_product(false)),
+    // and the AVX gather where available.
+    for (const auto isa : {incise::fem::KernelIsa::kBaseline, incise::fem::KernelIsa::kAvx}) {
+      if (!incise::fem::kernel_isa_available(isa)) continue;
+      p.set_kernel_isa(isa);
+      for (const bool half : {true, false})
+        for (const int t : {1, threads}) {
+          SCOPED_TRACE(std::string(incise::fem::to_string(isa)) + (half ? " half" : " full") +
+                       " threads " + std::to_string(t));
+          p.set_half_stored_product(half);
+          p.set_threads(t);
+          ASSERT_EQ(p.hessian_product(u, d, again), EvalStatus::kOk);
+          EXPECT_EQ(again, kd_assembled);
+        }
+    }
+    p.set_kernel_isa(incise::fem::best_kernel_isa());
+    p.set_half_stored_product(true);
+    p.set_threads(threads);
+    // Rows of fixed DOFs included: the product of a unit vector e_c is row c of K (the product
+    // sums K(r, c)·d_r down column c; K is symmetric up to rounding inside node blocks).
+    const Eigen::SparseMatrix<double> kt = p.tangent_matrix().transpose();
+    for (const incise::Index node : {incise::Index(0), incise::Index(p.num_nodes() - 1)}) {
+      VecX e = VecX::Zero(p.size());
+      e[3 * node + 1] = 1.0;
+      ASSERT_EQ(p.hessian_product(u, e, again), EvalStatus::kOk);
+      EXPECT_EQ(again, VecX(kt.col(3 * node + 1)));
+    }
     p.set_assembled_product(false);
     ASSERT_EQ(p.hessian_product(u, d, again), EvalStatus::kOk);
     EXPECT_EQ(again, kd);
@@ -394,6 +423,50 @@ TEST(ElasticProblem, AssembledProductEqualsMatrixFreeForLinearMaterial) {
   // Only a linear-geometry material has one K.
   ElasticProblem nh(small_box(), Material("neohookean", incise::test::fem_test_parameters()));
   EXPECT_THROW(nh.set_assembled_product(true), incise::UsageError);
+}
+
+// build_pattern(): the assembled tangent's columns 3b + j hold exactly the rows 3a + i of the
+// nodes a sharing an element with b (b included), sorted — on a box whose vertices are
+// relabelled at random, so that neighbour lists are not runs of consecutive numbers. The
+// values (the scatter map) are checked by AssembledProductEqualsMatrixFreeForLinearMaterial.
+TEST(ElasticProblem, TangentPatternIsTheNodeAdjacency) {
+  INCISE_SEEDED_RNG(rng, 612);
+  incise::mesh::MeshData mesh = small_box(incise::mesh::CubeSplit::kFive);
+  const auto nodes = static_cast<std::size_t>(mesh.points.cols());
+  std::vector<incise::Index> label(nodes);
+  for (std::size_t v = 0; v < nodes; ++v) label[v] = static_cast<incise::Index>(v);
+  std::shuffle(label.begin(), label.end(), rng);
+  Eigen::Matrix3Xd points(3, mesh.points.cols());
+  for (std::size_t v = 0; v < nodes; ++v)
+    points.col(label[v]) = mesh.points.col(static_cast<Eigen::Index>(v));
+  mesh.points = points;
+  for (Eigen::Index e = 0; e < mesh.cells.cols(); ++e)
+    for (int i = 0; i < 4; ++i)
+      mesh.cells(i, e) = label[static_cast<std::size_t>(mesh.cells(i, e))];
+  ElasticProblem p(mesh, Material("linear", incise::test::fem_test_parameters()));
+  ASSERT_EQ(p.assemble_tangent(VecX::Zero(p.size()), FixedDofTreatment::kKeep), EvalStatus::kOk);
+  std::vector<std::vector<int>> adjacent(nodes);
+  for (Eigen::Index e = 0; e < mesh.cells.cols(); ++e)
+    for (int i = 0; i < 4; ++i)
+      for (int k = 0; k < 4; ++k)
+        adjacent[static_cast<std::size_t>(mesh.cells(i, e))].push_back(
+            static_cast<int>(mesh.cells(k, e)));
+  const Eigen::SparseMatrix<double>& k = p.tangent_matrix();
+  for (std::size_t b = 0; b < nodes; ++b) {
+    std::vector<int>& a = adjacent[b];
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+    for (int j = 0; j < 3; ++j) {
+      const auto c = static_cast<Eigen::Index>(3 * b) + j;
+      std::vector<int> rows;
+      for (Eigen::SparseMatrix<double>::InnerIterator it(k, c); it; ++it)
+        rows.push_back(static_cast<int>(it.row()));
+      std::vector<int> expected;
+      for (const int n : a)
+        for (int i = 0; i < 3; ++i) expected.push_back(3 * n + i);
+      EXPECT_EQ(rows, expected) << "column " << c;
+    }
+  }
 }
 
 TEST(NodeSelection, PlaneAndBox) {

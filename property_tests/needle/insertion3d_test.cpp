@@ -227,24 +227,36 @@ TEST(NeedleInsertion3D, FastPathStaysWithinTheToleranceOfThePlainPath) {
   fast.extrapolate = true;
   InsertionOptions3D exact = plain;
   exact.epsilon = 1e-9;
-  auto a = make_sim(plain), b = make_sim(fast), c = make_sim(exact);
+  // Jacobi-preconditioned CG (opt-in) at the same ε, with the default assembled product.
+  InsertionOptions3D jacobi;
+  jacobi.epsilon = 0.01;
+  jacobi.preconditioner = incise::solver::Preconditioner::kJacobi;
+  auto a = make_sim(plain), b = make_sim(fast), c = make_sim(exact), j = make_sim(jacobi);
   const Vec3 dir = Vec3(1.0, 0.04, -0.02).normalized();
   const Vec3 start(-0.01, 0.051, 0.048);
-  double fmax = 0.0, dev_plain = 0.0, dev_fast = 0.0;
+  double fmax = 0.0, dev_plain = 0.0, dev_fast = 0.0, dev_jacobi = 0.0;
   for (int step = 1; step <= 30; ++step) {
     const NeedlePose3D p = pose(start + 2e-3 * step * dir, dir);
-    const StepReport3D ra = a->step(p), rb = b->step(p), rc = c->step(p);
-    ASSERT_TRUE(ra.ok() && rb.ok() && rc.ok()) << "step " << step;
+    const StepReport3D ra = a->step(p), rb = b->step(p), rc = c->step(p), rj = j->step(p);
+    ASSERT_TRUE(ra.ok() && rb.ok() && rc.ok() && rj.ok()) << "step " << step;
     fmax = std::max(fmax, rc.needle_force.norm());
     dev_plain = std::max(dev_plain, (ra.needle_force - rc.needle_force).norm());
     dev_fast = std::max(dev_fast, (rb.needle_force - rc.needle_force).norm());
+    dev_jacobi = std::max(dev_jacobi, (rj.needle_force - rc.needle_force).norm());
   }
+  std::printf(
+      "deviation from the ε = 1e-9 path over the largest force: plain %.3g, fast %.3g, "
+      "Jacobi %.3g\n",
+      dev_plain / fmax, dev_fast / fmax, dev_jacobi / fmax);
   // Both ε = 0.01 paths stay within ε of the reference's needle force over the whole insertion
   // (measured: 0.47 % of the largest force for each): the fast options change the solver's
-  // start and the rounding of K·d, not the fixed point the (6.9) rule accepts.
+  // start and the rounding of K·d, not the fixed point the (6.9) rule accepts. Jacobi changes
+  // every iterate, and stays within ε too (measured 0.90 %; docs/needle.md "The liver's update
+  // rate").
   ASSERT_GT(fmax, 1.0);  // N: the needle met the body and rearrangements loaded it
   EXPECT_LE(dev_plain, plain.epsilon * fmax) << "plain path: " << dev_plain << " N of " << fmax;
   EXPECT_LE(dev_fast, fast.epsilon * fmax) << "fast path: " << dev_fast << " N of " << fmax;
+  EXPECT_LE(dev_jacobi, jacobi.epsilon * fmax) << "Jacobi: " << dev_jacobi << " N of " << fmax;
 }
 
 // InsertionOptions3D::factor_preconditioner: CG preconditioned by a CHOLMOD factor of the last

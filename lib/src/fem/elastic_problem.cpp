@@ -10,6 +10,11 @@
 #include <limits>
 #include <sstream>
 
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
+    !defined(INCISE_SANITIZED_BUILD)
+#include <immintrin.h>  // the AVX block gather of the assembled product (INCISE_AVX_KERNELS)
+#endif
+
 namespace incise::fem {
 
 namespace {
@@ -554,6 +559,33 @@ __attribute__((target("avx"))) void sweep_chunk_avx(const ChunkArgs& a, Visit& v
 }
 #endif
 
+#if INCISE_AVX_KERNELS
+/// Node rows [first, last) of the assembled product K·d from full 3×3 node blocks stored as
+/// padded columns (block t: c[4i + j] = K(3a + i, 3b + j), a = node[t], c[4i + 3] = 0): the
+/// gather of hessian_product() with the three rows of a node in one 256-bit register — per row
+/// the same products summed in the same order (no FMA), so bitwise the scalar gather's.
+__attribute__((target("avx"))) void block_gather_avx(Index first, Index last, const int* start,
+                                                     const int* node, const double* val4,
+                                                     const double* src, double* dst) {
+  for (Index b = first; b < last; ++b) {
+    __m256d s = _mm256_setzero_pd();
+    for (int t = start[b]; t < start[b + 1]; ++t) {
+      const double* x = src + 3 * node[t];
+      const double* c = val4 + 12 * t;
+      __m256d p = _mm256_mul_pd(_mm256_loadu_pd(c), _mm256_broadcast_sd(x));
+      p = _mm256_add_pd(p, _mm256_mul_pd(_mm256_loadu_pd(c + 4), _mm256_broadcast_sd(x + 1)));
+      p = _mm256_add_pd(p, _mm256_mul_pd(_mm256_loadu_pd(c + 8), _mm256_broadcast_sd(x + 2)));
+      s = _mm256_add_pd(s, p);
+    }
+    alignas(32) double out[4];
+    _mm256_store_pd(out, s);
+    dst[3 * b] = out[0];
+    dst[3 * b + 1] = out[1];
+    dst[3 * b + 2] = out[2];
+  }
+}
+#endif
+
 }  // namespace
 
 bool kernel_isa_available(KernelIsa isa) {
@@ -743,32 +775,84 @@ void ElasticProblem::set_assembled_product(bool on) {
   assembled_product_ = on;
 }
 
+ElasticProblem::ProductKernel ElasticProblem::product_kernel() const {
+#if INCISE_AVX_KERNELS
+  if (isa_ == KernelIsa::kAvx) return ProductKernel::kFullAvx;
+#endif
+  return threads_ == 1 && half_stored_ ? ProductKernel::kHalf : ProductKernel::kFull;
+}
+
 EvalStatus ElasticProblem::assemble_product_matrix(const VecX& u) {
-  if (!block_start_.empty()) return EvalStatus::kOk;
-  const EvalStatus s = assemble_tangent(u, FixedDofTreatment::kKeep);
-  if (s != EvalStatus::kOk) return s;
+  const ProductKernel kernel = product_kernel();
+  const bool need_half = kernel == ProductKernel::kHalf && half_start_.empty();
+  const bool need_full = kernel == ProductKernel::kFull && block_value_.empty();
+  const bool need_avx = kernel == ProductKernel::kFullAvx && block_value4_.empty();
+  if (!need_half && !need_full && !need_avx) return EvalStatus::kOk;
+  if (assembled_diag_.size() == 0) {
+    const EvalStatus s = assemble_tangent(u, FixedDofTreatment::kKeep);
+    if (s != EvalStatus::kOk) return s;
+    assembled_diag_.resize(size());
+    for (Eigen::Index c = 0; c < size(); ++c)
+      assembled_diag_[c] = k_.valuePtr()[diag_[static_cast<std::size_t>(c)]];
+  } else if (assemble_tangent(u, FixedDofTreatment::kKeep) != EvalStatus::kOk) {
+    return EvalStatus::kInverted;  // another layout of K after a change of threads or ISA
+  }
   // Copy K into 3×3 node blocks: build_pattern() gives the three columns of node b one row
   // pattern of whole node triples, so block k of node b (neighbour a = inner[outer[3b] + 3k] / 3)
-  // holds K(3a + i, 3b + j) at value index outer[3b + j] + 3k + i; stored at 9k' + 3j + i.
+  // holds K(3a + i, 3b + j) at value index outer[3b + j] + 3k + i.
   const int* outer = k_.outerIndexPtr();
   const int* inner = k_.innerIndexPtr();
   const double* val = k_.valuePtr();
   const auto nodes = static_cast<std::size_t>(num_nodes());
-  block_start_.assign(nodes + 1, 0);
-  for (std::size_t b = 0; b < nodes; ++b)
-    block_start_[b + 1] = block_start_[b] + (outer[3 * b + 1] - outer[3 * b]) / 3;
-  block_node_.resize(static_cast<std::size_t>(block_start_[nodes]));
-  block_value_.resize(9 * block_node_.size());
-  for (std::size_t b = 0; b < nodes; ++b)
-    for (int k = 0; k < block_start_[b + 1] - block_start_[b]; ++k) {
-      const auto blk = static_cast<std::size_t>(block_start_[b] + k);
-      block_node_[blk] = inner[outer[3 * b] + 3 * k] / 3;
-      for (int j = 0; j < 3; ++j)
-        for (int i = 0; i < 3; ++i)
-          block_value_[9 * blk + static_cast<std::size_t>(3 * j + i)] =
-              val[outer[3 * b + static_cast<std::size_t>(j)] + 3 * k + i];
+  // Stored at dst[3j + i] (rows of the gather), or at dst[4i + j] (padded columns, AVX).
+  const auto copy_block = [&](std::size_t b, int k, double* dst, bool padded) {
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i)
+        dst[padded ? 4 * i + j : 3 * j + i] =
+            val[outer[3 * b + static_cast<std::size_t>(j)] + 3 * k + i];
+  };
+  if (need_half) {
+    // Half storage: node b's diagonal block first, then its blocks with neighbours a > b.
+    half_start_.assign(nodes + 1, 0);
+    for (std::size_t b = 0; b < nodes; ++b) {
+      int upper = 0;
+      for (int k = 0; k < (outer[3 * b + 1] - outer[3 * b]) / 3; ++k)
+        upper += inner[outer[3 * b] + 3 * k] / 3 >= static_cast<int>(b);
+      half_start_[b + 1] = half_start_[b] + upper;
     }
-  return s;
+    half_node_.resize(static_cast<std::size_t>(half_start_[nodes]));
+    half_value_.resize(9 * half_node_.size());
+    for (std::size_t b = 0; b < nodes; ++b) {
+      auto blk = static_cast<std::size_t>(half_start_[b]) + 1;
+      for (int k = 0; k < (outer[3 * b + 1] - outer[3 * b]) / 3; ++k) {
+        const int a = inner[outer[3 * b] + 3 * k] / 3;
+        if (a < static_cast<int>(b)) continue;
+        const std::size_t at = a == static_cast<int>(b) ? half_start_[b] : blk++;
+        half_node_[at] = a;
+        copy_block(b, k, half_value_.data() + 9 * at, false);
+      }
+    }
+  }
+  if ((need_full || need_avx) && block_start_.empty()) {
+    block_start_.assign(nodes + 1, 0);
+    for (std::size_t b = 0; b < nodes; ++b)
+      block_start_[b + 1] = block_start_[b] + (outer[3 * b + 1] - outer[3 * b]) / 3;
+    block_node_.resize(static_cast<std::size_t>(block_start_[nodes]));
+    for (std::size_t b = 0; b < nodes; ++b)
+      for (int k = 0; k < block_start_[b + 1] - block_start_[b]; ++k)
+        block_node_[static_cast<std::size_t>(block_start_[b] + k)] =
+            inner[outer[3 * b] + 3 * k] / 3;
+  }
+  if (need_full || need_avx) {
+    std::vector<double>& dst = need_avx ? block_value4_ : block_value_;
+    const std::size_t stride = need_avx ? 12 : 9;
+    dst.assign(stride * block_node_.size(), 0.0);
+    for (std::size_t b = 0; b < nodes; ++b)
+      for (int k = 0; k < block_start_[b + 1] - block_start_[b]; ++k)
+        copy_block(b, k, dst.data() + stride * static_cast<std::size_t>(block_start_[b] + k),
+                   need_avx);
+  }
+  return EvalStatus::kOk;
 }
 
 EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& out) {
@@ -776,19 +860,69 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
   if (assembled_product_) {
     const EvalStatus s = assemble_product_matrix(u);
     if (s != EvalStatus::kOk) return s;
+    out.resize(size());
+    const double* src = d.data();
+    double* dst = out.data();
+    const Index nodes = num_nodes();
+    const ProductKernel kernel = product_kernel();
+    if (kernel == ProductKernel::kHalf) {
+      // One thread: the half-stored K. Node b's row sums are, in increasing neighbour order,
+      // the scatters of the nodes a < b (done when a was visited, a ascending), its diagonal
+      // block, and the gathers of its neighbours a > b — the order and the products of the
+      // gather below, and each off-diagonal block of K is bitwise the transpose of its mirror
+      // (TetKernel::tangent_impl writes K_ba = K_abᵀ; both are summed over the same elements in
+      // the same order), so the result is bitwise the full product's (test
+      // ElasticProblem.AssembledProductEqualsMatrixFreeForLinearMaterial), with half the matrix
+      // read.
+      const int* start = half_start_.data();
+      const int* node = half_node_.data();
+      const double* val = half_value_.data();
+      out.setZero();
+      for (Index b = 0; b < nodes; ++b) {
+        const double* xb = src + 3 * b;
+        const double x0 = xb[0], x1 = xb[1], x2 = xb[2];
+        double s0 = dst[3 * b], s1 = dst[3 * b + 1], s2 = dst[3 * b + 2];
+        const double* v = val + 9 * start[b];
+        s0 += v[0] * x0 + v[1] * x1 + v[2] * x2;
+        s1 += v[3] * x0 + v[4] * x1 + v[5] * x2;
+        s2 += v[6] * x0 + v[7] * x1 + v[8] * x2;
+        for (int t = start[b] + 1; t < start[b + 1]; ++t) {
+          // v[3j + i] = K(3a + i, 3b + j)
+          double* ya = dst + 3 * node[t];
+          const double* xa = src + 3 * node[t];
+          v = val + 9 * t;
+          s0 += v[0] * xa[0] + v[1] * xa[1] + v[2] * xa[2];
+          s1 += v[3] * xa[0] + v[4] * xa[1] + v[5] * xa[2];
+          s2 += v[6] * xa[0] + v[7] * xa[1] + v[8] * xa[2];
+          ya[0] += v[0] * x0 + v[3] * x1 + v[6] * x2;
+          ya[1] += v[1] * x0 + v[4] * x1 + v[7] * x2;
+          ya[2] += v[2] * x0 + v[5] * x1 + v[8] * x2;
+        }
+        dst[3 * b] = s0;
+        dst[3 * b + 1] = s1;
+        dst[3 * b + 2] = s2;
+      }
+      flops_ += 18 * static_cast<std::uint64_t>(2 * half_node_.size() - num_nodes());
+      return out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
+    }
     // K is symmetric: (K·d)_(3b+j) = Σ over the blocks of node b of Σ_i K(3a + i, 3b + j) d_(3a+i),
     // a gather per node, each entry summed in one fixed order whatever the thread count.
-    out.resize(size());
     const int* start = block_start_.data();
     const int* node = block_node_.data();
     const double* val = block_value_.data();
-    const double* src = d.data();
-    double* dst = out.data();
+    const double* val4 = block_value4_.data();
     constexpr Index kNodes = 512;
-    const Index nodes = num_nodes(), chunks = (nodes + kNodes - 1) / kNodes;
+    const Index chunks = (nodes + kNodes - 1) / kNodes;
     std::atomic<Index> next{0};
     run_parallel(threads_, [&] {
-      for (Index k = next++; k < chunks; k = next++)
+      for (Index k = next++; k < chunks; k = next++) {
+#if INCISE_AVX_KERNELS
+        if (kernel == ProductKernel::kFullAvx) {
+          block_gather_avx(k * kNodes, std::min(nodes, (k + 1) * kNodes), start, node, val4, src,
+                           dst);
+          continue;
+        }
+#endif
         for (Index b = k * kNodes, end = std::min(nodes, b + kNodes); b < end; ++b) {
           double s0 = 0.0, s1 = 0.0, s2 = 0.0;
           for (int t = start[b]; t < start[b + 1]; ++t) {
@@ -802,7 +936,9 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
           dst[3 * b + 1] = s1;
           dst[3 * b + 2] = s2;
         }
+      }
     });
+    (void)val4;
     flops_ += 18 * static_cast<std::uint64_t>(block_node_.size());
     return out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
   }
@@ -848,14 +984,9 @@ bool ElasticProblem::tangent_sweep(const VecX& u, Sink&& sink) const {
 bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
   INCISE_CHECK(u.size() == size(), "hessian_diagonal: u has the wrong size");
   diag.setZero(size());
-  if (assembled_product_) {  // from the node blocks (b, b)
+  if (assembled_product_) {  // K's diagonal, kept when the product's blocks were built
     if (assemble_product_matrix(u) != EvalStatus::kOk) return false;
-    for (Index b = 0; b < num_nodes(); ++b)
-      for (int t = block_start_[static_cast<std::size_t>(b)];
-           t < block_start_[static_cast<std::size_t>(b) + 1]; ++t)
-        if (block_node_[static_cast<std::size_t>(t)] == b)
-          for (int j = 0; j < 3; ++j)
-            diag[3 * b + j] = block_value_[9 * static_cast<std::size_t>(t) + 4 * j];
+    diag = assembled_diag_;
     for (Eigen::Index i = 0; i < diag.size(); ++i)
       if (fixed_[static_cast<std::size_t>(i)]) diag[i] = 1.0;
     return diag.allFinite();
@@ -873,35 +1004,46 @@ bool ElasticProblem::hessian_diagonal(const VecX& u, VecX& diag) {
 void ElasticProblem::build_pattern() {
   const Eigen::Index n = size();
   const auto nodes = static_cast<std::size_t>(num_nodes());
-  // Node adjacency in flat arrays (counting sort by node, then each short list sorted and made
-  // unique; the node itself included): every element couples all three DOFs of its nodes, so
-  // column 3·b + j holds rows 3·a + i for every neighbour a of b and i = 0, 1, 2.
-  std::vector<int> start(nodes + 1, 0);
-  for (std::size_t b = 0; b < nodes; ++b) start[b + 1] = 1;
-  for (Index e = 0; e < num_elements(); ++e)
-    for (int b = 0; b < 4; ++b) start[static_cast<std::size_t>(cells_(b, e)) + 1] += 3;
-  for (std::size_t b = 0; b < nodes; ++b) start[b + 1] += start[b];
-  std::vector<int> adj(static_cast<std::size_t>(start[nodes]));
-  std::vector<int> fill(start.begin(), start.end() - 1);
-  for (std::size_t b = 0; b < nodes; ++b)
-    adj[static_cast<std::size_t>(fill[b]++)] = static_cast<int>(b);
-  for (Index e = 0; e < num_elements(); ++e)
-    for (int b = 0; b < 4; ++b)
-      for (int a = 0; a < 4; ++a)
-        if (a != b)
-          adj[static_cast<std::size_t>(fill[static_cast<std::size_t>(cells_(b, e))]++)] =
-              cells_(a, e);
-  std::vector<int> degree(nodes);
-  for (std::size_t b = 0; b < nodes; ++b) {
-    int* lo = adj.data() + start[b];
-    int* hi = adj.data() + start[b + 1];
-    std::sort(lo, hi);
-    degree[b] = static_cast<int>(std::unique(lo, hi) - lo);
+  const std::size_t m = order_.size();
+  // Node → incident sweep positions (4·position + local index), by counting sort.
+  std::vector<int> inc_start(nodes + 1, 0);
+  for (std::size_t q = 0; q < 4 * m; ++q)
+    ++inc_start[static_cast<std::size_t>(sweep_cells_[q]) + 1];
+  for (std::size_t b = 0; b < nodes; ++b) inc_start[b + 1] += inc_start[b];
+  std::vector<int> inc(4 * m);
+  {
+    std::vector<int> fill(inc_start.begin(), inc_start.end() - 1);
+    for (std::size_t q = 0; q < 4 * m; ++q)
+      inc[static_cast<std::size_t>(fill[static_cast<std::size_t>(sweep_cells_[q])]++)] =
+          static_cast<int>(q);
+  }
+  // Node adjacency (the node itself included), each list sorted: every element couples all
+  // three DOFs of its nodes, so column 3·b + j holds rows 3·a + i for every neighbour a of b
+  // and i = 0, 1, 2. Neighbours are collected once each (a stamp per node), then sorted.
+  std::vector<int> adj_start(nodes + 1, 0), adj;
+  adj.reserve(16 * nodes);
+  {
+    std::vector<int> stamp(nodes, -1);
+    for (std::size_t b = 0; b < nodes; ++b) {
+      const auto lo = adj.size();
+      adj.push_back(static_cast<int>(b));
+      stamp[b] = static_cast<int>(b);
+      for (int t = inc_start[b]; t < inc_start[b + 1]; ++t) {
+        const Index* cell = sweep_cells_.data() + 4 * (inc[static_cast<std::size_t>(t)] / 4);
+        for (int k = 0; k < 4; ++k) {
+          const auto a = static_cast<std::size_t>(cell[k]);
+          if (stamp[a] == static_cast<int>(b)) continue;
+          stamp[a] = static_cast<int>(b);
+          adj.push_back(static_cast<int>(a));
+        }
+      }
+      std::sort(adj.begin() + static_cast<std::ptrdiff_t>(lo), adj.end());
+      adj_start[b + 1] = static_cast<int>(adj.size());
+    }
   }
   // The compressed column arrays, written directly.
   k_.resize(n, n);
-  Eigen::Index nnz = 0;
-  for (std::size_t b = 0; b < nodes; ++b) nnz += 9 * static_cast<Eigen::Index>(degree[b]);
+  const Eigen::Index nnz = 9 * static_cast<Eigen::Index>(adj.size());
   k_.resizeNonZeros(nnz);
   int* outer_w = k_.outerIndexPtr();
   int* inner_w = k_.innerIndexPtr();
@@ -909,40 +1051,39 @@ void ElasticProblem::build_pattern() {
   for (std::size_t b = 0; b < nodes; ++b)
     for (int j = 0; j < 3; ++j) {
       outer_w[3 * b + static_cast<std::size_t>(j)] = t;
-      for (int k = 0; k < degree[b]; ++k)
-        for (int i = 0; i < 3; ++i)
-          inner_w[t++] = 3 * adj[static_cast<std::size_t>(start[b] + k)] + i;
+      for (int k = adj_start[b]; k < adj_start[b + 1]; ++k)
+        for (int i = 0; i < 3; ++i) inner_w[t++] = 3 * adj[static_cast<std::size_t>(k)] + i;
     }
   outer_w[n] = t;
   std::fill(k_.valuePtr(), k_.valuePtr() + nnz, 0.0);
   const int* outer = k_.outerIndexPtr();
-  // Index of node a in node b's sorted neighbour list; entry (3a, 3b) is at outer[3b] + 3·that.
-  auto find = [&](Index a, Index b) {
-    const int* lo = adj.data() + start[static_cast<std::size_t>(b)];
-    const int* hi = lo + degree[static_cast<std::size_t>(b)];
-    return static_cast<int>(std::lower_bound(lo, hi, static_cast<int>(a)) - lo);
-  };
   // Scatter map, kScatterStride = 20 ints per element: s[4b + a] = value index of entry
   // (3·node_a, 3·node_b), s[16 + b] = number of stored entries in column 3·node_b. Columns
   // 3·node_b + j (j = 0, 1, 2) have identical row patterns (every element couples all three DOFs
   // of its nodes) and are consecutive, and rows 3·node_a + i (i = 0, 1, 2) are consecutive in
   // each, so entry (3·node_a + i, 3·node_b + j) is at s[4b + a] + j·s[16 + b] + i.
-  // Stored in sweep order (position i: element order_[i], nodes sweep_cells_[4i..4i+3]).
-  scatter_.resize(static_cast<std::size_t>(num_elements()) * kScatterStride);
-  for (std::size_t i = 0; i < order_.size(); ++i) {
-    int* s = scatter_.data() + i * kScatterStride;
-    const Index* cell = sweep_cells_.data() + 4 * i;
-    for (int b = 0; b < 4; ++b) {
-      const int c = 3 * cell[b];
-      s[16 + b] = outer[c + 1] - outer[c];
-      for (int a = 0; a < 4; ++a) s[4 * b + a] = outer[c] + 3 * find(cell[a], cell[b]);
+  // Stored in sweep order (position i: element order_[i], nodes sweep_cells_[4i..4i+3]); filled
+  // node by node with the index of each neighbour in the node's sorted list (`where`).
+  scatter_.resize(m * kScatterStride);
+  diag_.resize(static_cast<std::size_t>(n));
+  std::vector<int> where(nodes, 0);
+  for (std::size_t b = 0; b < nodes; ++b) {
+    for (int k = adj_start[b]; k < adj_start[b + 1]; ++k)
+      where[static_cast<std::size_t>(adj[static_cast<std::size_t>(k)])] = k - adj_start[b];
+    const int c = outer[3 * b];
+    for (int j = 0; j < 3; ++j)
+      diag_[3 * b + static_cast<std::size_t>(j)] =
+          outer[3 * b + static_cast<std::size_t>(j)] + 3 * where[b] + j;
+    for (int q = inc_start[b]; q < inc_start[b + 1]; ++q) {
+      const auto pos = static_cast<std::size_t>(inc[static_cast<std::size_t>(q)] / 4);
+      const int local = inc[static_cast<std::size_t>(q)] % 4;
+      int* sc = scatter_.data() + pos * kScatterStride;
+      const Index* cell = sweep_cells_.data() + 4 * pos;
+      sc[16 + local] = outer[3 * b + 1] - c;
+      for (int a = 0; a < 4; ++a)
+        sc[4 * local + a] = c + 3 * where[static_cast<std::size_t>(cell[a])];
     }
   }
-  diag_.resize(static_cast<std::size_t>(n));
-  for (Eigen::Index c = 0; c < n; ++c)
-    diag_[static_cast<std::size_t>(c)] =
-        outer[c] + 3 * find(static_cast<Index>(c / 3), static_cast<Index>(c / 3)) +
-        static_cast<int>(c % 3);
 }
 
 EvalStatus ElasticProblem::assemble_tangent(const VecX& u, FixedDofTreatment treatment) {

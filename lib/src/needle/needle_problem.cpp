@@ -39,6 +39,8 @@ NeedleProblemT<D>::NeedleProblemT(Base& base, const Pose& pose, const std::vecto
       f_fric_.template segment<D>(D * v) = (nd.friction_sign * friction[k]) * frame_.col(0);
     }
   }
+  for (std::size_t i = 0; i < n; ++i)
+    if (fixed_[i]) fixed_list_.push_back(static_cast<Eigen::Index>(i));
 }
 
 template <int D>
@@ -109,6 +111,12 @@ EvalStatus NeedleProblemT<D>::gradient(const VecX& u, VecX& g, double* energy) {
   // The 2D base problem keeps its last gradient: the interaction loop's repeated requests at
   // the solver's final iterate, and the next solve's start after the needle moved a few nodes,
   // are answered without a sweep (PlaneStressProblem::gradient).
+  if (has_last_ && (last_has_energy_ || !energy) && u.size() == last_u_.size() && u == last_u_) {
+    g = last_g_;
+    if (energy) *energy = last_energy_;
+    return EvalStatus::kOk;
+  }
+  has_last_ = false;
   x_ = u;
   rotate(x_, false);
   const EvalStatus s = base_.gradient(x_, g, energy);
@@ -117,6 +125,11 @@ EvalStatus NeedleProblemT<D>::gradient(const VecX& u, VecX& g, double* energy) {
   if (energy) *energy -= f_fric_.dot(x_);
   own_flops_ += 3 * static_cast<std::uint64_t>(size());
   rotate(g, true);
+  last_u_ = u;
+  last_g_ = g;
+  last_has_energy_ = energy != nullptr;
+  last_energy_ = energy ? *energy : 0.0;
+  has_last_ = true;
   return s;
 }
 
@@ -126,7 +139,10 @@ EvalStatus NeedleProblemT<D>::hessian_product(const VecX& u, const VecX& d, VecX
   rotate(dx_, false);
   // A constant tangent does not depend on the point: u need not be rotated back then.
   bool constant = false;
-  if constexpr (D == 2) constant = base_.has_constant_tangent();
+  if constexpr (D == 2)
+    constant = base_.has_constant_tangent();
+  else
+    constant = base_.energy_is_quadratic();  // linear geometry: one K (elastic_problem.hpp)
   if (!constant) {
     x_ = u;
     rotate(x_, false);
@@ -152,8 +168,7 @@ bool NeedleProblemT<D>::hessian_diagonal(const VecX& u, VecX& diag) {
 
 template <int D>
 void NeedleProblemT<D>::project(VecX& v) const {
-  for (Eigen::Index i = 0; i < v.size(); ++i)
-    if (fixed_[static_cast<std::size_t>(i)]) v[i] = 0.0;
+  for (const Eigen::Index i : fixed_list_) v[i] = 0.0;
 }
 
 template <int D>

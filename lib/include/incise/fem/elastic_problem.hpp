@@ -182,10 +182,16 @@ class ElasticProblem : public Problem {
   /// `on` makes hessian_product() multiply by the raw tangent (kKeep) assembled once, at the
   /// first product after the call (a problem's mesh and material never change), instead of the
   /// matrix-free element products: the same K·d up to rounding, fewer flops (2 per stored entry)
-  /// — worth it when many products follow (docs/needle.md "Fig. 6.14 and speed"). Throws
+  /// — worth it when many products follow (docs/needle.md "Fig. 6.14 and speed"). On one thread
+  /// K is read half-stored (diagonal blocks and the blocks above), with a result bitwise equal
+  /// to the full product of several threads; with kernel_isa() kAvx the full product runs three
+  /// rows at once in 256-bit registers, bitwise the same again (docs/needle.md). Throws
   /// UsageError for any other material. Default off (matrix-free, §3.1).
   void set_assembled_product(bool on);
   bool assembled_product() const { return assembled_product_; }
+  /// Baseline kernels on one thread: whether the assembled product reads K half-stored (default
+  /// true) or full as on several threads (the same result bitwise; for benchmarks of the two).
+  void set_half_stored_product(bool on) { half_stored_ = on; }
   /// Elastic forces only: f_int = Σ q_τ(u) (N).
   [[nodiscard]] EvalStatus internal_forces(const VecX& u, VecX& f_int);
 
@@ -260,11 +266,25 @@ class ElasticProblem : public Problem {
   std::uint64_t flops_ = 0;
   Eigen::SparseMatrix<double> k_;
   bool assembled_product_ = false;
+  bool half_stored_ = true;
   // K for the assembled product in 3×3 node blocks (empty until used): node b's blocks are
   // block_start_[b] .. block_start_[b + 1] − 1, block t couples node block_node_[t], its values
-  // block_value_[9t + 3j + i] = K(3·block_node_[t] + i, 3b + j).
+  // block_value_[9t + 3j + i] = K(3·block_node_[t] + i, 3b + j). Full storage (every
+  // neighbour), built for the scalar kernel on several threads only.
   std::vector<int> block_start_, block_node_;
   std::vector<double> block_value_;
+  // block_value4_: the same blocks as padded columns for the AVX gather, 12 per block:
+  // [12t + 4i + j] = K(3·block_node_[t] + i, 3b + j), [12t + 4i + 3] = 0.
+  std::vector<double> block_value4_;
+  // The same blocks half-stored: node b's diagonal block at half_start_[b], then its blocks
+  // with neighbours a > b in increasing a.
+  std::vector<int> half_start_, half_node_;
+  std::vector<double> half_value_;
+  VecX assembled_diag_;  ///< K's diagonal (the assembled product's)
+  /// Which layout the assembled product reads (each built on first use, all bitwise the same
+  /// product): the AVX gather when isa_ is kAvx, else half-stored on one thread, else full.
+  enum class ProductKernel { kHalf, kFull, kFullAvx };
+  ProductKernel product_kernel() const;
   std::vector<int> scatter_;  ///< per element: 16 block value indices, 4 column lengths
   std::vector<int> diag_;     ///< value index of each diagonal entry
   int threads_ = 1;

@@ -85,6 +85,7 @@ class NeedleProblemT : public Problem {
   // --- incise::Problem (in rotated unknowns) --------------------------------------------
   Eigen::Index size() const override { return base_.size(); }
   [[nodiscard]] EvalStatus energy(const VecX& u, double& energy) override;
+  /// Repeated at the last successful call's argument (bitwise), answered from that call.
   [[nodiscard]] EvalStatus gradient(const VecX& u, VecX& g, double* energy = nullptr) override;
   [[nodiscard]] EvalStatus hessian_product(const VecX& u, const VecX& d, VecX& out) override;
   /// A positive diagonal for Jacobi preconditioning (linear CG, solver::Preconditioner::
@@ -107,9 +108,15 @@ class NeedleProblemT : public Problem {
   MatD frame_;
   std::vector<Index> needle_vertices_;
   std::vector<char> fixed_;
+  std::vector<Eigen::Index> fixed_list_;  ///< the fixed components in increasing order
   VecX f_fric_;
   mutable std::uint64_t own_flops_ = 0;
   VecX x_, dx_;  ///< scratch: the arguments rotated back to the original frame
+  // The last gradient() (a solver's closing check and the caller's gradient at the returned
+  // solution ask for the same point): its argument, result and energy when computed.
+  VecX last_u_, last_g_;
+  double last_energy_ = 0.0;
+  bool has_last_ = false, last_has_energy_ = false;
 };
 
 /// The 2D needle problem (§6.6).
