@@ -311,18 +311,19 @@ class AugmentedSystem {
   /// snapshot is stale by AugmentedOptions::overlap_stale_columns and no second one.
   bool may_start_refactorization() const;
   /// Background jobs pending (0, 1, or 2 with overlap_stale_columns).
-  int refactorizations_pending() const {
-    return (job_.valid() ? 1 : 0) + (job2_.valid() ? 1 : 0);
-  }
+  int refactorizations_pending() const { return (job_.valid() ? 1 : 0) + (job2_.valid() ? 1 : 0); }
   /// Background jobs abandoned so far because a newer snapshot's factorization finished first.
   int refactorizations_abandoned() const { return abandoned_count_; }
   /// Whether a background refactorization is running or finished but not yet swapped in.
   bool refactorization_pending() const { return job_.valid(); }
   /// If the background job has finished, swaps its factor in (m drops to the columns changed
-  /// since the job started) and returns true. A failed job is dropped; its status is stored in
-  /// last_refactorization_status().
+  /// since the job started) and returns true; a second job then becomes the pending one, and if
+  /// the second finished its factorization while the first is still running, the first is
+  /// abandoned and the second goes on as the first would (refactorizations_abandoned()). A
+  /// failed job is dropped; its status is stored in last_refactorization_status().
   bool poll_refactorization();
-  /// Blocks until the background job (if any) finishes, then swaps as poll does.
+  /// Blocks until the background job (if any) finishes, then swaps as poll does; with a second
+  /// (overlapping) job, then also that one, so that none is pending on return.
   bool wait_for_refactorization();
   /// Factors the current K now, in the calling thread (a pending background job is waited for
   /// and swapped first), and swaps it in: m drops to |𝓓|. The per-frame "refactor every step"
