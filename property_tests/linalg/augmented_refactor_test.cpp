@@ -160,6 +160,52 @@ TEST(AugmentedRefactor, PreparedSwapBringsGOfTheKeptColumnsSec3_6) {
   }
 }
 
+// AugmentedOptions::overlap_stale_columns (§3.6 with several jobs, issue 17): once a column has
+// changed since the pending job's snapshot (threshold 1 here), a second job may start from the
+// current K; at most two run. After both are done, 𝓛 holds only the columns changed since the
+// newer snapshot (and 𝓓), whichever job was swapped in or abandoned on the way, and every
+// solve equals a fresh factorization. With and without the prepared swap.
+TEST(AugmentedRefactor, OverlappingJobOnAStaleSnapshotLeavesOnlyTheNewerChangesSec3_6) {
+  for (const bool prepare : {true, false}) {
+    CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
+    linalg::AugmentedOptions options;
+    options.schur_solver = linalg::SchurSolver::kDirectCached;
+    options.prepare_swap = prepare;
+    options.overlap_stale_columns = 1;
+    linalg::AugmentedSystem aug(options);
+    ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
+    Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
+    std::map<int, double> dir;
+    std::vector<int> plane;  // nodes on x = 0.2 (mid-plane)
+    for (int v = 0; v < static_cast<int>(m.points.cols()); ++v)
+      if (std::abs(m.points(0, v) - 0.2) < 1e-9 && m.node_dof[v] >= 0) plane.push_back(v);
+    ASSERT_GE(plane.size(), 6u);
+    for (int k = 0; k < 3; ++k) ASSERT_TRUE(cut_node(m, aug, plane[k]));
+    aug.impose_dirichlet(0, 0.01);
+    dir[0] = 0.01;
+    expect_equivalent(aug, m, f, dir);
+    ASSERT_TRUE(aug.start_refactorization());
+    EXPECT_FALSE(aug.may_start_refactorization());  // nothing changed since its snapshot
+    EXPECT_FALSE(aug.start_refactorization());
+    ASSERT_TRUE(cut_node(m, aug, plane[3]));  // the first snapshot goes stale
+    ASSERT_TRUE(aug.may_start_refactorization()) << "prepare_swap " << prepare;
+    const int n_second = aug.num_dofs();
+    ASSERT_TRUE(aug.start_refactorization());
+    EXPECT_EQ(aug.refactorizations_pending(), 2);
+    std::set<int> touched;  // columns changed since the second snapshot
+    ASSERT_TRUE(cut_node(m, aug, plane[4], &touched));
+    EXPECT_FALSE(aug.start_refactorization());  // at most two
+    ASSERT_TRUE(cut_node(m, aug, plane[5], &touched));
+    expect_equivalent(aug, m, f, dir);  // polls: may swap the first in or abandon it
+    (void)aug.wait_for_refactorization();
+    EXPECT_EQ(aug.refactorizations_pending(), 0);
+    EXPECT_EQ(aug.last_refactorization_status(), linalg::FactorStatus::kOk);
+    EXPECT_EQ(aug.factored_dofs(), n_second);  // the newer snapshot's factor is in use
+    for (int j : aug.replaced_columns()) EXPECT_TRUE(j == 0 || touched.count(j) != 0) << j;
+    expect_equivalent(aug, m, f, dir);
+  }
+}
+
 // Updates and solves keep running in the foreground while background jobs start and finish
 // (polled in solve()); every solution equals a fresh factorization. The ThreadSanitizer build
 // of this test is the data-race check of §3.6. Step 3 runs its backward pass on two threads

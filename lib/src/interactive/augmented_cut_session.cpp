@@ -291,7 +291,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
     // next solve makes the next attempt, so a stuck K costs one factorization every other solve.
     const bool may_start = r.solve.status != linalg::AugmentedStatus::kNoFactor &&
                            r.solve.refactorization_status == linalg::FactorStatus::kOk &&
-                           !system_->refactorization_pending();
+                           system_->may_start_refactorization();
     const int removable = r.m_after_solve - r.solve.dirichlet;
     if (options_.refactor_every_step) {
       // no background job: every step refactors in refactor_now() above

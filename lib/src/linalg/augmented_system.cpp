@@ -182,6 +182,8 @@ AugmentedSystem::AugmentedSystem(AugmentedOptions options)
 
 AugmentedSystem::~AugmentedSystem() {
   if (job_.valid()) job_.wait();
+  if (job2_.valid()) job2_.wait();
+  reap_abandoned(true);
 }
 
 FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
@@ -194,7 +196,11 @@ FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
                  "AugmentedSystem::initialize: K0 must be symmetric with both triangles stored");
   }
   if (job_.valid()) job_.wait();
+  if (job2_.valid()) job2_.wait();
+  reap_abandoned(true);
   job_ = {};
+  job2_ = {};
+  changed_since_snapshot2_.clear();
   job_preparing_ = false;
   std::unique_ptr<CholmodFactor> reuse;
   if (base_) reuse = std::move(base_->factor);
@@ -246,6 +252,7 @@ AugmentedSystem::Column AugmentedSystem::column_of(int j) const {
 
 void AugmentedSystem::touch_column(int j) {
   if (snapshot_active_) changed_since_snapshot_.insert(j);
+  if (job2_.valid()) changed_since_snapshot2_.insert(j);
   if (changed_.count(j) != 0) return;
   changed_.emplace(j, column_of(j));
 }
@@ -388,19 +395,58 @@ int AugmentedSystem::prune_unchanged_columns() {
 // ---------------------------------------------------------------------------------------------
 // Background refactorization (§3.6).
 
+bool AugmentedSystem::may_start_refactorization() const {
+  if (!job_.valid()) return true;
+  return options_.overlap_stale_columns > 0 && !job2_.valid() &&
+         static_cast<int>(changed_since_snapshot_.size()) >= options_.overlap_stale_columns;
+}
+
 bool AugmentedSystem::start_refactorization() {
   INCISE_CHECK(base_ != nullptr, "start_refactorization before initialize");
-  if (job_.valid()) return false;
+  if (!may_start_refactorization()) return false;
+  reap_abandoned(false);
   SparseMatrix snapshot = current_matrix();
-  changed_since_snapshot_.clear();
-  snapshot_active_ = true;
   std::unique_ptr<CholmodFactor> spare;  // a fresh object: its own cholmod_common
   const AugmentedOptions options = options_;
-  job_ = std::async(std::launch::async,
-                    [m = std::move(snapshot), options, f = std::move(spare)]() mutable {
-                      return make_base(std::move(m), std::move(f), options);
-                    });
+  auto job = std::async(std::launch::async,
+                        [m = std::move(snapshot), options, f = std::move(spare)]() mutable {
+                          return make_base(std::move(m), std::move(f), options);
+                        });
+  if (job_.valid()) {  // overlap: a second, newer snapshot
+    changed_since_snapshot2_.clear();
+    job2_ = std::move(job);
+  } else {
+    changed_since_snapshot_.clear();
+    snapshot_active_ = true;
+    job_ = std::move(job);
+  }
   return true;
+}
+
+void AugmentedSystem::reap_abandoned(bool wait) {
+  for (auto it = abandoned_.begin(); it != abandoned_.end();) {
+    if (wait || it->wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+      (void)it->get();
+      it = abandoned_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+// The newer job becomes the only one (after job_ was swapped in, or to replace it).
+void AugmentedSystem::promote_second_job() {
+  if (!job2_.valid()) return;
+  if (job_.valid()) {
+    abandoned_.push_back(std::move(job_));
+    ++abandoned_count_;
+  }
+  job_ = std::move(job2_);
+  job2_ = {};
+  job_preparing_ = false;
+  changed_since_snapshot_ = std::move(changed_since_snapshot2_);
+  changed_since_snapshot2_.clear();
+  snapshot_active_ = true;
 }
 
 bool AugmentedSystem::start_preparing(std::unique_ptr<Base>& base) {
@@ -455,18 +501,32 @@ bool AugmentedSystem::swap_in(std::unique_ptr<Base> base, const std::set<int>& c
 }
 
 bool AugmentedSystem::poll_refactorization() {
+  reap_abandoned(false);
   if (!job_.valid()) return false;
-  if (job_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
+  const auto ready = [](std::future<std::unique_ptr<Base>>& j) {
+    return j.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
+  };
+  if (!ready(job_)) {
+    // overlap: the newer snapshot's factorization finished first; the older job is abandoned.
+    if (!job2_.valid() || !ready(job2_)) return false;
+    promote_second_job();
+  }
   std::unique_ptr<Base> base = job_.get();
   if (!job_preparing_ && start_preparing(base)) return false;  // swapped by a later poll
-  return swap_in(std::move(base), changed_since_snapshot_);
+  const bool swapped = swap_in(std::move(base), changed_since_snapshot_);
+  promote_second_job();
+  return swapped;
 }
 
 bool AugmentedSystem::wait_for_refactorization() {
-  if (!job_.valid()) return false;
-  std::unique_ptr<Base> base = job_.get();
-  if (!job_preparing_ && start_preparing(base)) base = job_.get();
-  return swap_in(std::move(base), changed_since_snapshot_);
+  bool swapped = false;
+  while (job_.valid()) {
+    std::unique_ptr<Base> base = job_.get();
+    if (!job_preparing_ && start_preparing(base)) base = job_.get();
+    swapped = swap_in(std::move(base), changed_since_snapshot_) || swapped;
+    promote_second_job();
+  }
+  return swapped;
 }
 
 bool AugmentedSystem::refactor_now() {

@@ -180,8 +180,9 @@ class AugmentedCutSession {
   AugmentedCutStepReport solve();
 
   /// §3.6 of the augmented paper: refactors the current K in a background thread; later
-  /// solves swap it in and m drops. Returns false if a job is already running. Started
-  /// automatically when AugmentedCutOptions::refactor_at_m > 0.
+  /// solves swap it in and m drops. Returns false if a job is already running (unless a second
+  /// may overlap it: linalg::AugmentedOptions::overlap_stale_columns). Started automatically
+  /// by the policy (AugmentedCutOptions::automatic_refactorization, refactor_at_m).
   bool start_refactorization() { return system_->start_refactorization(); }
   /// Blocks until a pending background refactorization finishes and swaps it in (m drops);
   /// returns whether a factor was swapped in (false: none pending, or the job failed).

@@ -123,6 +123,13 @@ struct AugmentedOptions {
   /// "Frame maximum (issue 17)". The solutions agree to round-off (GMRES on the exact operator
   /// either way).
   bool blas_kernels = true;
+  /// §3.6, overlapping refactorizations: while a background job is pending and at least this
+  /// many columns have changed since its snapshot (the swap would leave them in 𝓛), a second
+  /// job may start from the current K (start_refactorization()); whichever finishes its
+  /// factorization first among the newer is used, an older one still running is abandoned
+  /// (its thread finishes unobserved). 0: one job at a time. Off by default: measured on the
+  /// liver path, docs/augmented.md "Stale background jobs (issue 17)".
+  int overlap_stale_columns = 0;
   /// Threads of step 3's full backward substitution (ClosureLdlSolver): 1 = serial, ≥ 1. The
   /// pass streams all of L and is memory-bound, so extra threads help as far as a core adds
   /// memory bandwidth (docs/augmented.md). The result is bit-identical for any value. Leave at
@@ -297,15 +304,26 @@ class AugmentedSystem {
   SparseMatrix current_matrix() const;
 
   /// §3.6: starts factoring a snapshot of the current K in a background thread (own CHOLMOD
-  /// common, own CholmodFactor). Returns false (and does nothing) if one is already running.
+  /// common, own CholmodFactor). Returns false (and does nothing) unless
+  /// may_start_refactorization().
   bool start_refactorization();
+  /// Whether start_refactorization() would start a job: none pending, or one pending whose
+  /// snapshot is stale by AugmentedOptions::overlap_stale_columns and no second one.
+  bool may_start_refactorization() const;
+  /// Background jobs pending (0, 1, or 2 with overlap_stale_columns).
+  int refactorizations_pending() const { return (job_.valid() ? 1 : 0) + (job2_.valid() ? 1 : 0); }
+  /// Background jobs abandoned so far because a newer snapshot's factorization finished first.
+  int refactorizations_abandoned() const { return abandoned_count_; }
   /// Whether a background refactorization is running or finished but not yet swapped in.
   bool refactorization_pending() const { return job_.valid(); }
   /// If the background job has finished, swaps its factor in (m drops to the columns changed
-  /// since the job started) and returns true. A failed job is dropped; its status is stored in
-  /// last_refactorization_status().
+  /// since the job started) and returns true; a second job then becomes the pending one, and if
+  /// the second finished its factorization while the first is still running, the first is
+  /// abandoned and the second goes on as the first would (refactorizations_abandoned()). A
+  /// failed job is dropped; its status is stored in last_refactorization_status().
   bool poll_refactorization();
-  /// Blocks until the background job (if any) finishes, then swaps as poll does.
+  /// Blocks until the background job (if any) finishes, then swaps as poll does; with a second
+  /// (overlapping) job, then also that one, so that none is pending on return.
   bool wait_for_refactorization();
   /// Factors the current K now, in the calling thread (a pending background job is waited for
   /// and swapped first), and swaps it in: m drops to |𝓓|. The per-frame "refactor every step"
@@ -359,6 +377,15 @@ class AugmentedSystem {
   bool snapshot_active_ = false;
   std::future<std::unique_ptr<Base>> job_;
   bool job_preparing_ = false;  // job_ is the prepare_swap stage (G of a finished factor)
+  // overlap_stale_columns: a newer job (factorization stage only) and its changed columns;
+  // promoted to job_ when job_ is swapped in or abandoned.
+  std::future<std::unique_ptr<Base>> job2_;
+  std::set<int> changed_since_snapshot2_;
+  // Abandoned jobs: std::async futures block on destruction, so they are kept until ready.
+  std::vector<std::future<std::unique_ptr<Base>>> abandoned_;
+  int abandoned_count_ = 0;
+  void promote_second_job();
+  void reap_abandoned(bool wait);
   FactorStatus last_refactor_status_ = FactorStatus::kOk;
   double diag_scale_ = 1;  // max |K⁰_ii|: entries below 1e-13·diag_scale_ count as zero
   // SchurSolver::kDirectCached: G = (R⁻¹) on the base DOFs of 𝓛 of the last solve, kept while
