@@ -12,8 +12,17 @@ function(incise_add_library name)
   target_include_directories(incise_${name} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/lib/include>
                                                    $<INSTALL_INTERFACE:include>)
   target_link_libraries(incise_${name} PUBLIC ${A_DEPS} PRIVATE incise_options)
+  if(INCISE_BUILD_FUZZERS AND name IN_LIST INCISE_FUZZ_COVERAGE_MODULES)
+    target_compile_options(incise_${name} PRIVATE -fsanitize=fuzzer-no-link)
+  endif()
   set_property(GLOBAL APPEND PROPERTY INCISE_LIBRARIES incise_${name})
 endfunction()
+
+# The modules the fuzz harnesses' inputs reach (fuzz/: the mesh readers, the sweep reader, the
+# scene parser and builder), compiled with libFuzzer's coverage when INCISE_BUILD_FUZZERS is on.
+# The other modules carry ASan + UBSan only: coverage there would guide nothing and made the
+# sanitizer build and its tests slower (docs/ci.md).
+set(INCISE_FUZZ_COVERAGE_MODULES core mesh io material fem scene)
 
 # incise_add_gtest(NAME SOURCES ... LIBS ... LABELS ... [TIMEOUT s] [OWN_EXECUTABLE])
 #   GoogleTest drivers; every TEST becomes one ctest case carrying LABELS.
