@@ -199,6 +199,8 @@ TEST(SceneNeedle, SmallInsertionRunsAndWritesCsvVtuSeriesAndPvd) {
   ASSERT_TRUE(res.report.ok()) << res.report.brief();
   ASSERT_EQ(res.needle_updates.size(), 6u);
   EXPECT_EQ(res.report.iterations, 6);
+  // The summary's solver_cpu_seconds: the updates' process CPU, measured (it read 0 before).
+  EXPECT_GT(res.report.cpu_seconds, 0.0);
   long cg = 0;
   for (std::size_t k = 0; k < res.needle_updates.size(); ++k) {
     const auto& r = res.needle_updates[k];
@@ -543,6 +545,7 @@ TEST(SceneNeedle3D, SmallInsertionRunsAndWritesCsvVtuSeriesAndNeedleSurface) {
                        });
   ASSERT_TRUE(res.report.ok()) << res.report.brief();
   ASSERT_EQ(res.needle_updates.size(), 14u);
+  EXPECT_GT(res.report.cpu_seconds, 0.0);  // the summary's solver_cpu_seconds
   for (const auto& r : res.needle_updates) {
     EXPECT_EQ(r.status, "ok");
     EXPECT_GE(r.seconds, r.seconds_refine + r.seconds_solve + r.seconds_rearrange - 1e-9);

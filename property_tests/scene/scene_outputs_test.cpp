@@ -151,6 +151,7 @@ TEST(SceneOutputs, InteractiveCutRunWritesOneRowAndOneFramePerSolve) {
   scene::SceneRunResult res;
   const std::vector<std::string> written = run_and_write(built, "", res);
   ASSERT_TRUE(res.report.ok());
+  EXPECT_GT(res.report.cpu_seconds, 0.0);  // the summary's solver_cpu_seconds (it read 0 before)
   const std::size_t solves = res.cut_steps.size();
   ASSERT_GE(solves, 2u);
   EXPECT_EQ(written,

@@ -138,6 +138,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
                        std::ostringstream& detail) {
   const SceneSpec& spec = scene.spec;
   Timer total;
+  const double cpu0 = process_cpu_seconds();  // the frames' and the background jobs' CPU
   const material::Material mat = make_material(spec.material);
   const Index n0 = scene.mesh.num_points();
   // The loads of the uncut body, held as nodal forces during the cut (new nodes carry none).
@@ -278,6 +279,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
                : rep.residual_norm <= rep.threshold ? solver::StopReason::kConverged
                                                     : solver::StopReason::kStagnated;
   rep.seconds = total.seconds();
+  rep.cpu_seconds = process_cpu_seconds() - cpu0;
   detail << "interactive cut with the augmented solver (Yeung et al. 2016 §3): K0 factored once "
             "(CHOLMOD, |L| = "
          << init.solve.nnz_l << "), then per sweep triangle: cut (thesis §3.2, in the "
@@ -321,18 +323,21 @@ void run_needle(BuiltScene& scene, Insertion& sim, SceneRunResult& res, const Ob
   const SceneSpec& spec = scene.spec;
   solver::SolverReport& rep = res.report;
   double update_seconds = 0;  // the updates' own time, without the observer's (frame writing)
+  double update_cpu_seconds = 0;  // their process CPU time, likewise
   long cg = 0, rearrangements = 0;
   std::uint64_t flops = 0;
   rep.status = solver::StopReason::kConverged;
   for (std::size_t k = 0; k < scene.needle_plan.size(); ++k) {
     const NeedleUpdatePlan& plan = scene.needle_plan[k];
     Timer t;
+    const double cpu0 = process_cpu_seconds();
     const auto r = [&] {
       if constexpr (kThreeD)
         return sim.step(plan.pose3d);
       else
         return sim.step(plan.pose);
     }();
+    update_cpu_seconds += process_cpu_seconds() - cpu0;
     NeedleUpdateRow row;
     row.seconds = t.seconds();
     row.update = static_cast<long>(k);
@@ -399,6 +404,7 @@ void run_needle(BuiltScene& scene, Insertion& sim, SceneRunResult& res, const Ob
   rep.energy = energy;
   rep.residual_norm = std::numeric_limits<double>::quiet_NaN();
   rep.seconds = update_seconds;
+  rep.cpu_seconds = update_cpu_seconds;
   res.external_force_norm = std::numeric_limits<double>::quiet_NaN();
   // Final checks (as check_final_state for tetrahedra): finite displacement, inverted elements.
   if (!ud.allFinite()) {
