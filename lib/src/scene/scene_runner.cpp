@@ -322,7 +322,7 @@ void run_needle(BuiltScene& scene, Insertion& sim, SceneRunResult& res, const Ob
   constexpr bool kThreeD = std::is_same_v<Insertion, needle::NeedleInsertion3D>;
   const SceneSpec& spec = scene.spec;
   solver::SolverReport& rep = res.report;
-  double update_seconds = 0;  // the updates' own time, without the observer's (frame writing)
+  double update_seconds = 0;      // the updates' own time, without the observer's (frame writing)
   double update_cpu_seconds = 0;  // their process CPU time, likewise
   long cg = 0, rearrangements = 0;
   std::uint64_t flops = 0;
