@@ -78,8 +78,6 @@ struct Samples {
   int agg_reps = 0;
 };
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 double median_of(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
@@ -103,7 +101,7 @@ void merge_context(BenchRun& run) {
       char* end = nullptr;
       const double x = std::strtod(kv.first.c_str(), &end);
       if (kv.first.empty() || *end != '\0' || !std::isfinite(x)) {
-        lo = kNaN;
+        lo = std::numeric_limits<double>::quiet_NaN();
         break;
       }
       lo = std::min(lo, x), hi = std::max(hi, x);
@@ -209,7 +207,7 @@ void add_benchmark_json(const std::string& json_text, const std::string& file, B
         bv.unit = counter == "cpu_time (ns)" ? "ns" : "";
         const auto md = s.agg_median.find(counter);
         bv.median = md != s.agg_median.end() ? md->second : mean;
-        bv.min = bv.max = kNaN;
+        bv.min = bv.max = std::numeric_limits<double>::quiet_NaN();
         bv.module = module;
         run.values[name + " | " + counter] = bv;
       }

@@ -3,6 +3,7 @@
 #include <incise/delaunay/predicates.hpp>
 #include "boundary_grid.hpp"
 #include "incision.hpp"
+#include "planar.hpp"
 #include "topology.hpp"
 
 #include <incise/core/error.hpp>
@@ -16,10 +17,6 @@ namespace {
 
 using detail::starting_at;
 using mesh::ElementHandle;
-
-double cross(const Vec2& a, const Vec2& b) {
-  return a.x() * b.y() - a.y() * b.x();
-}
 
 /// Parameters (t, s) of the intersection of segments p0→p1 and q0→q1 (double precision, for
 /// placing points; the topology is decided by orient2d). False when parallel or not meeting.

@@ -1,6 +1,8 @@
 #include <incise/delaunay/predicates.hpp>
 #include <incise/delaunay/subdivision.hpp>
 
+#include "planar.hpp"
+
 #include <incise/core/error.hpp>
 
 #include <algorithm>
@@ -12,10 +14,6 @@ namespace incise::delaunay {
 namespace {
 
 using mesh::ElementHandle;
-
-double cross(const Vec2& a, const Vec2& b) {
-  return a.x() * b.y() - a.y() * b.x();
-}
 
 /// A node at x: a vertex within snap of x, else a new node on the edge or in the triangle that
 /// contains x; −1 when x is outside the mesh.

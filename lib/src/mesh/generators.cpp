@@ -1,5 +1,6 @@
 #include <incise/core/error.hpp>
 #include <incise/mesh/generators.hpp>
+#include <incise/mesh/quality.hpp>
 
 #include <algorithm>
 #include <array>
@@ -56,11 +57,9 @@ void check_index_range(const char* generator, const MeshSize& s) {
                                  std::to_string(kMax) + ")");
 }
 
-double signed_volume(const Eigen::Matrix3Xd& p, Index a, Index b, Index c, Index d) {
-  const Vec3 e1 = p.col(b) - p.col(a);
-  const Vec3 e2 = p.col(c) - p.col(a);
-  const Vec3 e3 = p.col(d) - p.col(a);
-  return e1.dot(e2.cross(e3)) / 6.0;
+/// The signed volume of tetrahedron (a, b, c, d) of `p` (mesh/quality.hpp).
+double tet_volume(const Eigen::Matrix3Xd& p, Index a, Index b, Index c, Index d) {
+  return signed_volume(p.col(a), p.col(b), p.col(c), p.col(d));
 }
 
 }  // namespace
@@ -124,8 +123,7 @@ MeshData make_box(int nx, int ny, int nz, double lx, double ly, double lz, CubeS
         }
         for (int t = 0; t < count; ++t) {
           std::array<Index, 4> tet{v[local[t][0]], v[local[t][1]], v[local[t][2]], v[local[t][3]]};
-          if (signed_volume(m.points, tet[0], tet[1], tet[2], tet[3]) < 0)
-            std::swap(tet[2], tet[3]);
+          if (tet_volume(m.points, tet[0], tet[1], tet[2], tet[3]) < 0) std::swap(tet[2], tet[3]);
           for (int r = 0; r < 4; ++r) m.cells(r, c) = tet[r];
           ++c;
         }
@@ -202,7 +200,7 @@ MeshData make_cylinder(double length, double radius, int rings, int layers) {
   m.cells.resize(4, static_cast<Eigen::Index>(tris.size()) * layers * 3);
   Eigen::Index c = 0;
   auto emit = [&](std::array<Index, 4> t) {
-    if (signed_volume(m.points, t[0], t[1], t[2], t[3]) < 0) std::swap(t[2], t[3]);
+    if (tet_volume(m.points, t[0], t[1], t[2], t[3]) < 0) std::swap(t[2], t[3]);
     for (int r = 0; r < 4; ++r) m.cells(r, c) = t[r];
     ++c;
   };

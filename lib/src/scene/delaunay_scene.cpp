@@ -252,8 +252,8 @@ SheetSpec parse_sheet(JsonObject o) {
   return s;
 }
 
-DelaunaySceneSpec parse_root(const Json& root_json, const std::string& file,
-                             const std::string& base_dir) {
+DelaunaySceneSpec parse_delaunay_root(const Json& root_json, const std::string& file,
+                                      const std::string& base_dir) {
   JsonObject root(root_json, "", file,
                   "a Delaunay scene object {\"mesh\": ..., \"tools\": [{\"type\": \"scalpel2d\" "
                   "or \"surface_scalpel\", ...}], ...}");
@@ -514,7 +514,7 @@ DelaunaySceneSpec parse_delaunay_scene(const std::string& text, const std::strin
                                        const std::string& base_dir) {
   detail::ParsedJson parsed = detail::parse_strict(text, file);
   try {
-    DelaunaySceneSpec s = parse_root(parsed.value, file, base_dir);
+    DelaunaySceneSpec s = parse_delaunay_root(parsed.value, file, base_dir);
     s.lines = std::move(parsed.lines);
     return s;
   } catch (const ParseError& e) {
