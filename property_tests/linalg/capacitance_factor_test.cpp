@@ -217,34 +217,60 @@ TEST(DenseBlas, LuGemmAndTrsmEqualEigenOnRandomBlocks) {
         EXPECT_LE((x0 - ref.col(0)).norm(), 1e-12 * ref.col(0).norm());
       }
     }
-    // dgemm on sub-blocks: C(2:, :) = 0.5 op(A) op(B) − 2 C.
+    // dgemm on sub-blocks: C(2:, :) = 0.5 op(A) op(B) − 2 C, through BLAS and through the
+    // Eigen fallback (use_blas = false: what runs when no BLAS is loaded); the rows of C
+    // outside the block must be left as they were.
     const int m = n + 3, kk = std::max(1, n / 2), nn = 5;
-    for (const bool ta : {false, true})
-      for (const bool tb : {false, true}) {
-        const Eigen::MatrixXd am = ta ? random(kk + 2, m) : random(m + 2, kk);
-        const Eigen::MatrixXd bm = tb ? random(nn + 1, kk) : random(kk + 1, nn);
-        Eigen::MatrixXd c = random(m + 4, nn);
-        const Eigen::MatrixXd opa =
-            ta ? Eigen::MatrixXd(am.topRows(kk).transpose()) : Eigen::MatrixXd(am.topRows(m));
-        const Eigen::MatrixXd opb =
-            tb ? Eigen::MatrixXd(bm.topRows(nn).transpose()) : Eigen::MatrixXd(bm.topRows(kk));
-        const Eigen::MatrixXd ref = 0.5 * opa * opb - 2.0 * c.block(2, 0, m, nn);
-        dense_gemm(ta, tb, m, nn, kk, 0.5, am.data(), static_cast<int>(am.rows()), bm.data(),
-                   static_cast<int>(bm.rows()), -2.0, c.data() + 2, static_cast<int>(c.rows()));
-        EXPECT_LE((c.block(2, 0, m, nn) - ref).norm(), 1e-12 * ref.norm()) << ta << tb;
-      }
-    // dtrsm: B ← B L⁻¹ and B ← B L⁻ᵀ for a unit-lower L (upper triangle holds garbage).
+    for (const bool use_blas : {true, false})
+      for (const bool ta : {false, true})
+        for (const bool tb : {false, true}) {
+          SCOPED_TRACE(testing::Message() << "use_blas " << use_blas << " op(A) " << ta
+                                          << " op(B) " << tb);
+          const Eigen::MatrixXd am = ta ? random(kk + 2, m) : random(m + 2, kk);
+          const Eigen::MatrixXd bm = tb ? random(nn + 1, kk) : random(kk + 1, nn);
+          const Eigen::MatrixXd c0 = random(m + 4, nn);
+          const Eigen::MatrixXd opa =
+              ta ? Eigen::MatrixXd(am.topRows(kk).transpose()) : Eigen::MatrixXd(am.topRows(m));
+          const Eigen::MatrixXd opb =
+              tb ? Eigen::MatrixXd(bm.topRows(nn).transpose()) : Eigen::MatrixXd(bm.topRows(kk));
+          // β = −2, β = 1 and β = 0 (C's block then NaN before: it must not be read).
+          for (const double beta : {-2.0, 1.0, 0.0}) {
+            Eigen::MatrixXd c = c0;
+            if (beta == 0) c.block(2, 0, m, nn).setConstant(std::nan(""));
+            const Eigen::MatrixXd ref =
+                0.5 * opa * opb + (beta == 0 ? Eigen::MatrixXd::Zero(m, nn)
+                                             : Eigen::MatrixXd(beta * c0.block(2, 0, m, nn)));
+            dense_gemm(ta, tb, m, nn, kk, 0.5, am.data(), static_cast<int>(am.rows()),
+                       bm.data(), static_cast<int>(bm.rows()), beta, c.data() + 2,
+                       static_cast<int>(c.rows()), use_blas);
+            EXPECT_LE((c.block(2, 0, m, nn) - ref).norm(), 1e-12 * ref.norm()) << "β " << beta;
+            EXPECT_EQ(c.topRows(2), c0.topRows(2));
+            EXPECT_EQ(c.bottomRows(2), c0.bottomRows(2));
+          }
+          // k = 0: C ← β C only.
+          Eigen::MatrixXd c = c0;
+          dense_gemm(ta, tb, m, nn, 0, 0.5, am.data(), static_cast<int>(am.rows()), bm.data(),
+                     static_cast<int>(bm.rows()), -2.0, c.data() + 2, static_cast<int>(c.rows()),
+                     use_blas);
+          EXPECT_EQ(c.block(2, 0, m, nn), Eigen::MatrixXd(-2.0 * c0.block(2, 0, m, nn)));
+        }
+    // dtrsm: B ← B L⁻¹ and B ← B L⁻ᵀ for a unit-lower L (upper triangle and diagonal hold
+    // garbage, which must not be read), through BLAS and through the Eigen fallback.
     const Eigen::MatrixXd l = random(n + 1, n) * (0.5 / static_cast<double>(n));
     const Eigen::MatrixXd lu_l =
         l.topRows(n).triangularView<Eigen::StrictlyLower>().toDenseMatrix() +
         Eigen::MatrixXd::Identity(n, n);
-    for (const bool tl : {false, true}) {
-      Eigen::MatrixXd bb = random(9, n);
-      const Eigen::MatrixXd ref = tl ? Eigen::MatrixXd(bb * lu_l.transpose().inverse())
-                                     : Eigen::MatrixXd(bb * lu_l.inverse());
-      dense_trsm_right_unit_lower(tl, 9, n, l.data(), n + 1, bb.data(), 9);
-      EXPECT_LE((bb - ref).norm(), 1e-12 * ref.norm()) << (tl ? "Lᵀ" : "L");
-    }
+    for (const bool use_blas : {true, false})
+      for (const bool tl : {false, true}) {
+        Eigen::MatrixXd bb = random(11, n);
+        const Eigen::MatrixXd b0 = bb;
+        const Eigen::MatrixXd ref = tl ? Eigen::MatrixXd(b0.topRows(9) * lu_l.transpose().inverse())
+                                       : Eigen::MatrixXd(b0.topRows(9) * lu_l.inverse());
+        dense_trsm_right_unit_lower(tl, 9, n, l.data(), n + 1, bb.data(), 11, use_blas);
+        EXPECT_LE((bb.topRows(9) - ref).norm(), 1e-12 * ref.norm())
+            << (tl ? "Lᵀ" : "L") << " use_blas " << use_blas;
+        EXPECT_EQ(bb.bottomRows(2), b0.bottomRows(2)) << "rows below the m×s block were written";
+      }
   }
 }
 

@@ -84,6 +84,70 @@ TEST(LinearCg, JacobiHelpsBadlyScaledDiagonal) {
   EXPECT_LT(jac.iterations, plain.iterations);
 }
 
+// LinearCgOptions::apply_preconditioner (the operator preconditioner the 3D needle passes,
+// needle/stick_slip.hpp): (a) the exact inverse of the free block gives the direct solution in
+// one step; (b) the callback z = D⁻¹ r gives Preconditioner::kJacobi's iterates bit for bit
+// (same operations, and linear_cg's projection of z is a no-op there); (c) garbage the callback
+// writes at fixed DOFs is projected away (fixed DOFs never move, §3.1); (d) both preconditioner
+// options at once are a usage error.
+TEST(LinearCg, OperatorPreconditionerExactInverseJacobiEquivalenceAndProjection_Sec2_4_1) {
+  INCISE_SEEDED_RNG(rng, 47);
+  const int n = 36;
+  QuadraticProblem p = random_spd_problem(rng, n, 1e3, 4);
+  const VecX x = p.direct_solution();
+  const std::vector<int> f = p.free_dofs();
+  const int m = int(f.size());
+  Eigen::MatrixXd af(m, m);
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) af(i, j) = p.matrix()(f[i], f[j]);
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(af);
+  LinearCgOptions o;
+  o.stop.rule = ResidualRule::kExternalForce;
+  o.stop.epsilon = 1e-12;
+  long calls = 0;
+  // (a) + (c): B = (free block of A)⁻¹, with NaN written at the fixed DOFs.
+  o.apply_preconditioner = [&](const VecX& r, VecX& z) {
+    ++calls;
+    VecX rf(m);
+    for (int i = 0; i < m; ++i) rf[i] = r[f[i]];
+    const VecX zf = ldlt.solve(rf);
+    z = VecX::Constant(r.size(), std::nan(""));
+    for (int i = 0; i < m; ++i) z[f[i]] = zf[i];
+  };
+  VecX u = VecX::Zero(n);
+  const SolverReport exact = linear_cg(p, u, o);
+  ASSERT_TRUE(exact.ok()) << to_string(exact.status) << ": " << exact.message;
+  // One step solves K x = b up to the dense factorization's round-off (cond 1e3 · ε ≪ 1e-8).
+  EXPECT_EQ(exact.iterations, 1);
+  EXPECT_GE(calls, 1);
+  EXPECT_LE((u - x).norm(), kDirectTol * x.norm());
+  EXPECT_TRUE(u.allFinite());
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(u[i], 0.0) << "fixed DOF " << i << " moved";
+
+  // (b) the Jacobi scaling as a callback against the built-in kJacobi, bitwise.
+  const JacobiDiagonal jd = jacobi_inverse_diagonal(p, VecX::Zero(n));
+  ASSERT_TRUE(jd.ok());
+  LinearCgOptions oj;
+  oj.stop = o.stop;
+  oj.apply_preconditioner = [&](const VecX& r, VecX& z) { z = jd.inverse.cwiseProduct(r); };
+  LinearCgOptions ok = oj;
+  ok.apply_preconditioner = nullptr;
+  ok.preconditioner = Preconditioner::kJacobi;
+  VecX u1 = VecX::Zero(n), u2 = VecX::Zero(n);
+  const SolverReport r1 = linear_cg(p, u1, oj), r2 = linear_cg(p, u2, ok);
+  ASSERT_TRUE(r1.ok() && r2.ok());
+  EXPECT_GT(r1.iterations, 1);
+  EXPECT_EQ(r1.iterations, r2.iterations);
+  EXPECT_EQ(r1.residual_history, r2.residual_history);
+  EXPECT_EQ(u1, u2);
+
+  // (d) both set.
+  oj.preconditioner = Preconditioner::kJacobi;
+  VecX u3 = VecX::Zero(n);
+  EXPECT_THROW((void)linear_cg(p, u3, oj), UsageError);
+  EXPECT_EQ(u3, VecX::Zero(n));
+}
+
 TEST(LinearCg, ReactionRule6_9ConvergesWithoutExternalLoad) {
   // Prescribed non-zero displacement at a fixed DOF and no load: (6.8) has threshold 0, (6.9)
   // uses the reaction force and converges.

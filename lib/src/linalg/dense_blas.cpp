@@ -56,9 +56,9 @@ bool dense_blas_available() {
 
 void dense_gemm(bool transpose_a, bool transpose_b, int m, int n, int k, double alpha,
                 const double* a, int lda, const double* b, int ldb, double beta, double* c,
-                int ldc) {
+                int ldc, bool use_blas) {
   if (m == 0 || n == 0) return;
-  if (const Dgemm f = routines().gemm) {
+  if (const Dgemm f = use_blas ? routines().gemm : nullptr) {
     const char ta = transpose_a ? 'T' : 'N', tb = transpose_b ? 'T' : 'N';
     f(&ta, &tb, &m, &n, &k, &alpha, a, &lda, b, &ldb, &beta, c, &ldc, 1, 1);
     return;
@@ -84,9 +84,9 @@ void dense_gemm(bool transpose_a, bool transpose_b, int m, int n, int k, double 
 }
 
 void dense_trsm_right_unit_lower(bool transpose_l, int m, int s, const double* l, int ldl,
-                                 double* b, int ldb) {
+                                 double* b, int ldb, bool use_blas) {
   if (m == 0 || s == 0) return;
-  if (const Dtrsm f = routines().trsm) {
+  if (const Dtrsm f = use_blas ? routines().trsm : nullptr) {
     const char side = 'R', uplo = 'L', trans = transpose_l ? 'T' : 'N', diag = 'U';
     const double one = 1.0;
     f(&side, &uplo, &trans, &diag, &m, &s, &one, l, &ldl, b, &ldb, 1, 1, 1, 1);

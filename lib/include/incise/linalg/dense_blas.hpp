@@ -20,16 +20,17 @@ namespace incise::linalg {
 bool dense_blas_available();
 
 /// C = α op(A) op(B) + β C for column-major blocks (BLAS dgemm): op(A) is m×k, op(B) k×n, C m×n,
-/// leading dimensions lda, ldb, ldc. With β = 0, C need not be initialized.
+/// leading dimensions lda, ldb, ldc. With β = 0, C need not be initialized. `use_blas` = false
+/// (or no BLAS found) takes Eigen's product.
 void dense_gemm(bool transpose_a, bool transpose_b, int m, int n, int k, double alpha,
                 const double* a, int lda, const double* b, int ldb, double beta, double* c,
-                int ldc);
+                int ldc, bool use_blas = true);
 
 /// B ← B op(L)⁻¹ for a unit-lower-triangular s×s L (BLAS dtrsm, side right, diagonal unit):
 /// B is m×s, leading dimension ldb; L leading dimension ldl; only L's strict lower triangle is
-/// read.
+/// read. `use_blas` = false (or no BLAS found) takes Eigen's triangular solve.
 void dense_trsm_right_unit_lower(bool transpose_l, int m, int s, const double* l, int ldl,
-                                 double* b, int ldb);
+                                 double* b, int ldb, bool use_blas = true);
 
 /// Dense LU with partial pivoting, P A = L U (LAPACK dgetrf/dgetrs; Eigen::PartialPivLU when
 /// they are missing or `use_blas` is false). Solves with many right-hand sides at once (BLAS-3).
