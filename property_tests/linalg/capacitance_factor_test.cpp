@@ -224,8 +224,8 @@ TEST(DenseBlas, LuGemmAndTrsmEqualEigenOnRandomBlocks) {
     for (const bool use_blas : {true, false})
       for (const bool ta : {false, true})
         for (const bool tb : {false, true}) {
-          SCOPED_TRACE(testing::Message() << "use_blas " << use_blas << " op(A) " << ta
-                                          << " op(B) " << tb);
+          SCOPED_TRACE(testing::Message()
+                       << "use_blas " << use_blas << " op(A) " << ta << " op(B) " << tb);
           const Eigen::MatrixXd am = ta ? random(kk + 2, m) : random(m + 2, kk);
           const Eigen::MatrixXd bm = tb ? random(nn + 1, kk) : random(kk + 1, nn);
           const Eigen::MatrixXd c0 = random(m + 4, nn);
@@ -240,9 +240,9 @@ TEST(DenseBlas, LuGemmAndTrsmEqualEigenOnRandomBlocks) {
             const Eigen::MatrixXd ref =
                 0.5 * opa * opb + (beta == 0 ? Eigen::MatrixXd::Zero(m, nn)
                                              : Eigen::MatrixXd(beta * c0.block(2, 0, m, nn)));
-            dense_gemm(ta, tb, m, nn, kk, 0.5, am.data(), static_cast<int>(am.rows()),
-                       bm.data(), static_cast<int>(bm.rows()), beta, c.data() + 2,
-                       static_cast<int>(c.rows()), use_blas);
+            dense_gemm(ta, tb, m, nn, kk, 0.5, am.data(), static_cast<int>(am.rows()), bm.data(),
+                       static_cast<int>(bm.rows()), beta, c.data() + 2, static_cast<int>(c.rows()),
+                       use_blas);
             EXPECT_LE((c.block(2, 0, m, nn) - ref).norm(), 1e-12 * ref.norm()) << "β " << beta;
             EXPECT_EQ(c.topRows(2), c0.topRows(2));
             EXPECT_EQ(c.bottomRows(2), c0.bottomRows(2));

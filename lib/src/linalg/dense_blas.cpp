@@ -55,8 +55,8 @@ bool dense_blas_available() {
 }
 
 void dense_gemm(bool transpose_a, bool transpose_b, int m, int n, int k, double alpha,
-                const double* a, int lda, const double* b, int ldb, double beta, double* c,
-                int ldc, bool use_blas) {
+                const double* a, int lda, const double* b, int ldb, double beta, double* c, int ldc,
+                bool use_blas) {
   if (m == 0 || n == 0) return;
   if (const Dgemm f = use_blas ? routines().gemm : nullptr) {
     const char ta = transpose_a ? 'T' : 'N', tb = transpose_b ? 'T' : 'N';

@@ -23,8 +23,8 @@ bool dense_blas_available();
 /// leading dimensions lda, ldb, ldc. With β = 0, C need not be initialized. `use_blas` = false
 /// (or no BLAS found) takes Eigen's product.
 void dense_gemm(bool transpose_a, bool transpose_b, int m, int n, int k, double alpha,
-                const double* a, int lda, const double* b, int ldb, double beta, double* c,
-                int ldc, bool use_blas = true);
+                const double* a, int lda, const double* b, int ldb, double beta, double* c, int ldc,
+                bool use_blas = true);
 
 /// B ← B op(L)⁻¹ for a unit-lower-triangular s×s L (BLAS dtrsm, side right, diagonal unit):
 /// B is m×s, leading dimension ldb; L leading dimension ldl; only L's strict lower triangle is
