@@ -93,24 +93,47 @@ void BM_NeedleFig6_14Linear(benchmark::State& state) {
   state.counters["elements"] = elements;
 }
 
+/// The shipped liver scene's insertion (reference_data/scenes/needle_liver.json): its mesh (mm →
+/// m), material, support box (x < 0.06 m held), friction and refinement options, and the pose of
+/// update k of its 91 (the tip moves 0.5 mm per update in −x).
+struct LiverInsertion {
+  incise::mesh::MeshData mesh;
+  incise::material::Material material{"linear", liver_parameters()};
+  incise::needle::InsertionOptions3D options;
+  incise::needle::FrictionProfile friction;
+  static constexpr int kUpdates = 91;
+
+  LiverInsertion() {
+    incise::io::ReadOptions ro;
+    ro.scale = 0.001;
+    mesh = incise::io::read_mesh(
+               std::string(INCISE_SOURCE_DIR) + "/reference_data/meshes/liver_coarse.mesh", ro)
+               .mesh;
+    options.h_ref = 0.001;
+    options.h_shaft = 0.002;
+    options.epsilon = 0.01;
+    friction.shaft_density = 5;
+    friction.tip_density = 15;
+  }
+  static incise::material::Parameters liver_parameters() {
+    incise::material::Parameters p;
+    p.youngs_modulus = 3000.0;
+    p.poisson_ratio = 0.45;
+    return p;
+  }
+  /// A fresh simulation with the scene's supports and `o` (the scene's options, varied).
+  NeedleInsertion3D simulation(const incise::needle::InsertionOptions3D& o) const {
+    return NeedleInsertion3D(mesh, material, {{Vec3(-kInf, -kInf, -kInf), Vec3(0.06, kInf, kInf)}},
+                             friction, o);
+  }
+  static NeedlePose3D pose(int k) {
+    return NeedlePose3D::make(Vec3(0.245 - 0.0005 * k, 0.06, 0.12), -Vec3::UnitX(), 0.1, 1e-3);
+  }
+};
+
 void BM_NeedleLiver(benchmark::State& state) {
-  incise::io::ReadOptions ro;
-  ro.scale = 0.001;
-  const auto mesh =
-      incise::io::read_mesh(
-          std::string(INCISE_SOURCE_DIR) + "/reference_data/meshes/liver_coarse.mesh", ro)
-          .mesh;
-  incise::material::Parameters p;
-  p.youngs_modulus = 3000.0;
-  p.poisson_ratio = 0.45;
-  const incise::material::Material mat("linear", p);
-  incise::needle::InsertionOptions3D o;
-  o.h_ref = 0.001;
-  o.h_shaft = 0.002;
-  o.epsilon = 0.01;
-  incise::needle::FrictionProfile f;
-  f.shaft_density = 5;
-  f.tip_density = 15;
+  const LiverInsertion liver;
+  incise::needle::InsertionOptions3D o = liver.options;
   o.assembled_product = state.range(0) != 0;
   o.extrapolate = state.range(1) != 0;
   if (state.range(2) != 0) o.preconditioner = incise::solver::Preconditioner::kJacobi;
@@ -132,13 +155,12 @@ void BM_NeedleLiver(benchmark::State& state) {
   std::vector<double> force_x;
   bool ok = true;
   for (auto _ : state) {
-    NeedleInsertion3D sim(mesh, mat, {{Vec3(-kInf, -kInf, -kInf), Vec3(0.06, kInf, kInf)}}, f, o);
+    NeedleInsertion3D sim = liver.simulation(o);
     const double t0 = incise::thread_cpu_seconds();
-    for (int k = 0; k <= 90; ++k) {
+    for (int k = 0; k < LiverInsertion::kUpdates; ++k) {
       incise::Timer t;
       const double c0 = incise::thread_cpu_seconds();
-      const auto rep = sim.step(
-          NeedlePose3D::make(Vec3(0.245 - 0.0005 * k, 0.06, 0.12), -Vec3::UnitX(), 0.1, 1e-3));
+      const auto rep = sim.step(LiverInsertion::pose(k));
       total.push_back(t.seconds());
       total_cpu.push_back(incise::thread_cpu_seconds() - c0);
       // The first updates advance the needle through air (no force on it): they cost 1-2 ms and
@@ -211,27 +233,10 @@ void BM_NeedleLiver(benchmark::State& state) {
 /// product (median); SkipWithError when the products differ in any bit (they must not:
 /// fem/elastic_problem.hpp).
 void BM_NeedleLiverProduct(benchmark::State& state) {
-  incise::io::ReadOptions ro;
-  ro.scale = 0.001;
-  const auto mesh =
-      incise::io::read_mesh(
-          std::string(INCISE_SOURCE_DIR) + "/reference_data/meshes/liver_coarse.mesh", ro)
-          .mesh;
-  incise::material::Parameters p;
-  p.youngs_modulus = 3000.0;
-  p.poisson_ratio = 0.45;
-  const incise::material::Material mat("linear", p);
-  incise::needle::InsertionOptions3D o;
-  o.h_ref = 0.001;
-  o.h_shaft = 0.002;
-  o.epsilon = 0.01;
-  incise::needle::FrictionProfile f;
-  f.shaft_density = 5;
-  f.tip_density = 15;
-  NeedleInsertion3D sim(mesh, mat, {{Vec3(-kInf, -kInf, -kInf), Vec3(0.06, kInf, kInf)}}, f, o);
-  for (int k = 0; k <= 90; ++k)
-    (void)sim.step(
-        NeedlePose3D::make(Vec3(0.245 - 0.0005 * k, 0.06, 0.12), -Vec3::UnitX(), 0.1, 1e-3));
+  const LiverInsertion liver;
+  incise::needle::InsertionOptions3D o = liver.options;
+  NeedleInsertion3D sim = liver.simulation(o);
+  for (int k = 0; k < LiverInsertion::kUpdates; ++k) (void)sim.step(LiverInsertion::pose(k));
   incise::fem::ElasticProblem& pb = sim.problem();
   pb.set_threads(1);
   const incise::VecX u = sim.displacement();
