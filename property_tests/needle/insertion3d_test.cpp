@@ -59,49 +59,13 @@ NeedlePose3D pose(const Vec3& tip, const Vec3& dir) {
   return NeedlePose3D::make(tip, dir, 0.1, 2.5e-3);
 }
 
-void expect_valid_mesh(const NeedleInsertion3D& sim) {
-  incise::mesh::ValidateOptions vo;
-  vo.positions = &sim.mesh().points();
-  const auto rep = incise::mesh::validate(sim.mesh().connectivity(), vo);
-  EXPECT_TRUE(rep.ok()) << rep.summary();
-}
+using incise::test::expect_valid_mesh;
 
-/// The friction inequalities at the fixed point of the rearrangements and the needle force,
-/// recomputed from the body's own gradient. Returns {sticking, slipping} counts checked.
+/// The friction inequalities (needle_support.hpp) and the reported needle force against the
+/// body's gradient summed over the needle vertices.
 std::pair<int, int> expect_friction_inequalities(NeedleInsertion3D& sim, const StepReport3D& rep) {
-  const VecX& u = sim.displacement();
-  VecX g;
-  EXPECT_EQ(sim.problem().gradient(u, g), incise::EvalStatus::kOk);
-  const Vec3 t = sim.pose().tangent();
-  const std::vector<double> fd = sim.dynamic_thresholds();
-  const auto& nodes = sim.needle_nodes();
-  incise::needle::NeedleProblem3D np(sim.problem(), sim.pose(), nodes, fd);
-  VecX gr;
-  EXPECT_EQ(np.gradient(np.to_rotated(u), gr), incise::EvalStatus::kOk);
-  const double threshold = incise::solver::residual_threshold(
-      sim.stopping_rule(), np.external_force_norm(), incise::solver::fixed_norm(np, gr), np.size());
-  std::pair<int, int> counts{0, 0};
   Vec3 needle = Vec3::Zero();
-  for (std::size_t k = 0; k < nodes.size(); ++k) {
-    const NeedleNode3D& n = nodes[k];
-    needle += g.segment<3>(3 * n.vertex);
-    const double r = g.segment<3>(3 * n.vertex).dot(t);  // tangential force needle → material
-    const double fs = sim.friction().static_factor * fd[k];
-    const auto& margin = sim.rearrange_margins();
-    if (n.state == NodeState::kStick) {
-      // The rearrangement tested the same quantity; the recomputed gradient differs by rounding.
-      EXPECT_LE(std::abs(r), fs * (1 + 1e-9) + margin.force + 1e-12)
-          << "sticking vertex " << n.vertex;
-      ++counts.first;
-    } else {
-      EXPECT_GE(n.friction_sign * (n.coords.s - n.anchor), -margin.slide)
-          << "slipping vertex " << n.vertex;
-      EXPECT_LE(std::abs(r - n.friction_sign * fd[k]), threshold) << "slipping vertex " << n.vertex;
-      ++counts.second;
-    }
-    EXPECT_GE(n.coords.s, 0.0);
-    EXPECT_LE(n.coords.s, sim.pose().length);
-  }
+  const std::pair<int, int> counts = incise::test::expect_friction_inequalities(sim, &needle);
   // Same gradient summed in another order (before release only): rounding of O(1 N) sums.
   if (rep.released == 0) {
     EXPECT_LT((rep.needle_force - needle).norm(), 1e-9 * (1.0 + needle.norm()));

@@ -44,49 +44,8 @@ std::unique_ptr<NeedleInsertion> make_slab_sim(InsertionOptions o = {},
       std::vector<incise::needle::FixedLine>{{0, 0.1}}, incise::needle::FrictionProfile{}, o);
 }
 
-void expect_valid_mesh(const NeedleInsertion& sim) {
-  incise::mesh::ValidateOptions vo;
-  vo.positions = &sim.mesh().points();
-  const auto rep = incise::mesh::validate(sim.mesh().connectivity(), vo);
-  EXPECT_TRUE(rep.ok()) << rep.summary();
-}
-
-/// The friction inequalities at the fixed point of the rearrangements, recomputed from the
-/// slab's own gradient. Returns {sticking, slipping} node counts checked.
-std::pair<int, int> expect_friction_inequalities(NeedleInsertion& sim) {
-  const VecX& u = sim.displacement();
-  VecX g;
-  EXPECT_EQ(sim.problem().gradient(u, g), incise::EvalStatus::kOk);
-  const Vec2 t = sim.pose().tangent();
-  const std::vector<double> fd = sim.dynamic_thresholds();
-  const auto& nodes = sim.needle_nodes();
-  incise::needle::NeedleProblem np(sim.problem(), sim.pose(), nodes, fd);
-  VecX gr;
-  EXPECT_EQ(np.gradient(np.to_rotated(u), gr), incise::EvalStatus::kOk);
-  const double threshold = incise::solver::residual_threshold(
-      sim.stopping_rule(), np.external_force_norm(), incise::solver::fixed_norm(np, gr), np.size());
-  std::pair<int, int> counts{0, 0};
-  for (std::size_t k = 0; k < nodes.size(); ++k) {
-    const NeedleNode& n = nodes[k];
-    const double r = g.segment<2>(2 * n.vertex).dot(t);  // tangential force needle → material
-    const double fs = sim.friction().static_factor * fd[k];
-    const auto& margin = sim.rearrange_margins();
-    if (n.state == NodeState::kStick) {
-      // The rearrangement tested the same quantity; the recomputed gradient differs by rounding.
-      EXPECT_LE(std::abs(r), fs * (1 + 1e-9) + margin.force + 1e-12)
-          << "sticking vertex " << n.vertex;
-      ++counts.first;
-    } else {
-      EXPECT_GE(n.friction_sign * (n.coords.s - n.anchor), -margin.slide)
-          << "slipping vertex " << n.vertex;
-      EXPECT_LE(std::abs(r - n.friction_sign * fd[k]), threshold) << "slipping vertex " << n.vertex;
-      ++counts.second;
-    }
-    EXPECT_GE(n.coords.s, 0.0);
-    EXPECT_LE(n.coords.s, sim.pose().length);
-  }
-  return counts;
-}
+using incise::test::expect_friction_inequalities;
+using incise::test::expect_valid_mesh;
 
 /// The (6.9) threshold on ‖r‖ at the current state (the rule every solve stopped by).
 double rule_threshold(NeedleInsertion& sim) {
