@@ -163,6 +163,34 @@ std::uint64_t slab_bytes(std::uint64_t points, std::uint64_t cells) {
 }
 
 /// A slab2d scene (scene_builder.hpp): the slab, its fixed lines and the needle insertion.
+/// Sorts b.fixed_nodes, drops repeats and records them: "<what>, N of M starting nodes (nodes
+/// refinement creates <on_or_in> them are fixed too)".
+void record_fixed_nodes(BuiltScene& b, const std::string& what, const char* on_or_in,
+                        const Timer& t) {
+  std::sort(b.fixed_nodes.begin(), b.fixed_nodes.end());
+  b.fixed_nodes.erase(std::unique(b.fixed_nodes.begin(), b.fixed_nodes.end()), b.fixed_nodes.end());
+  b.record(what + ", " + std::to_string(b.fixed_nodes.size()) + " of " +
+               std::to_string(b.mesh.num_points()) + " starting nodes (nodes refinement creates " +
+               on_or_in + " them are fixed too)",
+           t.seconds(), b.fixed_nodes.size() * sizeof(Index));
+}
+
+/// The options the 2D and 3D needle insertions share (thesis §6.7), from the scene's solver and
+/// needle keys.
+void set_insertion_options(const SceneSpec& spec, const ToolSpec& tool,
+                           needle::InsertionOptions& o) {
+  o.h_ref = tool.h_ref;
+  o.epsilon = spec.solver.tolerance;
+  o.epsilon_round = spec.solver.tolerance_round;
+  o.relaxation = spec.solver.method == SolverSpec::Method::kNonlinearCG
+                     ? needle::Relaxation::kNonlinearCg
+                     : needle::Relaxation::kLinearCg;
+  o.max_iterations = spec.solver.max_iterations;
+  o.max_rearrangements = tool.max_rearrangements;
+  o.relocate = tool.relocate;
+  o.preconditioner = spec.solver.preconditioner;
+}
+
 BuiltScene build_needle_scene(const SceneSpec& spec) {
   BuiltScene b;
   b.spec = spec;
@@ -225,25 +253,11 @@ BuiltScene build_needle_scene(const SceneSpec& spec) {
     b.fixed_nodes.insert(b.fixed_nodes.end(), sel.begin(), sel.end());
     lines.push_back(needle::FixedLine{r.axis, r.value});
   }
-  std::sort(b.fixed_nodes.begin(), b.fixed_nodes.end());
-  b.fixed_nodes.erase(std::unique(b.fixed_nodes.begin(), b.fixed_nodes.end()), b.fixed_nodes.end());
-  b.record("fixed lines: " + std::to_string(lines.size()) + ", " +
-               std::to_string(b.fixed_nodes.size()) + " of " + std::to_string(b.mesh.num_points()) +
-               " starting nodes (nodes refinement creates on them are fixed too)",
-           t.seconds(), b.fixed_nodes.size() * sizeof(Index));
+  record_fixed_nodes(b, "fixed lines: " + std::to_string(lines.size()), "on", t);
   // The insertion: plane-stress problem on the slab, friction, options (thesis §6.7).
   t.restart();
   needle::InsertionOptions o;
-  o.h_ref = tool.h_ref;
-  o.epsilon = spec.solver.tolerance;
-  o.epsilon_round = spec.solver.tolerance_round;
-  o.relaxation = spec.solver.method == SolverSpec::Method::kNonlinearCG
-                     ? needle::Relaxation::kNonlinearCg
-                     : needle::Relaxation::kLinearCg;
-  o.max_iterations = spec.solver.max_iterations;
-  o.max_rearrangements = tool.max_rearrangements;
-  o.relocate = tool.relocate;
-  o.preconditioner = spec.solver.preconditioner;
+  set_insertion_options(spec, tool, o);
   b.needle = std::make_unique<needle::NeedleInsertion>(b.mesh, make_material(spec.material),
                                                        ms.thickness, lines, tool.friction, o);
   b.needle_plan = needle_updates(tool);
@@ -451,26 +465,12 @@ BuiltScene build_needle3d_scene(const SceneSpec& spec) {
     }
     boxes.push_back(box);
   }
-  std::sort(b.fixed_nodes.begin(), b.fixed_nodes.end());
-  b.fixed_nodes.erase(std::unique(b.fixed_nodes.begin(), b.fixed_nodes.end()), b.fixed_nodes.end());
-  b.record("fixed regions: " + std::to_string(boxes.size()) + ", " +
-               std::to_string(b.fixed_nodes.size()) + " of " + std::to_string(b.mesh.num_points()) +
-               " starting nodes (nodes refinement creates in them are fixed too)",
-           t.seconds(), b.fixed_nodes.size() * sizeof(Index));
+  record_fixed_nodes(b, "fixed regions: " + std::to_string(boxes.size()), "in", t);
   t.restart();
   needle::InsertionOptions3D o;
-  o.h_ref = tool.h_ref;
+  set_insertion_options(spec, tool, o);
   o.h_shaft = tool.h_shaft;
   o.max_elements = tool.max_elements;
-  o.epsilon = spec.solver.tolerance;
-  o.epsilon_round = spec.solver.tolerance_round;
-  o.relaxation = spec.solver.method == SolverSpec::Method::kNonlinearCG
-                     ? needle::Relaxation::kNonlinearCg
-                     : needle::Relaxation::kLinearCg;
-  o.max_iterations = spec.solver.max_iterations;
-  o.max_rearrangements = tool.max_rearrangements;
-  o.relocate = tool.relocate;
-  o.preconditioner = spec.solver.preconditioner;
   if (tool.assembled_product) o.assembled_product = *tool.assembled_product;
   o.extrapolate = tool.extrapolate;
   if (spec.solver.method == SolverSpec::Method::kAugmented) {
