@@ -11,6 +11,7 @@
 /// the rest in __float128 (Quad, 113 bits). The double kernels are also checked against their
 /// own formulas evaluated in 113 bits (their rounding alone).
 
+#include <incise/core/scalar_traits.hpp>
 #include <incise/fem/tet_kernels.hpp>
 #include <incise/material/material.hpp>
 #include <incise_test/param_names.hpp>
@@ -180,40 +181,14 @@ class Quad2 {
 
 namespace Eigen {
 template <>
-struct NumTraits<incise::test::Quad> : GenericNumTraits<double> {
-  using Real = incise::test::Quad;
-  using NonInteger = incise::test::Quad;
-  using Nested = incise::test::Quad;
-  using Literal = incise::test::Quad;
-  enum {
-    IsComplex = 0,
-    IsInteger = 0,
-    IsSigned = 1,
-    RequireInitialization = 1,
-    ReadCost = 1,
-    AddCost = 1,
-    MulCost = 1
-  };
+struct NumTraits<incise::test::Quad> : incise::RealScalarTraits<incise::test::Quad> {
   /// 2⁻¹¹² (FLT128_EPSILON without the GNU literal suffix).
   static inline Real epsilon() { return incise::test::Quad(std::ldexp(1.0, -112)); }
   static inline Real dummy_precision() { return incise::test::Quad(1e-30); }
   static inline int digits10() { return 33; }
 };
 template <>
-struct NumTraits<incise::test::Quad2> : GenericNumTraits<double> {
-  using Real = incise::test::Quad2;
-  using NonInteger = incise::test::Quad2;
-  using Nested = incise::test::Quad2;
-  using Literal = incise::test::Quad2;
-  enum {
-    IsComplex = 0,
-    IsInteger = 0,
-    IsSigned = 1,
-    RequireInitialization = 1,
-    ReadCost = 1,
-    AddCost = 1,
-    MulCost = 1
-  };
+struct NumTraits<incise::test::Quad2> : incise::RealScalarTraits<incise::test::Quad2> {
   static inline Real epsilon() { return incise::test::Quad2(std::ldexp(1.0, -225)); }
   static inline Real dummy_precision() { return incise::test::Quad2(1e-60); }
   static inline int digits10() { return 67; }

@@ -78,6 +78,22 @@ void expect_equivalent(linalg::AugmentedSystem& aug, const CutModel& m, Eigen::V
   EXPECT_LE((r - ref.r).norm(), kRefactorRelTol * (ref.r.norm() + f.norm()));
 }
 
+/// The start of the §3.6 tests below: `plane` ← the nodes with DOFs on the beam's mid-plane
+/// x = 0.2 (at least `need` of them), the first three cut (§4.3.2), u₀ = 0.01 imposed, and the
+/// solve checked against a fresh factorization. Call through ASSERT_NO_FATAL_FAILURE.
+void cut_three_mid_plane_nodes(CutModel& m, linalg::AugmentedSystem& aug, Eigen::VectorXd& f,
+                               std::map<int, double>& dir, std::vector<int>& plane,
+                               std::size_t need) {
+  plane.clear();
+  for (int v = 0; v < static_cast<int>(m.points.cols()); ++v)
+    if (std::abs(m.points(0, v) - 0.2) < 1e-9 && m.node_dof[v] >= 0) plane.push_back(v);
+  ASSERT_GE(plane.size(), need);
+  for (int k = 0; k < 3; ++k) ASSERT_TRUE(cut_node(m, aug, plane[k]));
+  aug.impose_dirichlet(0, 0.01);
+  dir[0] = 0.01;
+  expect_equivalent(aug, m, f, dir);
+}
+
 // §3.6, Fig. 1: m + m′ drops to m′ when the fresh factor replaces the old one.
 TEST(AugmentedRefactor, SwapDropsMToChangesSinceStartSec3_6) {
   CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
@@ -85,15 +101,8 @@ TEST(AugmentedRefactor, SwapDropsMToChangesSinceStartSec3_6) {
   ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
   Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
   std::map<int, double> dir;
-  const int nodes = static_cast<int>(m.points.cols());
-  std::vector<int> plane;  // nodes on x = 0.2 (mid-plane), z > 0
-  for (int v = 0; v < nodes; ++v)
-    if (std::abs(m.points(0, v) - 0.2) < 1e-9 && m.node_dof[v] >= 0) plane.push_back(v);
-  ASSERT_GE(plane.size(), 6u);
-  for (int k = 0; k < 3; ++k) ASSERT_TRUE(cut_node(m, aug, plane[k]));
-  aug.impose_dirichlet(0, 0.01);
-  dir[0] = 0.01;
-  expect_equivalent(aug, m, f, dir);
+  std::vector<int> plane;
+  ASSERT_NO_FATAL_FAILURE(cut_three_mid_plane_nodes(m, aug, f, dir, plane, 6));
   const int m_before = aug.num_replaced();
   ASSERT_TRUE(aug.start_refactorization());
   EXPECT_FALSE(aug.start_refactorization());  // one job at a time
@@ -133,14 +142,8 @@ TEST(AugmentedRefactor, PreparedSwapBringsGOfTheKeptColumnsSec3_6) {
     ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
     Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
     std::map<int, double> dir;
-    std::vector<int> plane;  // nodes on x = 0.2 (mid-plane)
-    for (int v = 0; v < static_cast<int>(m.points.cols()); ++v)
-      if (std::abs(m.points(0, v) - 0.2) < 1e-9 && m.node_dof[v] >= 0) plane.push_back(v);
-    ASSERT_GE(plane.size(), 5u);
-    for (int k = 0; k < 3; ++k) ASSERT_TRUE(cut_node(m, aug, plane[k]));
-    aug.impose_dirichlet(0, 0.01);
-    dir[0] = 0.01;
-    expect_equivalent(aug, m, f, dir);
+    std::vector<int> plane;
+    ASSERT_NO_FATAL_FAILURE(cut_three_mid_plane_nodes(m, aug, f, dir, plane, 5));
     ASSERT_TRUE(aug.start_refactorization());
     ASSERT_TRUE(cut_node(m, aug, plane[3]));  // changed while the job runs
     ASSERT_TRUE(cut_node(m, aug, plane[4]));
@@ -176,14 +179,8 @@ TEST(AugmentedRefactor, OverlappingJobOnAStaleSnapshotLeavesOnlyTheNewerChangesS
     ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
     Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
     std::map<int, double> dir;
-    std::vector<int> plane;  // nodes on x = 0.2 (mid-plane)
-    for (int v = 0; v < static_cast<int>(m.points.cols()); ++v)
-      if (std::abs(m.points(0, v) - 0.2) < 1e-9 && m.node_dof[v] >= 0) plane.push_back(v);
-    ASSERT_GE(plane.size(), 6u);
-    for (int k = 0; k < 3; ++k) ASSERT_TRUE(cut_node(m, aug, plane[k]));
-    aug.impose_dirichlet(0, 0.01);
-    dir[0] = 0.01;
-    expect_equivalent(aug, m, f, dir);
+    std::vector<int> plane;
+    ASSERT_NO_FATAL_FAILURE(cut_three_mid_plane_nodes(m, aug, f, dir, plane, 6));
     ASSERT_TRUE(aug.start_refactorization());
     EXPECT_FALSE(aug.may_start_refactorization());  // nothing changed since its snapshot
     EXPECT_FALSE(aug.start_refactorization());

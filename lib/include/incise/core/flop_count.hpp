@@ -21,6 +21,8 @@
 /// `Eigen::Matrix<Counted, 3, 3>` can be multiplied, transposed and traced. Mixed expressions
 /// with double scalars are allowed (`2.0 * Counted`, Eigen `Counted`-matrix × double).
 
+#include <incise/core/scalar_traits.hpp>
+
 #include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
@@ -116,26 +118,7 @@ namespace Eigen {
 
 /// Eigen traits for the counting scalar: a real, signed, non-integer type of double precision.
 template <>
-struct NumTraits<incise::Counted> : GenericNumTraits<double> {
-  using Real = incise::Counted;
-  using NonInteger = incise::Counted;
-  using Nested = incise::Counted;
-  using Literal = incise::Counted;
-  enum {
-    IsComplex = 0,
-    IsInteger = 0,
-    IsSigned = 1,
-    RequireInitialization = 1,
-    ReadCost = 1,
-    AddCost = 1,
-    MulCost = 1
-  };
-  static inline Real epsilon() { return NumTraits<double>::epsilon(); }
-  static inline Real dummy_precision() { return NumTraits<double>::dummy_precision(); }
-  static inline Real highest() { return NumTraits<double>::highest(); }
-  static inline Real lowest() { return NumTraits<double>::lowest(); }
-  static inline int digits10() { return NumTraits<double>::digits10(); }
-};
+struct NumTraits<incise::Counted> : incise::RealScalarTraits<incise::Counted> {};
 
 /// Counted ⊗ double mixes to Counted (so `Matrix<Counted,3,3> * 2.0` compiles).
 template <typename BinaryOp>

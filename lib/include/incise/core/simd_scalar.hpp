@@ -12,6 +12,8 @@
 /// double kernel to round-off (lane-wise IEEE operations; Eigen may order a reduction
 /// differently for double, which vectorizes its own way).
 
+#include <incise/core/scalar_traits.hpp>
+
 #include <Eigen/Core>
 #include <cmath>
 
@@ -102,25 +104,6 @@ namespace Eigen {
 
 /// Eigen traits for Lanes4 (real, signed; vectorization happens inside the scalar).
 template <>
-struct NumTraits<incise::Lanes4> : GenericNumTraits<double> {
-  using Real = incise::Lanes4;
-  using NonInteger = incise::Lanes4;
-  using Nested = incise::Lanes4;
-  using Literal = incise::Lanes4;
-  enum {
-    IsComplex = 0,
-    IsInteger = 0,
-    IsSigned = 1,
-    RequireInitialization = 1,
-    ReadCost = 1,
-    AddCost = 1,
-    MulCost = 1
-  };
-  static inline Real epsilon() { return NumTraits<double>::epsilon(); }
-  static inline Real dummy_precision() { return NumTraits<double>::dummy_precision(); }
-  static inline Real highest() { return NumTraits<double>::highest(); }
-  static inline Real lowest() { return NumTraits<double>::lowest(); }
-  static inline int digits10() { return NumTraits<double>::digits10(); }
-};
+struct NumTraits<incise::Lanes4> : incise::RealScalarTraits<incise::Lanes4> {};
 
 }  // namespace Eigen
