@@ -162,7 +162,6 @@ std::uint64_t slab_bytes(std::uint64_t points, std::uint64_t cells) {
          points * (4 * sizeof(Index) + 6 * sizeof(double));
 }
 
-/// A slab2d scene (scene_builder.hpp): the slab, its fixed lines and the needle insertion.
 /// Sorts b.fixed_nodes, drops repeats and records them: "<what>, N of M starting nodes (nodes
 /// refinement creates <on_or_in> them are fixed too)".
 void record_fixed_nodes(BuiltScene& b, const std::string& what, const char* on_or_in,
@@ -191,6 +190,7 @@ void set_insertion_options(const SceneSpec& spec, const ToolSpec& tool,
   o.preconditioner = spec.solver.preconditioner;
 }
 
+/// A slab2d scene (scene_builder.hpp): the slab, its fixed lines and the needle insertion.
 BuiltScene build_needle_scene(const SceneSpec& spec) {
   BuiltScene b;
   b.spec = spec;
