@@ -22,7 +22,8 @@
 /// time; > 0: a second job may start once that many columns changed since the pending one's
 /// snapshot), and the solves per frame: 0 one after each sweep triangle (AugmentedCutSession::step,
 /// twice per frame), 1 one per frame (AugmentedCutSession::frame: both triangles cut in the
-/// deformed configuration of the last frame, then one solve). chg_* counters: frames that solved
+/// deformed configuration of the last frame, then one solve), and AugmentedCutOptions::
+/// poll_after_solve (0 off, 1 on). chg_* counters: frames that solved
 /// (the others reuse the last solution and cost the cut); bg_cpu_*: CPU of the background
 /// factorizations that were swapped in (their own thread). With INCISE_ORGAN_TRACE=<dir> the
 /// per-frame numbers go to <dir>/<benchmark args>.csv.
@@ -108,6 +109,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
   opt.augmented.blas_kernels = state.range(7) != 0;
   opt.augmented.overlap_stale_columns = static_cast<int>(state.range(8));
   const bool per_frame = state.range(9) != 0;
+  opt.poll_after_solve = state.range(10) != 0;
   opt.refactorization_mode = state.range(5) == 0
                                  ? incise::interactive::RefactorizationMode::kContinuous
                                  : incise::interactive::RefactorizationMode::kBreakEven;
@@ -124,7 +126,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
     std::ofstream trace;
     if (const char* dir = std::getenv("INCISE_ORGAN_TRACE")) {
       std::string name = std::string(dir) + "/scalpel";
-      for (int a = 0; a < 10; ++a) name += "_" + std::to_string(state.range(a));
+      for (int a = 0; a < 11; ++a) name += "_" + std::to_string(state.range(a));
       trace.open(name + ".csv");
       trace << "frame,cut_cpu_ms,update_cpu_ms,m_before,m_after,swapped,started,new_columns,"
                "newcol_ms,capfactor_ms,cap_fresh,bg_cpu_ms,dirichlet,product_ms,setup_ms,step1_ms,"
@@ -245,58 +247,76 @@ void BM_LiverScalpelPath(benchmark::State& state) {
 // §3.6 policy, capacitance updated); at 3 mm also the capacitance LU made afresh at every solve
 // (before issue 17) for the ratio in one run. The refined liver takes minutes per path. Then
 // overlapping background jobs on stale snapshots (AugmentedOptions::overlap_stale_columns). The
-// rows above solve after every sweep triangle (last arg 0); last: one solve per frame
-// (AugmentedCutSession::frame, last arg 1) on both livers, and the refined liver's shorter paths
-// (10 and 30 frames) both ways.
+// rows above solve after every sweep triangle (tenth arg 0); then one solve per frame
+// (AugmentedCutSession::frame, tenth arg 1) on both livers, and the refined liver's shorter paths
+// (10 and 30 frames) both ways; all of these with poll_after_solve off (last arg 0). Last: the
+// session's defaults since "One solve per frame" (docs/augmented.md) — poll_after_solve on —
+// per triangle and per frame on both livers; the frame of that section is the one-solve frame
+// (…/0/1/1/).
 BENCHMARK(BM_LiverScalpelPath)
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 0, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 0, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 0, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 1, 1, 1, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 1, 1, 1, 0, 0})
-    ->Args({0, 30, 100, 0, 0, 0, 1, 1, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 1, 1, 1, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 0, 1, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 1, 0, 1, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 0, 1, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 1, 0, 1, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 0, 1, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 1, 0, 1, 0, 0})
-    ->Args({0, 30, 30, 0, 1, 0, 1, 1, 0, 0})
-    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 150, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 300, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 600, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 150, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 300, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 600, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 150, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 300, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 600, 0})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0})
-    ->Args({1, 30, 100, 0, 0, 0, 1, 1, 0, 0})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 0})
-    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 0})
-    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 0})
-    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 0})
-    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 0, 0, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 0, 0, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 0, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 1, 1, 1, 0, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 1, 1, 1, 0, 0, 0})
+    ->Args({0, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 1, 1, 1, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 0, 1, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 1, 0, 1, 0, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 0, 1, 0, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 1, 0, 1, 0, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 0, 1, 0, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 1, 0, 1, 0, 0, 0})
+    ->Args({0, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 150, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 300, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 600, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 150, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 300, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 600, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 150, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 300, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 600, 0, 0})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 

@@ -75,17 +75,14 @@ std::vector<AugmentedCutStepReport> organ_path_cut_frame(AugmentedCutSession& se
 
 void run_path(double advance, int frames, const AugmentedCutOptions& options = {},
               bool per_frame = false) {
-  const OrganPathLiverSession liver_session = organ_path_liver_session(options);
-  AugmentedCutSession& session = *liver_session.session;
-  const fixtures::OrganPath& path = liver_session.path;
-  const material::Material& material = liver_session.material;
-  const std::vector<Vec3>& forces = liver_session.forces;
+  const OrganPathLiverSession organ = organ_path_liver_session(options);
+  AugmentedCutSession& session = *organ.session;
   ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
   double worst = 0;
   int solved = 0, dissected = 0, swaps = 0, updated = 0, two_pending = 0;
   for (int f = 0; f < frames; ++f) {
     for (const AugmentedCutStepReport& r :
-         organ_path_cut_frame(session, path, f, advance, per_frame)) {
+         organ_path_cut_frame(session, organ.path, f, advance, per_frame)) {
       ASSERT_TRUE(r.ok()) << "frame " << f << ": " << r.message;
       EXPECT_EQ(r.triangles, per_frame ? 2 : 1);
       dissected += r.cut.faces_dissected;
@@ -98,7 +95,7 @@ void run_path(double advance, int frames, const AugmentedCutOptions& options = {
         EXPECT_EQ(r.m_after_solve, r.solve.dirichlet);
       }
       updated += r.solve.m > 0 && !r.solve.capacitance_refreshed;
-      const test::Reference ref = test::reference_solution(session, material, forces);
+      const test::Reference ref = test::reference_solution(session, organ.material, organ.forces);
       ASSERT_TRUE(ref.ok) << "frame " << f;
       const double d = test::relative_difference(session, ref);
       worst = std::max(worst, d);
@@ -275,23 +272,20 @@ TEST(OrganPath, Issue17OverlappingStaleJobsEqualAFreshFactorization10mm) {
 TEST(OrganPath, Issue17OverlappingJobsWithoutPausesEndEqualToAFreshFactorization10mm) {
   AugmentedCutOptions options;
   options.augmented.overlap_stale_columns = 1;
-  const OrganPathLiverSession liver_session = organ_path_liver_session(options);
-  AugmentedCutSession& session = *liver_session.session;
-  const fixtures::OrganPath& path = liver_session.path;
-  const material::Material& material = liver_session.material;
-  const std::vector<Vec3>& forces = liver_session.forces;
+  const OrganPathLiverSession organ = organ_path_liver_session(options);
+  AugmentedCutSession& session = *organ.session;
   ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
   int swaps = 0, two_pending = 0;
   const int frames = slow() ? 40 : 12;
   for (int f = 0; f < frames; ++f) {
-    for (const auto& tri : path.frame(f, 0.010)) {
+    for (const auto& tri : organ.path.frame(f, 0.010)) {
       const AugmentedCutStepReport r = session.step(tri);
       ASSERT_TRUE(r.ok()) << "frame " << f << ": " << r.message;
       swaps += r.refactorization_swapped;
       two_pending += session.system().refactorizations_pending() == 2;
     }
   }
-  const test::Reference ref = test::reference_solution(session, material, forces);
+  const test::Reference ref = test::reference_solution(session, organ.material, organ.forces);
   ASSERT_TRUE(ref.ok);
   const double before = test::relative_difference(session, ref);
   EXPECT_LE(before, 1e-9);

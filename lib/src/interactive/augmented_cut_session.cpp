@@ -336,7 +336,18 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
       r.refactorization_swapped = system_->refactor_now();
     r.solve = system_->solve(a, reaction);  // swaps in a finished background factor first
     r.solved = true;
-    r.refactorization_swapped = r.refactorization_swapped || r.solve.refactorization_swapped;
+    // §3.6 pipeline after the solve (AugmentedCutOptions::poll_after_solve): a job that finished
+    // meanwhile goes on now (to the preparation of its G, or swapped in) instead of at the next
+    // solve. A job it finds failed is dropped, and no new one starts in this solve (as below).
+    bool late_swap = false, late_failed = false;
+    if (options_.poll_after_solve && r.solve.status != linalg::AugmentedStatus::kNoFactor &&
+        system_->refactorization_pending()) {
+      late_swap = system_->poll_refactorization();
+      late_failed = !late_swap && !system_->refactorization_pending() &&
+                    system_->last_refactorization_status() != linalg::FactorStatus::kOk;
+    }
+    r.refactorization_swapped =
+        r.refactorization_swapped || r.solve.refactorization_swapped || late_swap;
     r.m_after_solve = system_->num_replaced();
     // §3.6: bound m by refactoring the current K in the background once the columns a
     // refactorization can remove (m − |𝓓|: Dirichlet DOFs stay in 𝓛) reach the threshold; the
@@ -345,7 +356,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
     // next solve makes the next attempt, so a stuck K costs one factorization every other solve.
     const bool may_start = r.solve.status != linalg::AugmentedStatus::kNoFactor &&
                            r.solve.refactorization_status == linalg::FactorStatus::kOk &&
-                           system_->may_start_refactorization();
+                           !late_failed && system_->may_start_refactorization();
     const int removable = r.m_after_solve - r.solve.dirichlet;
     if (options_.refactor_every_step) {
       // no background job: every step refactors in refactor_now() above
@@ -357,7 +368,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
       // RefactorizationPolicy (break-even or continuous) on measured or injected costs.
       const double update =
           options_.update_cost ? options_.update_cost(r.solve) : r.solve.seconds_total;
-      policy_.observe(update, r.solve.refactorization_swapped);
+      policy_.observe(update, r.solve.refactorization_swapped || late_swap);
       const double factorization = options_.factorization_cost
                                        ? options_.factorization_cost(*system_)
                                        : system_->factorization_seconds();

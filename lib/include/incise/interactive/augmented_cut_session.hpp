@@ -86,6 +86,12 @@ struct AugmentedCutOptions {
   /// "Per-frame strategies"). Overrides refactor_at_m and automatic_refactorization (no
   /// background job is started).
   bool refactor_every_step = false;
+  /// §3.6 pipeline: after each solve, also poll the background job (AugmentedSystem::
+  /// poll_refactorization) so that one that finished during the solve is handed to the
+  /// preparation of its swap (AugmentedOptions::prepare_swap), or swapped in, now rather than at
+  /// the next solve — a frame earlier with one solve per frame. On by default; measured:
+  /// docs/augmented.md, "One solve per frame".
+  bool poll_after_solve = true;
   /// Cost of one solver update for the automatic policy; empty: its measured wall time
   /// (AugmentedReport::seconds_total). Tests inject a deterministic model.
   std::function<double(const linalg::AugmentedReport&)> update_cost;
