@@ -72,6 +72,15 @@ const incise::mesh::MeshData& liver(bool refined) {
 /// Median, 95th percentile (nearest rank) and maximum: mesh::summarize.
 using incise::mesh::summarize;
 
+/// Counters <prefix>_med_ms, <prefix>_p95_ms and <prefix>_max_ms of per-frame times (seconds).
+void put_ms_summary(benchmark::State& state, const std::string& prefix,
+                    const std::vector<double>& seconds) {
+  const auto s = summarize(seconds);
+  state.counters[prefix + "_med_ms"] = 1e3 * s.median;
+  state.counters[prefix + "_p95_ms"] = 1e3 * s.p95;
+  state.counters[prefix + "_max_ms"] = 1e3 * s.max;
+}
+
 /// The augmented solves' split, summed over the solves of a frame or of the whole path.
 struct SolveTimes {
   double seconds_setup = 0, seconds_step1 = 0, seconds_step2 = 0, seconds_step3 = 0,
@@ -192,35 +201,20 @@ void BM_LiverScalpelPath(benchmark::State& state) {
               << 1e3 * in_frame.seconds_step3 << ',' << 1e3 * in_frame.seconds_swap << ','
               << in_frame.gmres_iterations << ',' << in_frame.rank << std::endl;
     }
-    const auto schg = summarize(chg_frame_cpu), sm = summarize(m_after);
     state.counters["chg_frames"] = static_cast<double>(chg_frame_cpu.size());
-    state.counters["chg_cpu_frame_med_ms"] = 1e3 * schg.median;
-    state.counters["chg_cpu_frame_p95_ms"] = 1e3 * schg.p95;
-    state.counters["chg_cpu_frame_max_ms"] = 1e3 * schg.max;
-    state.counters["m_med"] = sm.median;
+    put_ms_summary(state, "chg_cpu_frame", chg_frame_cpu);
+    state.counters["m_med"] = summarize(m_after).median;
     state.counters["bg_cpu_total_s"] = bg_cpu;
     state.counters["bg_cpu_mean_ms"] = swaps > 0 ? 1e3 * bg_cpu / swaps : 0;
     state.counters["bg_wall_mean_ms"] = swaps > 0 ? 1e3 * bg_wall / swaps : 0;
-    const auto sc = summarize(cut), su = summarize(update), sf = summarize(frame);
-    const auto scc = summarize(cut_cpu), suc = summarize(update_cpu), sfc = summarize(frame_cpu);
-    state.counters["cpu_cut_med_ms"] = 1e3 * scc.median;
-    state.counters["cpu_cut_max_ms"] = 1e3 * scc.max;
-    state.counters["cpu_upd_med_ms"] = 1e3 * suc.median;
-    state.counters["cpu_upd_max_ms"] = 1e3 * suc.max;
-    state.counters["cpu_frame_med_ms"] = 1e3 * sfc.median;
-    state.counters["cpu_frame_p95_ms"] = 1e3 * sfc.p95;
-    state.counters["cpu_frame_max_ms"] = 1e3 * sfc.max;
+    put_ms_summary(state, "cpu_cut", cut_cpu);
+    put_ms_summary(state, "cpu_upd", update_cpu);
+    put_ms_summary(state, "cpu_frame", frame_cpu);
     state.counters["tets"] = static_cast<double>(body.num_cells());
     state.counters["frames"] = frames;
-    state.counters["cut_med_ms"] = 1e3 * sc.median;
-    state.counters["cut_p95_ms"] = 1e3 * sc.p95;
-    state.counters["cut_max_ms"] = 1e3 * sc.max;
-    state.counters["upd_med_ms"] = 1e3 * su.median;
-    state.counters["upd_p95_ms"] = 1e3 * su.p95;
-    state.counters["upd_max_ms"] = 1e3 * su.max;
-    state.counters["frame_med_ms"] = 1e3 * sf.median;
-    state.counters["frame_p95_ms"] = 1e3 * sf.p95;
-    state.counters["frame_max_ms"] = 1e3 * sf.max;
+    put_ms_summary(state, "cut", cut);
+    put_ms_summary(state, "upd", update);
+    put_ms_summary(state, "frame", frame);
     state.counters["m_max"] = m_max;
     state.counters["m_before_max"] = m_before_max;
     state.counters["swaps"] = swaps;
