@@ -345,6 +345,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
       late_swap = system_->poll_refactorization();
       late_failed = !late_swap && !system_->refactorization_pending() &&
                     system_->last_refactorization_status() != linalg::FactorStatus::kOk;
+      if (late_failed) r.solve.refactorization_status = system_->last_refactorization_status();
     }
     r.refactorization_swapped =
         r.refactorization_swapped || r.solve.refactorization_swapped || late_swap;
@@ -356,7 +357,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
     // next solve makes the next attempt, so a stuck K costs one factorization every other solve.
     const bool may_start = r.solve.status != linalg::AugmentedStatus::kNoFactor &&
                            r.solve.refactorization_status == linalg::FactorStatus::kOk &&
-                           !late_failed && system_->may_start_refactorization();
+                           system_->may_start_refactorization();
     const int removable = r.m_after_solve - r.solve.dirichlet;
     if (options_.refactor_every_step) {
       // no background job: every step refactors in refactor_now() above
