@@ -2,12 +2,13 @@
 /// and the same liver refined once by mesh::refine_uniform (Bey 1995, 132,776 tetrahedra) on
 /// the scripted path of fixtures/organ_path.hpp (supports and load of liver_pull.json, linear
 /// material, a vertical blade half-way down following a circle) at 1, 3 or 10 mm per frame. One
-/// frame = one blade advance = two sweep triangles (AugmentedCutSession::step), each followed by
-/// the augmented solve. Each benchmark is one run of the whole path (Iterations(1)); the counters
-/// are per-frame statistics of wall time: cut (Cutter::step, incl. the deformed-grid rebuild),
-/// solver update (column replacements
-/// + augmented solve + deformed positions) and frame = their sum; median, p95, max. Frame rate
-/// target: median ≤ 33 ms, max ≤ 100 ms. The machine is shared: compare ratios within one run.
+/// frame = one blade advance = two sweep triangles, each followed by the augmented solve
+/// (AugmentedCutSession::step) or both followed by one (AugmentedCutSession::frame; last arg).
+/// Each benchmark is one run of the whole path (Iterations(1)); the counters are per-frame
+/// statistics of wall time: cut (Cutter::step, incl. the deformed-grid update), solver update
+/// (column replacements + augmented solve + deformed positions) and frame = their sum; median,
+/// p95, max. Frame rate target: median ≤ 33 ms, max ≤ 100 ms. The machine is shared: compare
+/// ratios within one run.
 ///
 /// Wall times are reported with the thread CPU times beside them (cpu_*: CLOCK_THREAD_CPUTIME_ID
 /// of the frame's thread; they do not grow when other jobs share the cores, wall times do).
@@ -19,9 +20,13 @@
 /// AugmentedOptions::blas_kernels (1, the default; 0: Eigen's LU and entry-by-entry blocked
 /// solves), and AugmentedOptions::overlap_stale_columns (0, the default: one background job at a
 /// time; > 0: a second job may start once that many columns changed since the pending one's
-/// snapshot). chg_* counters: frames that solved (the others reuse the last solution and cost the
-/// cut); bg_cpu_*: CPU of the background factorizations that were swapped in (their own thread).
-/// With INCISE_ORGAN_TRACE=<dir> the per-frame numbers go to <dir>/<benchmark args>.csv.
+/// snapshot), and the solves per frame: 0 one after each sweep triangle (AugmentedCutSession::step,
+/// twice per frame), 1 one per frame (AugmentedCutSession::frame: both triangles cut in the
+/// deformed configuration of the last frame, then one solve), and AugmentedCutOptions::
+/// poll_after_solve (0 off, 1 on). chg_* counters: frames that solved
+/// (the others reuse the last solution and cost the cut); bg_cpu_*: CPU of the background
+/// factorizations that were swapped in (their own thread). With INCISE_ORGAN_TRACE=<dir> the
+/// per-frame numbers go to <dir>/<benchmark args>.csv.
 
 #include <benchmark/benchmark.h>
 #include <incise/core/problem.hpp>
@@ -67,6 +72,38 @@ const incise::mesh::MeshData& liver(bool refined) {
 /// Median, 95th percentile (nearest rank) and maximum: mesh::summarize.
 using incise::mesh::summarize;
 
+/// Counters <prefix>_med_ms, <prefix>_p95_ms and <prefix>_max_ms of per-frame times (seconds).
+void put_ms_summary(benchmark::State& state, const std::string& prefix,
+                    const std::vector<double>& seconds) {
+  const auto s = summarize(seconds);
+  state.counters[prefix + "_med_ms"] = 1e3 * s.median;
+  state.counters[prefix + "_p95_ms"] = 1e3 * s.p95;
+  state.counters[prefix + "_max_ms"] = 1e3 * s.max;
+}
+
+/// The augmented solves' split, summed over the solves of a frame or of the whole path.
+struct SolveTimes {
+  double seconds_setup = 0, seconds_step1 = 0, seconds_step2 = 0, seconds_step3 = 0,
+         seconds_new_columns = 0, seconds_product = 0, seconds_capfactor = 0, seconds_swap = 0,
+         new_columns = 0;
+  int solves = 0, fresh = 0, gmres_iterations = 0, rank = 0;
+  void add(const incise::linalg::AugmentedReport& s) {
+    ++solves;
+    seconds_setup += s.seconds_setup;
+    seconds_step1 += s.seconds_step1;
+    seconds_step2 += s.seconds_step2;
+    seconds_step3 += s.seconds_step3;
+    seconds_new_columns += s.seconds_new_columns;
+    seconds_product += s.seconds_capacitance_product;
+    seconds_capfactor += s.seconds_capacitance_factor;
+    seconds_swap += s.seconds_swap;
+    new_columns += s.schur_solves;
+    fresh += s.capacitance_refreshed ? 1 : 0;
+    gmres_iterations += s.gmres.iterations;
+    rank = std::max(rank, s.capacitance_rank);
+  }
+};
+
 void BM_LiverScalpelPath(benchmark::State& state) {
   const bool refined = state.range(0) != 0;
   const double advance = 1e-4 * static_cast<double>(state.range(1));  // m per frame
@@ -80,6 +117,8 @@ void BM_LiverScalpelPath(benchmark::State& state) {
   opt.augmented.prepare_swap = state.range(6) != 0;
   opt.augmented.blas_kernels = state.range(7) != 0;
   opt.augmented.overlap_stale_columns = static_cast<int>(state.range(8));
+  const bool per_frame = state.range(9) != 0;
+  opt.poll_after_solve = state.range(10) != 0;
   opt.refactorization_mode = state.range(5) == 0
                                  ? incise::interactive::RefactorizationMode::kContinuous
                                  : incise::interactive::RefactorizationMode::kBreakEven;
@@ -90,44 +129,40 @@ void BM_LiverScalpelPath(benchmark::State& state) {
       return;
     }
     std::vector<double> cut, update, frame, cut_cpu, update_cpu, frame_cpu;
-    int failed = 0, swaps = 0, m_max = 0, iterations = 0, refreshed = 0, updated = 0;
-    double setup = 0, step1 = 0, step2 = 0, step3 = 0, schur_solves = 0, newcols = 0, product = 0,
-           capfactor = 0, bg_cpu = 0, bg_wall = 0;
+    int failed = 0, swaps = 0, m_max = 0, m_before_max = 0, refreshed = 0, updated = 0;
+    double bg_cpu = 0, bg_wall = 0;
     std::vector<double> chg_frame_cpu, m_after;
     std::ofstream trace;
     if (const char* dir = std::getenv("INCISE_ORGAN_TRACE")) {
       std::string name = std::string(dir) + "/scalpel";
-      for (int a = 0; a < 9; ++a) name += "_" + std::to_string(state.range(a));
+      for (int a = 0; a < 11; ++a) name += "_" + std::to_string(state.range(a));
       trace.open(name + ".csv");
       trace << "frame,cut_cpu_ms,update_cpu_ms,m_before,m_after,swapped,started,new_columns,"
                "newcol_ms,capfactor_ms,cap_fresh,bg_cpu_ms,dirichlet,product_ms,setup_ms,step1_ms,"
                "step2_ms,step3_ms,swap_ms,gmres_iterations,cap_rank\n";
     }
+    SolveTimes total;
     for (int f = 0; f < frames; ++f) {
       const auto tris = path.frame(f, advance);
-      double c = 0, u = 0, cc = 0, uc = 0, nc = 0, ncs = 0, cf = 0, bgc = 0, pr = 0, su = 0, s1 = 0,
-             s2 = 0, s3 = 0, swp = 0;
-      int mb = 0, ma = 0, sw = 0, st = 0, fresh = 0, dir = 0, git = 0, rank = 0;
+      double c = 0, u = 0, cc = 0, uc = 0, bgc = 0;
+      int mb = 0, ma = 0, sw = 0, st = 0, dir = 0;
+      SolveTimes in_frame;
       bool solved = false;
-      for (int k = 0; k < 2; ++k) {
-        const incise::interactive::AugmentedCutStepReport r = session.step(tris[k]);
+      // One solve per frame (AugmentedCutSession::frame) or one per sweep triangle (step).
+      std::vector<incise::interactive::AugmentedCutStepReport> reports;
+      if (per_frame) {
+        reports.push_back(session.frame(tris));
+      } else {
+        for (const auto& tri : tris) reports.push_back(session.step(tri));
+      }
+      for (const incise::interactive::AugmentedCutStepReport& r : reports) {
         solved = solved || r.solved;
         if (r.solved) {
           mb = std::max(mb, r.m_before_solve);
           ma = r.m_after_solve;
           dir = r.solve.dirichlet;
-          nc += r.solve.schur_solves;
-          ncs += r.solve.seconds_new_columns;
-          cf += r.solve.seconds_capacitance_factor;
-          fresh += r.solve.capacitance_refreshed ? 1 : 0;
-          pr += r.solve.seconds_capacitance_product;
-          su += r.solve.seconds_setup;
-          s1 += r.solve.seconds_step1;
-          s2 += r.solve.seconds_step2;
-          s3 += r.solve.seconds_step3;
-          swp += r.solve.seconds_swap;
-          git += r.solve.gmres.iterations;
-          rank = std::max(rank, r.solve.capacitance_rank);
+          in_frame.add(r.solve);
+          total.add(r.solve);
           st += r.refactorization_started ? 1 : 0;
         }
         if (r.refactorization_swapped) {
@@ -143,16 +178,8 @@ void BM_LiverScalpelPath(benchmark::State& state) {
         failed += r.ok() ? 0 : 1;
         swaps += r.refactorization_swapped ? 1 : 0;
         m_max = std::max(m_max, r.m_after_solve);
-        iterations += r.solve.gmres.iterations;
+        m_before_max = std::max(m_before_max, r.m_before_solve);
         if (r.solved && r.solve.m > 0) (r.solve.capacitance_refreshed ? refreshed : updated) += 1;
-        setup += r.solve.seconds_setup;
-        step1 += r.solve.seconds_step1;
-        step2 += r.solve.seconds_step2;
-        step3 += r.solve.seconds_step3;
-        schur_solves += r.solve.schur_solves;
-        newcols += r.solve.seconds_new_columns;
-        product += r.solve.seconds_capacitance_product;
-        capfactor += r.solve.seconds_capacitance_factor;
       }
       cut.push_back(c);
       update.push_back(u);
@@ -166,54 +193,44 @@ void BM_LiverScalpelPath(benchmark::State& state) {
       }
       if (trace.is_open())
         trace << f << ',' << 1e3 * cc << ',' << 1e3 * uc << ',' << mb << ',' << ma << ',' << sw
-              << ',' << st << ',' << nc << ',' << 1e3 * ncs << ',' << 1e3 * cf << ',' << fresh
-              << ',' << 1e3 * bgc << ',' << dir << ',' << 1e3 * pr << ',' << 1e3 * su << ','
-              << 1e3 * s1 << ',' << 1e3 * s2 << ',' << 1e3 * s3 << ',' << 1e3 * swp << ',' << git
-              << ',' << rank << '\n';
+              << ',' << st << ',' << in_frame.new_columns << ','
+              << 1e3 * in_frame.seconds_new_columns << ',' << 1e3 * in_frame.seconds_capfactor
+              << ',' << in_frame.fresh << ',' << 1e3 * bgc << ',' << dir << ','
+              << 1e3 * in_frame.seconds_product << ',' << 1e3 * in_frame.seconds_setup << ','
+              << 1e3 * in_frame.seconds_step1 << ',' << 1e3 * in_frame.seconds_step2 << ','
+              << 1e3 * in_frame.seconds_step3 << ',' << 1e3 * in_frame.seconds_swap << ','
+              << in_frame.gmres_iterations << ',' << in_frame.rank << std::endl;
     }
-    const auto schg = summarize(chg_frame_cpu), sm = summarize(m_after);
     state.counters["chg_frames"] = static_cast<double>(chg_frame_cpu.size());
-    state.counters["chg_cpu_frame_med_ms"] = 1e3 * schg.median;
-    state.counters["chg_cpu_frame_p95_ms"] = 1e3 * schg.p95;
-    state.counters["chg_cpu_frame_max_ms"] = 1e3 * schg.max;
-    state.counters["m_med"] = sm.median;
+    put_ms_summary(state, "chg_cpu_frame", chg_frame_cpu);
+    state.counters["m_med"] = summarize(m_after).median;
     state.counters["bg_cpu_total_s"] = bg_cpu;
     state.counters["bg_cpu_mean_ms"] = swaps > 0 ? 1e3 * bg_cpu / swaps : 0;
     state.counters["bg_wall_mean_ms"] = swaps > 0 ? 1e3 * bg_wall / swaps : 0;
-    const auto sc = summarize(cut), su = summarize(update), sf = summarize(frame);
-    const auto scc = summarize(cut_cpu), suc = summarize(update_cpu), sfc = summarize(frame_cpu);
-    state.counters["cpu_cut_med_ms"] = 1e3 * scc.median;
-    state.counters["cpu_cut_max_ms"] = 1e3 * scc.max;
-    state.counters["cpu_upd_med_ms"] = 1e3 * suc.median;
-    state.counters["cpu_upd_max_ms"] = 1e3 * suc.max;
-    state.counters["cpu_frame_med_ms"] = 1e3 * sfc.median;
-    state.counters["cpu_frame_p95_ms"] = 1e3 * sfc.p95;
-    state.counters["cpu_frame_max_ms"] = 1e3 * sfc.max;
+    put_ms_summary(state, "cpu_cut", cut_cpu);
+    put_ms_summary(state, "cpu_upd", update_cpu);
+    put_ms_summary(state, "cpu_frame", frame_cpu);
     state.counters["tets"] = static_cast<double>(body.num_cells());
     state.counters["frames"] = frames;
-    state.counters["cut_med_ms"] = 1e3 * sc.median;
-    state.counters["cut_p95_ms"] = 1e3 * sc.p95;
-    state.counters["cut_max_ms"] = 1e3 * sc.max;
-    state.counters["upd_med_ms"] = 1e3 * su.median;
-    state.counters["upd_p95_ms"] = 1e3 * su.p95;
-    state.counters["upd_max_ms"] = 1e3 * su.max;
-    state.counters["frame_med_ms"] = 1e3 * sf.median;
-    state.counters["frame_p95_ms"] = 1e3 * sf.p95;
-    state.counters["frame_max_ms"] = 1e3 * sf.max;
+    put_ms_summary(state, "cut", cut);
+    put_ms_summary(state, "upd", update);
+    put_ms_summary(state, "frame", frame);
     state.counters["m_max"] = m_max;
+    state.counters["m_before_max"] = m_before_max;
     state.counters["swaps"] = swaps;
-    state.counters["gmres_per_frame"] = static_cast<double>(iterations) / frames;
+    state.counters["gmres_per_frame"] = static_cast<double>(total.gmres_iterations) / frames;
     state.counters["failed_steps"] = failed;
     state.counters["cap_updated"] = updated;
     state.counters["cap_fresh"] = refreshed;
-    state.counters["mean_setup_ms"] = 1e3 * setup / frames;
-    state.counters["mean_step1_ms"] = 1e3 * step1 / frames;
-    state.counters["mean_step2_ms"] = 1e3 * step2 / frames;
-    state.counters["mean_step3_ms"] = 1e3 * step3 / frames;
-    state.counters["new_columns_per_frame"] = schur_solves / frames;
-    state.counters["mean_newcol_ms"] = 1e3 * newcols / frames;
-    state.counters["mean_product_ms"] = 1e3 * product / frames;
-    state.counters["mean_capfactor_ms"] = 1e3 * capfactor / frames;
+    state.counters["solves"] = total.solves;
+    state.counters["mean_setup_ms"] = 1e3 * total.seconds_setup / frames;
+    state.counters["mean_step1_ms"] = 1e3 * total.seconds_step1 / frames;
+    state.counters["mean_step2_ms"] = 1e3 * total.seconds_step2 / frames;
+    state.counters["mean_step3_ms"] = 1e3 * total.seconds_step3 / frames;
+    state.counters["new_columns_per_frame"] = total.new_columns / frames;
+    state.counters["mean_newcol_ms"] = 1e3 * total.seconds_new_columns / frames;
+    state.counters["mean_product_ms"] = 1e3 * total.seconds_product / frames;
+    state.counters["mean_capfactor_ms"] = 1e3 * total.seconds_capfactor / frames;
     state.counters["abandoned"] = session.system().refactorizations_abandoned();
     state.counters["grid_builds"] = static_cast<double>(session.cutter().grid_builds());
     state.counters["grid_reentries"] = static_cast<double>(session.cutter().grid_reentries());
@@ -222,40 +239,78 @@ void BM_LiverScalpelPath(benchmark::State& state) {
 
 // Both livers at 1, 3 and 10 mm per frame, 100 frames, the session's defaults (automatic
 // §3.6 policy, capacitance updated); at 3 mm also the capacitance LU made afresh at every solve
-// (before issue 17) for the ratio in one run. The refined liver takes minutes per path. Last:
-// overlapping background jobs on stale snapshots (AugmentedOptions::overlap_stale_columns).
+// (before issue 17) for the ratio in one run. The refined liver takes minutes per path. Then
+// overlapping background jobs on stale snapshots (AugmentedOptions::overlap_stale_columns). The
+// rows above solve after every sweep triangle (tenth arg 0); then one solve per frame
+// (AugmentedCutSession::frame, tenth arg 1) on both livers, and the refined liver's shorter paths
+// (10 and 30 frames) both ways; all of these with poll_after_solve off (last arg 0). Last: the
+// session's defaults since "One solve per frame" (docs/augmented.md) — poll_after_solve on —
+// per triangle and per frame on both livers; the frame of that section is the one-solve frame
+// (…/0/1/1/).
 BENCHMARK(BM_LiverScalpelPath)
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 1, 1, 1, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0})
-    ->Args({0, 30, 100, 0, 1, 1, 1, 1, 0})
-    ->Args({0, 30, 100, 0, 0, 0, 1, 1, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0})
-    ->Args({0, 100, 100, 0, 1, 1, 1, 1, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 0, 1, 0})
-    ->Args({0, 10, 100, 0, 1, 1, 0, 1, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 0, 1, 0})
-    ->Args({0, 30, 100, 0, 1, 1, 0, 1, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 0, 1, 0})
-    ->Args({0, 100, 100, 0, 1, 1, 0, 1, 0})
-    ->Args({0, 30, 30, 0, 1, 0, 1, 1, 0})
-    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 150})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 300})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 600})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 150})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 300})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 600})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 150})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 300})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 600})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0})
-    ->Args({1, 30, 100, 0, 0, 0, 1, 1, 0})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 0, 0, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 0, 0, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 0, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 1, 1, 1, 0, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 1, 1, 1, 0, 0, 0})
+    ->Args({0, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 1, 1, 1, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 0, 1, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 1, 0, 1, 0, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 0, 1, 0, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 1, 0, 1, 0, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 0, 1, 0, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 1, 0, 1, 0, 0, 0})
+    ->Args({0, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 150, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 300, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 600, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 150, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 300, 0, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 600, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 150, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 300, 0, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 600, 0, 0})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 0, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 

@@ -5,7 +5,8 @@
 // fem::ElasticProblem + SimplicialLDLT). The default run checks 4 frames at 3 mm and 1 at
 // 10 mm (and 2 at 10 mm with overlapping background jobs: each checked frame costs ≈ 25 s under
 // TSan, label threads); the slow run (`ctest -L slow -R
-// organ_path`, INCISE_ORGAN_PATH_SLOW=1) 100 frames at 3 mm and 40 at 10 mm (each way).
+// organ_path`, INCISE_ORGAN_PATH_SLOW=1) 100 frames at 3 mm and 40 at 10 mm (each way). The
+// same with one solve per frame (AugmentedCutSession::frame), and per frame vs per triangle.
 
 #include <incise/cut/cut_mesh.hpp>
 #include <incise/cut/cutter.hpp>
@@ -20,6 +21,9 @@
 
 #include <cstdlib>
 #include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
 
 namespace incise::interactive {
 namespace {
@@ -34,21 +38,53 @@ bool slow() {
   return std::getenv("INCISE_ORGAN_PATH_SLOW") != nullptr;
 }
 
-void run_path(double advance, int frames, const AugmentedCutOptions& options = {}) {
-  const mesh::MeshData body = liver();
-  const fixtures::OrganPath path = fixtures::organ_path(body);
-  const material::Material material = fixtures::organ_material();
-  std::vector<Vec3> forces(static_cast<std::size_t>(body.num_points()));
-  for (Index v = 0; v < body.num_points(); ++v)
-    forces[static_cast<std::size_t>(v)] = path.forces.col(v);
-  AugmentedCutSession session(body, material, path.fixed, path.forces, options);
+// The liver of the path, its supports, loads and material, and a session on it (the one set-up
+// of every session test here).
+struct OrganPathLiverSession {
+  mesh::MeshData body;
+  fixtures::OrganPath path;
+  material::Material material;
+  std::vector<Vec3> forces;  // path.forces as test::reference_solution takes them
+  std::unique_ptr<AugmentedCutSession> session;
+};
+
+OrganPathLiverSession organ_path_liver_session(const AugmentedCutOptions& options) {
+  OrganPathLiverSession s{liver(), {}, fixtures::organ_material(), {}, nullptr};
+  s.path = fixtures::organ_path(s.body);
+  s.forces.resize(static_cast<std::size_t>(s.body.num_points()));
+  for (Index v = 0; v < s.body.num_points(); ++v)
+    s.forces[static_cast<std::size_t>(v)] = s.path.forces.col(v);
+  s.session = std::make_unique<AugmentedCutSession>(s.body, s.material, s.path.fixed, s.path.forces,
+                                                    options);
+  return s;
+}
+
+// Cuts frame f of the path: one solve per sweep triangle (step) or one per frame (frame()).
+std::vector<AugmentedCutStepReport> organ_path_cut_frame(AugmentedCutSession& session,
+                                                         const fixtures::OrganPath& path, int f,
+                                                         double advance, bool per_frame) {
+  std::vector<AugmentedCutStepReport> reports;
+  const auto tris = path.frame(f, advance);
+  if (per_frame) {
+    reports.push_back(session.frame(tris));
+  } else {
+    for (const auto& tri : tris) reports.push_back(session.step(tri));
+  }
+  return reports;
+}
+
+void run_path(double advance, int frames, const AugmentedCutOptions& options = {},
+              bool per_frame = false) {
+  const OrganPathLiverSession organ = organ_path_liver_session(options);
+  AugmentedCutSession& session = *organ.session;
   ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
   double worst = 0;
   int solved = 0, dissected = 0, swaps = 0, updated = 0, two_pending = 0;
   for (int f = 0; f < frames; ++f) {
-    for (const auto& tri : path.frame(f, advance)) {
-      const AugmentedCutStepReport r = session.step(tri);
+    for (const AugmentedCutStepReport& r :
+         organ_path_cut_frame(session, organ.path, f, advance, per_frame)) {
       ASSERT_TRUE(r.ok()) << "frame " << f << ": " << r.message;
+      EXPECT_EQ(r.triangles, per_frame ? 2 : 1);
       dissected += r.cut.faces_dissected;
       swaps += r.refactorization_swapped;
       two_pending += session.system().refactorizations_pending() == 2;
@@ -59,7 +95,7 @@ void run_path(double advance, int frames, const AugmentedCutOptions& options = {
         EXPECT_EQ(r.m_after_solve, r.solve.dirichlet);
       }
       updated += r.solve.m > 0 && !r.solve.capacitance_refreshed;
-      const test::Reference ref = test::reference_solution(session, material, forces);
+      const test::Reference ref = test::reference_solution(session, organ.material, organ.forces);
       ASSERT_TRUE(ref.ok) << "frame " << f;
       const double d = test::relative_difference(session, ref);
       worst = std::max(worst, d);
@@ -77,9 +113,11 @@ void run_path(double advance, int frames, const AugmentedCutOptions& options = {
   if (slow() && !options.refactor_every_step) {
     EXPECT_GT(updated, 0);
   }
-  std::cout << frames << " frames at " << advance * 1e3 << " mm: " << solved << " solves compared, "
-            << dissected << " faces dissected, " << swaps << " refactorizations swapped in, "
-            << updated << " with an updated capacitance factorization, "
+  std::cout << frames << " frames at " << advance * 1e3 << " mm"
+            << (per_frame ? ", one solve per frame: " : ", one solve per sweep triangle: ")
+            << solved << " solves compared, " << dissected << " faces dissected, " << swaps
+            << " refactorizations swapped in, " << updated
+            << " with an updated capacitance factorization, "
             << session.system().refactorizations_abandoned() << " abandoned, " << two_pending
             << " steps left two jobs pending, worst relative "
             << "difference " << worst << "\n";
@@ -101,6 +139,119 @@ TEST(OrganPath, Issue17EveryFrameEqualsAFreshFactorization10mm) {
   run_path(0.010, slow() ? 40 : 1);
 }
 
+// One solve per frame (AugmentedCutSession::frame: both sweep triangles of a blade advance cut,
+// then one solve) on the same paths: every frame's solution equals a fresh factorization of the
+// mesh the frame left (the bound of run_path).
+TEST(OrganPath, Issue17OneSolvePerFrameEqualsAFreshFactorization3mm) {
+  run_path(0.003, slow() ? 100 : 4, {}, true);
+}
+
+TEST(OrganPath, Issue17OneSolvePerFrameEqualsAFreshFactorization10mm) {
+  run_path(0.010, slow() ? 40 : 2, {}, true);
+}
+
+// Final cut meshes equal: the same live element slots with the same nodes, the same nodes with
+// the same reference positions.
+::testing::AssertionResult organ_path_same_mesh(const cut::CutMesh& a, const cut::CutMesh& b) {
+  if (a.num_nodes() != b.num_nodes() || a.element_capacity() != b.element_capacity())
+    return ::testing::AssertionFailure()
+           << "nodes " << a.num_nodes() << " vs " << b.num_nodes() << ", element slots "
+           << a.element_capacity() << " vs " << b.element_capacity();
+  for (Index e = 0; e < a.element_capacity(); ++e) {
+    if (a.alive(e) != b.alive(e) || (a.alive(e) && a.element(e) != b.element(e)))
+      return ::testing::AssertionFailure() << "element slot " << e << " differs";
+  }
+  for (Index v = 0; v < a.num_nodes(); ++v) {
+    if (a.unused(v) != b.unused(v) || a.reference(v) != b.reference(v))
+      return ::testing::AssertionFailure() << "node " << v << " differs";
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// step(tri) is the frame of one triangle: with the background policy off (a swap's timing would
+// make the solves differ), stepping the 10 mm path triangle by triangle through step() and
+// through frame() on one-triangle vectors gives bitwise the same reports, meshes and
+// displacements.
+TEST(OrganPath, Issue17OneTriangleFrameIsBitwiseStep) {
+  AugmentedCutOptions options;
+  options.automatic_refactorization = false;
+  const OrganPathLiverSession a = organ_path_liver_session(options);
+  const OrganPathLiverSession b = organ_path_liver_session(options);
+  Index dissected = 0;
+  for (int f = 0; f < 3; ++f) {
+    for (const auto& tri : a.path.frame(f, 0.010)) {
+      const AugmentedCutStepReport ra = a.session->step(tri);
+      const AugmentedCutStepReport rb = b.session->frame(std::vector<std::array<Vec3, 3>>{tri});
+      ASSERT_TRUE(ra.ok()) << ra.message;
+      EXPECT_EQ(ra.status, rb.status);
+      EXPECT_EQ(ra.triangles, 1);
+      EXPECT_EQ(rb.triangles, 1);
+      EXPECT_EQ(ra.cut.changed_elements, rb.cut.changed_elements);
+      EXPECT_EQ(ra.elements_added, rb.elements_added);
+      EXPECT_EQ(ra.dofs_added, rb.dofs_added);
+      EXPECT_EQ(ra.m_before_solve, rb.m_before_solve);
+      EXPECT_EQ(ra.m_after_solve, rb.m_after_solve);
+      EXPECT_EQ(ra.solve.gmres.iterations, rb.solve.gmres.iterations);
+      ASSERT_TRUE(a.session->displacement() == b.session->displacement()) << "frame " << f;
+      dissected += ra.cut.faces_dissected;
+    }
+  }
+  EXPECT_GT(dissected, 0);  // the frames cut
+  EXPECT_TRUE(organ_path_same_mesh(a.session->mesh(), b.session->mesh()));
+  EXPECT_TRUE(a.session->displacement() == b.session->displacement());  // bitwise
+}
+
+// Per frame vs per triangle. Cutting in the reference configuration (update_deformed = false)
+// the cutter sees the same positions either way, so the final meshes are identical and the two
+// solutions (other DOF numbering and summation order, both exact) equal within 1e-9 relative,
+// the bound of run_path. In the deformed configuration (the default) the second triangle of a
+// frame meets the nodes where the last frame's solve left them rather than where an intermediate
+// solve would have moved them, so the meshes may legitimately differ: that run only prints
+// whether they did (each way's exactness is the tests above).
+TEST(OrganPath, Issue17PerFrameAndPerTriangleCutTheSameMeshInTheReferenceConfiguration10mm) {
+  for (const bool deformed : {false, true}) {
+    AugmentedCutOptions options;
+    options.update_deformed = deformed;
+    const OrganPathLiverSession per_triangle = organ_path_liver_session(options);
+    const OrganPathLiverSession per_frame = organ_path_liver_session(options);
+    const int frames = slow() ? 20 : 4;
+    int solves_triangle = 0, solves_frame = 0;
+    for (int f = 0; f < frames; ++f) {
+      for (const AugmentedCutStepReport& r :
+           organ_path_cut_frame(*per_triangle.session, per_triangle.path, f, 0.010, false)) {
+        ASSERT_TRUE(r.ok()) << r.message;
+        solves_triangle += r.solved;
+      }
+      for (const AugmentedCutStepReport& r :
+           organ_path_cut_frame(*per_frame.session, per_frame.path, f, 0.010, true)) {
+        ASSERT_TRUE(r.ok()) << r.message;
+        solves_frame += r.solved;
+      }
+    }
+    EXPECT_LT(solves_frame, solves_triangle);
+    const ::testing::AssertionResult same =
+        organ_path_same_mesh(per_triangle.session->mesh(), per_frame.session->mesh());
+    double difference = -1;  // of the solutions, where the meshes are the same
+    if (same) {
+      const test::Reference ref =
+          test::reference_solution(*per_frame.session, per_frame.material, per_frame.forces);
+      ASSERT_TRUE(ref.ok);
+      difference = test::relative_difference(*per_triangle.session, ref);
+      EXPECT_LE(difference, 1e-9);
+      EXPECT_LE(test::relative_difference(*per_frame.session, ref), 1e-9);
+    }
+    if (!deformed) {
+      EXPECT_TRUE(same);
+    }
+    std::cout << frames << " frames at 10 mm, cut in the " << (deformed ? "deformed" : "reference")
+              << " configuration: " << solves_triangle << " solves per triangle, " << solves_frame
+              << " per frame; final meshes "
+              << (same ? "identical" : "differ (" + std::string(same.message()) + ")")
+              << ", per-triangle solution vs the per-frame mesh's fresh factorization "
+              << difference << "\n";
+  }
+}
+
 // AugmentedOptions::overlap_stale_columns (a second background job once a column changed since
 // the pending one's snapshot — threshold 1, so that overlaps happen whenever a job is pending at
 // a solve; the older abandoned when the newer finishes first) on the 10 mm path, where it was
@@ -119,27 +270,22 @@ TEST(OrganPath, Issue17OverlappingStaleJobsEqualAFreshFactorization10mm) {
 // solve, and again after the last jobs are waited for and swapped in, against a fresh
 // factorization within 1e-9 (the bound of run_path).
 TEST(OrganPath, Issue17OverlappingJobsWithoutPausesEndEqualToAFreshFactorization10mm) {
-  const mesh::MeshData body = liver();
-  const fixtures::OrganPath path = fixtures::organ_path(body);
-  const material::Material material = fixtures::organ_material();
-  std::vector<Vec3> forces(static_cast<std::size_t>(body.num_points()));
-  for (Index v = 0; v < body.num_points(); ++v)
-    forces[static_cast<std::size_t>(v)] = path.forces.col(v);
   AugmentedCutOptions options;
   options.augmented.overlap_stale_columns = 1;
-  AugmentedCutSession session(body, material, path.fixed, path.forces, options);
+  const OrganPathLiverSession organ = organ_path_liver_session(options);
+  AugmentedCutSession& session = *organ.session;
   ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
   int swaps = 0, two_pending = 0;
   const int frames = slow() ? 40 : 12;
   for (int f = 0; f < frames; ++f) {
-    for (const auto& tri : path.frame(f, 0.010)) {
+    for (const auto& tri : organ.path.frame(f, 0.010)) {
       const AugmentedCutStepReport r = session.step(tri);
       ASSERT_TRUE(r.ok()) << "frame " << f << ": " << r.message;
       swaps += r.refactorization_swapped;
       two_pending += session.system().refactorizations_pending() == 2;
     }
   }
-  const test::Reference ref = test::reference_solution(session, material, forces);
+  const test::Reference ref = test::reference_solution(session, organ.material, organ.forces);
   ASSERT_TRUE(ref.ok);
   const double before = test::relative_difference(session, ref);
   EXPECT_LE(before, 1e-9);

@@ -137,8 +137,7 @@ void AugmentedCutSession::constrain(Index v, Index& counter) {
   }
 }
 
-void AugmentedCutSession::assign_new_nodes(const cut::CutStepReport& cut,
-                                           AugmentedCutStepReport& r) {
+void AugmentedCutSession::assign_new_nodes(AugmentedCutStepReport& r) {
   const Index old_n = static_cast<Index>(node_dof_.size());
   const Index n = mesh_->num_nodes();
   if (n == old_n) return;
@@ -146,7 +145,8 @@ void AugmentedCutSession::assign_new_nodes(const cut::CutStepReport& cut,
   initially_fixed_.resize(static_cast<size_t>(n), 0);
   node_force_.resize(static_cast<size_t>(n), Vec3::Zero());
   displacement_.conservativeResize(3, n);
-  (void)cut;  // every node with index ≥ old_n is new (new_nodes lists the used ones)
+  // Every node with index ≥ old_n is new (new_nodes lists them; those a later triangle of the
+  // frame left unused get no DOFs).
   for (Index v = old_n; v < n; ++v) {
     displacement_.col(v) = mesh_->deformed(v) - mesh_->reference(v);
     if (mesh_->unused(v)) continue;  // e.g. a split node left unused by a refused collapse
@@ -162,23 +162,77 @@ void AugmentedCutSession::assign_new_nodes(const cut::CutStepReport& cut,
   }
 }
 
-AugmentedCutStepReport AugmentedCutSession::step(const Vec3& a, const Vec3& b, const Vec3& c) {
+namespace {
+
+void append_list(std::vector<Index>& to, const std::vector<Index>& from) {
+  to.insert(to.end(), from.begin(), from.end());
+}
+
+// Merges the report of a frame's later triangle into `to` (AugmentedCutStepReport::cut).
+void merge_cut_report(cut::CutStepReport& to, const cut::CutStepReport& r) {
+  if (to.ok() && !r.ok()) {
+    to.status = r.status;
+    to.message = r.message;
+  }
+  to.elements_tested += r.elements_tested;
+  to.edges_intersected += r.edges_intersected;
+  to.faces_selected += r.faces_selected;
+  to.faces_dissected += r.faces_dissected;
+  to.faces_pending = r.faces_pending;
+  to.halved_choices += r.halved_choices;
+  to.incomplete_elements = r.incomplete_elements;
+  to.nodes_snapped += r.nodes_snapped;
+  to.snaps_refused += r.snaps_refused;
+  to.snaps_failed += r.snaps_failed;
+  to.snaps_no_projection += r.snaps_no_projection;
+  to.snaps_outside_star += r.snaps_outside_star;
+  to.nodes_on_sweep += r.nodes_on_sweep;
+  to.snaps_fixed += r.snaps_fixed;
+  to.degenerate_found += r.degenerate_found;
+  to.collapses += r.collapses;
+  to.incollapsible += r.incollapsible;
+  to.removal_passes += r.removal_passes;
+  to.free_components += r.free_components;
+  to.components_fixed += r.components_fixed;
+  to.full_component_check = to.full_component_check || r.full_component_check;
+  append_list(to.new_nodes, r.new_nodes);
+  append_list(to.moved_nodes, r.moved_nodes);
+  append_list(to.changed_elements, r.changed_elements);
+  append_list(to.removed_nodes, r.removed_nodes);
+  append_list(to.fixed_nodes, r.fixed_nodes);
+}
+
+}  // namespace
+
+AugmentedCutStepReport AugmentedCutSession::frame(const std::array<Vec3, 3>* triangles,
+                                                  std::size_t count) {
   AugmentedCutStepReport r;
   {
     const double cpu0 = thread_cpu_seconds();
     const Timer timer;
-    r.cut = cutter_->step(a, b, c);
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::array<Vec3, 3>& t = triangles[k];
+      if (k == 0) {
+        r.cut = cutter_->step(t[0], t[1], t[2]);
+      } else {
+        merge_cut_report(r.cut, cutter_->step(t[0], t[1], t[2]));
+      }
+    }
+    r.triangles = static_cast<int>(count);
     r.seconds_cut = timer.seconds();
     r.cpu_seconds_cut = thread_cpu_seconds() - cpu0;
   }
   const double cpu0 = thread_cpu_seconds();
   const Timer timer;
-  assign_new_nodes(r.cut, r);
+  // Translated once, after all triangles: the system is compared slot by slot with the mesh as
+  // the frame left it, so a slot changed by several triangles is replaced once.
+  assign_new_nodes(r);
   if (static_cast<Index>(records_.size()) < mesh_->element_capacity())
     records_.resize(static_cast<size_t>(mesh_->element_capacity()));
 
   // Slots whose element may differ from what the system holds: changed elements and the
-  // stars of moved nodes (snapping changes reference positions, hence Kₑ).
+  // stars of moved nodes (snapping changes reference positions, hence Kₑ). An element that
+  // left a moved node's star during the frame changed its nodes, so it is a changed element.
   std::vector<Index> slots = r.cut.changed_elements;
   for (Index v : r.cut.moved_nodes) {
     for (Index e : mesh_->star(v)) slots.push_back(e);
@@ -282,7 +336,19 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
       r.refactorization_swapped = system_->refactor_now();
     r.solve = system_->solve(a, reaction);  // swaps in a finished background factor first
     r.solved = true;
-    r.refactorization_swapped = r.refactorization_swapped || r.solve.refactorization_swapped;
+    // §3.6 pipeline after the solve (AugmentedCutOptions::poll_after_solve): a job that finished
+    // meanwhile goes on now (to the preparation of its G, or swapped in) instead of at the next
+    // solve. A job it finds failed is dropped, and no new one starts in this solve (as below).
+    bool late_swap = false, late_failed = false;
+    if (options_.poll_after_solve && r.solve.status != linalg::AugmentedStatus::kNoFactor &&
+        system_->refactorization_pending()) {
+      late_swap = system_->poll_refactorization();
+      late_failed = !late_swap && !system_->refactorization_pending() &&
+                    system_->last_refactorization_status() != linalg::FactorStatus::kOk;
+      if (late_failed) r.solve.refactorization_status = system_->last_refactorization_status();
+    }
+    r.refactorization_swapped =
+        r.refactorization_swapped || r.solve.refactorization_swapped || late_swap;
     r.m_after_solve = system_->num_replaced();
     // §3.6: bound m by refactoring the current K in the background once the columns a
     // refactorization can remove (m − |𝓓|: Dirichlet DOFs stay in 𝓛) reach the threshold; the
@@ -303,7 +369,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
       // RefactorizationPolicy (break-even or continuous) on measured or injected costs.
       const double update =
           options_.update_cost ? options_.update_cost(r.solve) : r.solve.seconds_total;
-      policy_.observe(update, r.solve.refactorization_swapped);
+      policy_.observe(update, r.solve.refactorization_swapped || late_swap);
       const double factorization = options_.factorization_cost
                                        ? options_.factorization_cost(*system_)
                                        : system_->factorization_seconds();

@@ -4,12 +4,12 @@
 /// current by the augmented-matrix solver (thesis §3.2 cut steps; Yeung, Crouch & Pothen 2016
 /// §3 column replacements). It owns the cut mesh, the Cutter and a linalg::AugmentedSystem.
 ///
-/// Each step() is one sweep triangle: Cutter::step, then the step's CutStepReport translated
-/// into column replacements (old element blocks subtracted, new ones added, new DOFs for new
-/// nodes, Dirichlet constraints for nodes fixed on a face or left without elements), then
-/// AugmentedSystem::solve(). The translation table, the DOF numbering and the diagonal spring
-/// that keeps K positive definite are in docs/cutting.md ("Integration with the augmented
-/// solver").
+/// Each frame() is one or more sweep triangles (one blade advance, rendered once): Cutter::step
+/// for each, then what they changed translated into column replacements (old element blocks
+/// subtracted, new ones added, new DOFs for new nodes, Dirichlet constraints for nodes fixed on a
+/// face or left without elements), then one AugmentedSystem::solve(); step() is the frame of one
+/// triangle. The translation table, the DOF numbering and the diagonal spring that keeps K positive
+/// definite are in docs/cutting.md ("Integration with the augmented solver").
 ///
 /// DOF numbering: nodes fixed at construction have no DOFs; the other used nodes of the initial
 /// mesh get 3·k, 3·k+1, 3·k+2 in node order; new nodes get the next DOFs in creation order.
@@ -27,6 +27,7 @@
 #include <incise/mesh/mesh_data.hpp>
 
 #include <array>
+#include <cstddef>
 #include <functional>
 #include <memory>
 #include <string>
@@ -85,6 +86,12 @@ struct AugmentedCutOptions {
   /// "Per-frame strategies"). Overrides refactor_at_m and automatic_refactorization (no
   /// background job is started).
   bool refactor_every_step = false;
+  /// §3.6 pipeline: after each solve, also poll the background job (AugmentedSystem::
+  /// poll_refactorization) so that one that finished during the solve is handed to the
+  /// preparation of its swap (AugmentedOptions::prepare_swap), or swapped in, now rather than at
+  /// the next solve — a frame earlier with one solve per frame. On by default; measured:
+  /// docs/augmented.md, "One solve per frame".
+  bool poll_after_solve = true;
   /// Cost of one solver update for the automatic policy; empty: its measured wall time
   /// (AugmentedReport::seconds_total). Tests inject a deterministic model.
   std::function<double(const linalg::AugmentedReport&)> update_cost;
@@ -105,12 +112,18 @@ enum class CutSolveStatus {
 /// Human-readable name of a CutSolveStatus.
 const char* to_string(CutSolveStatus status);
 
-/// Report of one interactive step (one sweep triangle, then the solver update).
-/// message: what the caller can do when status != kOk.
+/// Report of one interactive frame (its sweep triangles cut, then one solver update; step():
+/// one triangle). message: what the caller can do when status != kOk.
 struct [[nodiscard]] AugmentedCutStepReport
     : Outcome<CutSolveStatus, CutSolveStatus::kOk, CutSolveStatus::kOk> {
-  cut::CutStepReport cut;  ///< the cutter's report (what changed in the mesh)
-  // Translation into column replacements (this step).
+  /// The cutter's reports merged over the frame's triangles (one triangle: its report as is):
+  /// counts summed, lists concatenated in triangle order (a node or element may appear in
+  /// several; a node created by one triangle and removed by a later one is in both new_nodes
+  /// and removed_nodes), faces_pending and incomplete_elements after the last triangle,
+  /// full_component_check if any, status the first one that is not ok (with its message).
+  cut::CutStepReport cut;
+  int triangles = 0;  ///< sweep triangles cut in this frame (step(): 1; solve(): 0)
+  // Translation into column replacements (this frame, after all its triangles).
   Index elements_subtracted = 0;  ///< element stiffnesses removed (old version of a slot)
   Index elements_added = 0;       ///< element stiffnesses added (new version of a slot)
   Index dofs_added = 0;           ///< new DOFs (3 per new free node)
@@ -130,8 +143,8 @@ struct [[nodiscard]] AugmentedCutStepReport
   /// After the solve, m ≥ refactor_at_m with no job pending: a background refactorization of
   /// the current K was started.
   bool refactorization_started = false;
-  // Timings (seconds). CPU = CLOCK_THREAD_CPUTIME_ID of the calling thread.
-  double seconds_cut = 0;         ///< wall time of cut::Cutter::step
+  // Timings (seconds) of the whole frame. CPU = CLOCK_THREAD_CPUTIME_ID of the calling thread.
+  double seconds_cut = 0;         ///< wall time of cut::Cutter::step (summed over the triangles)
   double seconds_update = 0;      ///< wall time of the column replacements (no solve)
   double seconds_solve = 0;       ///< wall time of AugmentedSystem::solve() (+ deformed update)
   double cpu_seconds_cut = 0;     ///< CPU time of cut::Cutter::step
@@ -162,14 +175,31 @@ class AugmentedCutSession {
   /// and a message naming the FactorStatus; steps then cut the mesh but cannot solve.
   const AugmentedCutStepReport& initial_report() const { return initial_; }
 
-  /// One interactive step: Cutter::step on sweep triangle (a, b, c) (deformed configuration,
-  /// m), the translation of its CutStepReport into column replacements, and the augmented
-  /// solve. Post: displacement() is the static solution of the cut mesh when ok().
-  AugmentedCutStepReport step(const Vec3& a, const Vec3& b, const Vec3& c);
-  /// Same with the triangle as an array.
-  AugmentedCutStepReport step(const std::array<Vec3, 3>& tri) {
-    return step(tri[0], tri[1], tri[2]);
+  /// One interactive frame: Cutter::step on each sweep triangle of `triangles` in order (all in
+  /// the deformed configuration of the last solve, m — no solve between them, so the positions
+  /// are those the user saw when the frame began), then the translation of everything they
+  /// changed into column replacements, and one augmented solve (none when nothing changed and
+  /// the last solution stands). Post: displacement() is the static solution of the cut mesh
+  /// when ok(). count = 0 cuts nothing (a solve only if the last one is stale).
+  /// Cutting per frame rather than per triangle gives a different mesh in general: the later
+  /// triangles meet the nodes where the previous frame left them, not where an intermediate
+  /// solve would have moved them (docs/augmented.md, "One solve per frame").
+  AugmentedCutStepReport frame(const std::array<Vec3, 3>* triangles, std::size_t count);
+  /// frame() on the triangles of a vector or an array (e.g. fixtures::OrganPath::frame).
+  AugmentedCutStepReport frame(const std::vector<std::array<Vec3, 3>>& triangles) {
+    return frame(triangles.data(), triangles.size());
   }
+  template <std::size_t N>
+  AugmentedCutStepReport frame(const std::array<std::array<Vec3, 3>, N>& triangles) {
+    return frame(triangles.data(), N);
+  }
+  /// The frame of one sweep triangle (a, b, c).
+  AugmentedCutStepReport step(const Vec3& a, const Vec3& b, const Vec3& c) {
+    const std::array<Vec3, 3> tri{a, b, c};
+    return frame(&tri, 1);
+  }
+  /// Same with the triangle as an array.
+  AugmentedCutStepReport step(const std::array<Vec3, 3>& tri) { return frame(&tri, 1); }
 
   /// Ends the current incision (Cutter::end_incision): the next step starts a new one.
   void end_incision() { cutter_->end_incision(); }
@@ -215,7 +245,7 @@ class AugmentedCutSession {
   };
   std::vector<int> element_dofs(const cut::Tet& t) const;
   void add_record(Index slot, double scale);
-  void assign_new_nodes(const cut::CutStepReport& cut, AugmentedCutStepReport& r);
+  void assign_new_nodes(AugmentedCutStepReport& r);
   void constrain(Index v, Index& counter);
   void solve_into(AugmentedCutStepReport& r);
 
