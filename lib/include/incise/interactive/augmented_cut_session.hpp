@@ -46,9 +46,10 @@ struct AugmentedCutOptions {
   /// behind the choice: docs/cutting.md, docs/augmented.md).
   linalg::AugmentedOptions augmented = supernodal_defaults();
   /// After every successful solve set the cut mesh's deformed positions to X + a, so that the
-  /// next sweep triangle is interpreted in the deformed configuration (§3.2). O(n) per step
-  /// (the cutter's boundary search grid is rebuilt); false keeps x = X (cutting in the
-  /// reference configuration).
+  /// next sweep triangle is interpreted in the deformed configuration (§3.2). O(n) per solve
+  /// for the positions; the cutter's boundary search grid is updated, not rebuilt: only the
+  /// stars of nodes that moved more than CutOptions::search_grid_slack cells are entered again;
+  /// false keeps x = X (cutting in the reference configuration).
   bool update_deformed = true;
   /// §3.6 of the augmented paper (automatic background refactorization), in replaced columns
   /// (a count). After a step's (or solve()'s) augmented solve, when the replaced columns that
