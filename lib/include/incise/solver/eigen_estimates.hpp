@@ -61,6 +61,18 @@ struct [[nodiscard]] LanczosExtremes {
 /// when there are no steps or the coefficient lists differ in length.
 LanczosExtremes cg_lanczos_extremes(const CgCoefficients& coefficients);
 
+/// Smallest and largest eigenvalue of the symmetric tridiagonal matrix with diagonal `diag` and
+/// off-diagonal `sub` (diag.size() − 1 entries), by bisection on Sturm counts (O(k) per halving,
+/// no QR of all k eigenvalues) from Gershgorin brackets, each to an absolute accuracy of
+/// 2ε‖T‖ (‖T‖ bounded by Gershgorin: what a QR iteration reaches). The kernel of
+/// lanczos_spectrum()'s Ritz values. Throws ParameterError when diag is empty, sub has the wrong
+/// length or an entry is not finite.
+struct TridiagonalExtremes {
+  double smallest = 0.0;
+  double largest = 0.0;
+};
+TridiagonalExtremes tridiagonal_extremes(const VecX& diag, const VecX& sub);
+
 /// Options of lanczos_spectrum().
 struct LanczosOptions {
   long min_steps = 12;      ///< never stop before this many steps
