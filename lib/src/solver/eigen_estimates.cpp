@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <random>
 #include <string>
@@ -291,8 +292,12 @@ SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& s
   double lo_prev = 0.0, hi_prev = 0.0, lo_step = 0.0, hi_step = 0.0;
   double tnorm = 0.0, max_sub2 = 0.0;  // Gershgorin bound of ‖T_k‖; largest β²
   long calm = 0;                       // consecutive steps with both changes ≤ tolerance
+  // K(u) assembled once when the problem offers it (an empty function otherwise, or when an
+  // element is inverted at u: then the matrix-free product reports it on the first step).
+  const std::function<EvalStatus(const VecX&, VecX&)> product =
+      options.assembled ? problem.assembled_hessian(u) : nullptr;
   for (long j = 0; j < options.max_steps; ++j) {
-    const EvalStatus st = problem.hessian_product(u, q, w);
+    const EvalStatus st = product ? product(q, w) : problem.hessian_product(u, q, w);
     if (st != EvalStatus::kOk || !w.allFinite()) {
       est.status = failure_reason(st);
       break;
