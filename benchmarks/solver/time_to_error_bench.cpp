@@ -244,7 +244,8 @@ void BM_EstimateShare(benchmark::State& state, const std::string& material) {
 /// One evaluation at the reference solution û (the per-iteration breakdown: an NCG iteration is
 /// one K·d and one gradient+energy plus vector passes, an SS22 step one gradient+energy plus
 /// vector passes). Counter ms_per_eval: process CPU ms per call.
-enum class Eval { kGradientEnergy, kGradient, kProduct, kGradientEnergyProduct };
+/// kCurvature: dᵀK(u)d alone (Problem::hessian_curvature, the nonlinear-CG secant's first slope).
+enum class Eval { kGradientEnergy, kGradient, kProduct, kGradientEnergyProduct, kCurvature };
 
 void BM_Evaluation(benchmark::State& state, const std::string& material, Eval what) {
   Case& c = get_case(material);
@@ -260,8 +261,10 @@ void BM_Evaluation(benchmark::State& state, const std::string& material, Eval wh
       case Eval::kGradient: (void)p.gradient(u, g); break;
       case Eval::kProduct: (void)p.hessian_product(u, d, out); break;
       case Eval::kGradientEnergyProduct: (void)p.gradient_energy_product(u, d, g, e, out); break;
+      case Eval::kCurvature: (void)p.hessian_curvature(u, d, e); break;
     }
     benchmark::DoNotOptimize(g.data());
+    benchmark::DoNotOptimize(e);
     benchmark::DoNotOptimize(out.data());
     ++calls;
   }
@@ -359,6 +362,7 @@ const bool kRegistered = [] {
     eval("BM_Evaluation/" + m + "/gradient", m, Eval::kGradient);
     eval("BM_Evaluation/" + m + "/product", m, Eval::kProduct);
     eval("BM_Evaluation/" + m + "/gradient_energy_product", m, Eval::kGradientEnergyProduct);
+    eval("BM_Evaluation/" + m + "/curvature", m, Eval::kCurvature);
   }
   return true;
 }();
