@@ -101,8 +101,9 @@ const char* to_string(KernelIsa isa);
 /// Element loops visit the elements in an internal order (sorted by smallest node index, for
 /// memory locality) four at a time; element and node numbering seen by callers are the mesh's.
 ///
-/// Threads: every element loop (energy, gradient, fused gradient+energy, K·d, the fused
-/// gradient+energy+product, the diagonal, tangent assembly) runs on threads() threads
+/// Threads: every element loop (energy, gradient, fused gradient+energy, K·d, the curvature
+/// dᵀKd, the fused gradient+energy+product, the diagonal, tangent assembly) runs on threads()
+/// threads
 /// (core/parallel.hpp). The sweep order is cut into fixed chunks of kElementChunk elements;
 /// chunks sharing a node are coloured apart and run in colour order, so every nodal value and
 /// matrix entry is summed in one fixed order (colour, then sweep order inside the chunk), and the
