@@ -13,7 +13,8 @@
 /// search (LineSearchKind::kSecantWarmStart); ss22-energy4: SS22 with Π on every 4th step only
 /// (DynamicRelaxationOptions::energy_every = 4). BM_PerIteration/<material>/<method>: CPU ms per
 /// iteration in a long run (best of batches; the per-iteration table of docs/solvers.md),
-/// BM_Evaluation: CPU ms per evaluation at û. Command:
+/// BM_Evaluation: CPU ms per evaluation at û; BM_EstimateShare/<material>: the automatic Δt/η
+/// estimate's CPU against the SS22 solve to 1e-6 it serves (counter estimate_share). Command:
 /// build/release/benchmarks/solver/time_to_error_bench [--benchmark_filter=...]
 #include <incise/fem/elastic_problem.hpp>
 #include <incise/material/material.hpp>
@@ -119,6 +120,60 @@ solver::SolverReport run_method(Method method, P& p, VecX& u,
   return solver::dynamic_relaxation(p, u, o);
 }
 
+/// The first iteration from which the relative energy-norm error stays ≤ kLevel, the process
+/// CPU seconds to it (observer excluded) and the counts of the run stopped there.
+struct LevelHit {
+  long iteration = -1;       ///< −1: not reached
+  double cpu_seconds = NAN;  ///< process CPU to `iteration`
+  long evaluations = 0;      ///< SolverReport::inner_iterations of the run stopped at the hit
+  long iterations = 0;       ///< SolverReport::iterations of that run
+};
+
+LevelHit time_to_level(Case& c, Method method, double dt, double eta) {
+  fem::ElasticProblem& p = *c.problem;
+  LevelHit out;
+  solver::EnergyErrorTrace trace(p, c.reference);
+  VecX u = VecX::Zero(p.size());
+  // First iteration from which the relative energy-norm error stays ≤ kLevel, and the CPU
+  // seconds at it (observer CPU excluded: the observer measures its own and subtracts it).
+  long hit = -1;
+  double hit_cpu = 0.0, observer_cpu = 0.0;
+  const double cpu0 = process_cpu();
+  solver::RelaxationOptions common;
+  common.stop.rule = solver::ResidualRule::kExternalForce;
+  common.stop.epsilon = 1e-12;
+  common.budget.max_iterations = 200000;
+  common.observer = [&](const solver::IterationInfo& info) {
+    const double now = process_cpu();
+    const double rel = std::sqrt(trace.energy_error(*info.u) / c.reference_norm2);
+    if (rel <= kLevel && hit < 0) {
+      hit = info.iteration;
+      hit_cpu = now - cpu0 - observer_cpu;
+    } else if (rel > kLevel) {
+      hit = -1;
+    }
+    observer_cpu += process_cpu() - now;
+    if (hit >= 0 && info.iteration >= hit + 20) throw std::runtime_error("done");
+  };
+  try {
+    (void)run_method(method, p, u, common, dt, eta);
+  } catch (const std::runtime_error&) {
+    // stopped 20 iterations after the level was reached and held
+  }
+  if (hit > 0) {  // the same run again, stopped at the hit, for its report's counts
+    solver::RelaxationOptions upto = common;
+    upto.observer = nullptr;
+    upto.budget.max_iterations = hit;
+    VecX w = VecX::Zero(p.size());
+    const solver::SolverReport r2 = run_method(method, p, w, upto, dt, eta);
+    out.evaluations = r2.inner_iterations;
+    out.iterations = r2.iterations;
+  }
+  out.iteration = hit;
+  if (hit >= 0) out.cpu_seconds = hit_cpu;
+  return out;
+}
+
 void BM_TimeToError(benchmark::State& state, const std::string& material, Method method) {
   Case& c = get_case(material);
   fem::ElasticProblem& p = *c.problem;
@@ -140,59 +195,57 @@ void BM_TimeToError(benchmark::State& state, const std::string& material, Method
     state.counters["dt_us"] = dt * 1e6;
     state.counters["eta"] = eta;
   }
-  long evaluations = 0, iterations = 0;  // line-search evaluations (NCG), K-products (SS22)
+  LevelHit h;
   for (auto _ : state) {
-    solver::EnergyErrorTrace trace(p, c.reference);
-    VecX u = VecX::Zero(p.size());
-    // First iteration from which the relative energy-norm error stays ≤ kLevel, and the CPU
-    // seconds at it (observer CPU excluded: the observer measures its own and subtracts it).
-    long hit = -1;
-    double hit_cpu = 0.0, observer_cpu = 0.0;
-    const double cpu0 = process_cpu();
-    solver::RelaxationOptions common;
-    common.stop.rule = solver::ResidualRule::kExternalForce;
-    common.stop.epsilon = 1e-12;
-    common.budget.max_iterations = 200000;
-    common.observer = [&](const solver::IterationInfo& info) {
-      const double now = process_cpu();
-      const double rel = std::sqrt(trace.energy_error(*info.u) / c.reference_norm2);
-      if (rel <= kLevel && hit < 0) {
-        hit = info.iteration;
-        hit_cpu = now - cpu0 - observer_cpu;
-      } else if (rel > kLevel) {
-        hit = -1;
-      }
-      observer_cpu += process_cpu() - now;
-      if (hit >= 0 && info.iteration >= hit + 20) throw std::runtime_error("done");
-    };
-    solver::SolverReport rep;
-    try {
-      rep = run_method(method, p, u, common, dt, eta);
-    } catch (const std::runtime_error&) {
-      // stopped 20 iterations after the level was reached and held
-    }
-    if (hit > 0) {  // the same run again, stopped at the hit, for its report's counts
-      solver::RelaxationOptions upto = common;
-      upto.observer = nullptr;
-      upto.budget.max_iterations = hit;
-      VecX w = VecX::Zero(p.size());
-      const solver::SolverReport r2 = run_method(method, p, w, upto, dt, eta);
-      evaluations = r2.inner_iterations;
-      iterations = r2.iterations;
-    }
-    state.counters["cpu_s"] = hit >= 0 ? hit_cpu : NAN;
-    state.counters["iters"] = double(hit);
-    state.counters["ms_per_iter"] = hit > 0 ? 1e3 * hit_cpu / double(hit) : NAN;
+    h = time_to_level(c, method, dt, eta);
+    state.counters["cpu_s"] = h.cpu_seconds;
+    state.counters["iters"] = double(h.iteration);
+    state.counters["ms_per_iter"] =
+        h.iteration > 0 ? 1e3 * h.cpu_seconds / double(h.iteration) : NAN;
   }
   // NCG: line-search evaluations per iteration; SS22: K-products (quadratic recurrence) per step.
-  if (iterations > 0) state.counters["inner_per_iter"] = double(evaluations) / double(iterations);
+  if (h.iterations > 0)
+    state.counters["inner_per_iter"] = double(h.evaluations) / double(h.iterations);
   state.counters["tets"] = double(p.num_elements());
 }
+
+#ifndef INCISE_TTE_BASELINE
+/// The automatic Δt and η against the solve they serve (issue 19: the estimate shall cost
+/// ≤ 10 % of it): estimate_dynamic_parameters at u = 0 (process CPU, the best of
+/// kEstimateRuns calls: the machine is shared), then SS22 with its Δt, η to the relative
+/// energy-norm error 1e-6 (time_to_level, the BM_TimeToError/<material>/ss22 run). Counters:
+/// estimate_cpu_s, products (Lanczos K-products), solve_cpu_s, estimate_share =
+/// estimate_cpu_s / solve_cpu_s.
+constexpr int kEstimateRuns = 3;
+
+void BM_EstimateShare(benchmark::State& state, const std::string& material) {
+  Case& c = get_case(material);
+  fem::ElasticProblem& p = *c.problem;
+  for (auto _ : state) {
+    double best = INFINITY;
+    solver::DynamicParameterEstimate dp;
+    for (int r = 0; r < kEstimateRuns; ++r) {
+      const double cpu0 = process_cpu();
+      dp = solver::estimate_dynamic_parameters(p, VecX::Zero(p.size()));
+      best = std::min(best, process_cpu() - cpu0);
+    }
+    const LevelHit h = time_to_level(c, Method::kSs22, dp.time_step, dp.damping);
+    state.counters["estimate_cpu_s"] = best;
+    state.counters["products"] = double(dp.products);
+    state.counters["solve_cpu_s"] = h.cpu_seconds;
+    state.counters["iters"] = double(h.iteration);
+    state.counters["estimate_share"] = best / h.cpu_seconds;
+    state.counters["dt_us"] = dp.time_step * 1e6;
+    state.counters["eta"] = dp.damping;
+  }
+}
+#endif
 
 /// One evaluation at the reference solution û (the per-iteration breakdown: an NCG iteration is
 /// one K·d and one gradient+energy plus vector passes, an SS22 step one gradient+energy plus
 /// vector passes). Counter ms_per_eval: process CPU ms per call.
-enum class Eval { kGradientEnergy, kGradient, kProduct, kGradientEnergyProduct };
+/// kCurvature: dᵀK(u)d alone (Problem::hessian_curvature, the nonlinear-CG secant's first slope).
+enum class Eval { kGradientEnergy, kGradient, kProduct, kGradientEnergyProduct, kCurvature };
 
 void BM_Evaluation(benchmark::State& state, const std::string& material, Eval what) {
   Case& c = get_case(material);
@@ -208,8 +261,10 @@ void BM_Evaluation(benchmark::State& state, const std::string& material, Eval wh
       case Eval::kGradient: (void)p.gradient(u, g); break;
       case Eval::kProduct: (void)p.hessian_product(u, d, out); break;
       case Eval::kGradientEnergyProduct: (void)p.gradient_energy_product(u, d, g, e, out); break;
+      case Eval::kCurvature: (void)p.hessian_curvature(u, d, e); break;
     }
     benchmark::DoNotOptimize(g.data());
+    benchmark::DoNotOptimize(e);
     benchmark::DoNotOptimize(out.data());
     ++calls;
   }
@@ -275,6 +330,13 @@ const bool kRegistered = [] {
   add("BM_TimeToError/veronda-westmann/ncg-warm", "veronda-westmann", Method::kNcgWarm);
   add("BM_TimeToError/veronda-westmann/ss22", "veronda-westmann", Method::kSs22);
   add("BM_TimeToError/veronda-westmann/ss22-energy4", "veronda-westmann", Method::kSs22Energy4);
+#ifndef INCISE_TTE_BASELINE
+  for (const std::string m : {"linear", "linear-assembled", "veronda-westmann"})
+    benchmark::RegisterBenchmark(("BM_EstimateShare/" + m).c_str(),
+                                 [m](benchmark::State& s) { BM_EstimateShare(s, m); })
+        ->Iterations(1)
+        ->Unit(benchmark::kMillisecond);
+#endif
   auto per_iteration = [](const std::string& name, const std::string& m, Method k) {
     benchmark::RegisterBenchmark(name.c_str(),
                                  [m, k](benchmark::State& s) { BM_PerIteration(s, m, k); })
@@ -300,6 +362,7 @@ const bool kRegistered = [] {
     eval("BM_Evaluation/" + m + "/gradient", m, Eval::kGradient);
     eval("BM_Evaluation/" + m + "/product", m, Eval::kProduct);
     eval("BM_Evaluation/" + m + "/gradient_energy_product", m, Eval::kGradientEnergyProduct);
+    eval("BM_Evaluation/" + m + "/curvature", m, Eval::kCurvature);
   }
   return true;
 }();

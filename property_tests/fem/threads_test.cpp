@@ -56,8 +56,9 @@ bool same_bits(double a, double b) {
 
 /// Everything one problem computes at (u, d) with the thread count in force.
 struct Results {
-  double energy = 0, fused_energy = 0, gep_energy = 0;
+  double energy = 0, fused_energy = 0, gep_energy = 0, curvature = 0;
   VecX gradient, fused_gradient, product, gep_gradient, gep_product, diagonal, matrix;
+  VecX assembled_product;  ///< by ElasticProblem::assembled_hessian (K(u) assembled once)
 };
 
 Results evaluate(ElasticProblem& p, const VecX& u, const VecX& d) {
@@ -68,7 +69,11 @@ Results evaluate(ElasticProblem& p, const VecX& u, const VecX& d) {
   EXPECT_EQ(p.hessian_product(u, d, r.product), EvalStatus::kOk);
   EXPECT_EQ(p.gradient_energy_product(u, d, r.gep_gradient, r.gep_energy, r.gep_product),
             EvalStatus::kOk);
+  EXPECT_EQ(p.hessian_curvature(u, d, r.curvature), EvalStatus::kOk);
   EXPECT_TRUE(p.hessian_diagonal(u, r.diagonal));
+  const auto assembled = p.assembled_hessian(u);
+  EXPECT_TRUE(assembled);
+  if (assembled) EXPECT_EQ(assembled(d, r.assembled_product), EvalStatus::kOk);
   EXPECT_EQ(p.assemble_tangent(u, FixedDofTreatment::kKeep), EvalStatus::kOk);
   const auto& k = p.tangent_matrix();
   r.matrix = Eigen::Map<const VecX>(k.valuePtr(), k.nonZeros());
@@ -80,6 +85,8 @@ void expect_same_bits(const Results& r, const Results& ref) {
   EXPECT_TRUE(same_bits(r.energy, ref.energy));
   EXPECT_TRUE(same_bits(r.fused_energy, ref.fused_energy));
   EXPECT_TRUE(same_bits(r.gep_energy, ref.gep_energy));
+  EXPECT_TRUE(same_bits(r.curvature, ref.curvature));
+  EXPECT_TRUE(same_bits(r.assembled_product, ref.assembled_product));
   EXPECT_TRUE(same_bits(r.gradient, ref.gradient));
   EXPECT_TRUE(same_bits(r.fused_gradient, ref.fused_gradient));
   EXPECT_TRUE(same_bits(r.product, ref.product));
@@ -169,7 +176,8 @@ INSTANTIATE_TEST_SUITE_P(AllRegistered, ThreadsProperty,
 
 /// The AVX variant of the element loops (KernelIsa::kAvx: the same Lanes4 operations on 256-bit
 /// registers, no FMA) gives every result bitwise equal to the baseline (SSE2) variant: energy,
-/// gradients, K·d, the fused sweeps, diagonal and assembled tangent at a random deformation, on
+/// gradients, K·d, the fused sweeps, the curvature dᵀKd, diagonal, assembled tangent and the
+/// product of assembled_hessian at a random deformation, on
 /// 1 and 2 threads; and the same status and bits where every element is inverted (the per-element
 /// double fallback inside the AVX variant). Skipped on builds or CPUs without the AVX variant.
 class ElasticProblemIsa : public ::testing::TestWithParam<std::string> {};

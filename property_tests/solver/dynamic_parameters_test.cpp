@@ -62,9 +62,10 @@ class EstimateCost : public ::testing::TestWithParam<std::string> {};
 
 // Issue 19's budget: the estimate costs ≤ 10 % of the solve it serves, counted in K-products
 // against time steps (one gradient evaluation each), to ‖r‖ ≤ 1e-6‖f‖. The counted-flop share
-// is printed, not asserted: a Veronda–Westmann K-product costs ≈ 1.4× a gradient in flops, so
-// its share is higher (docs/solvers.md: 10.1 %). The inverse iteration it replaces took 52,859
-// and 61,113 inner CG steps.
+// is printed, not asserted: with K(u) assembled once (LanczosOptions::assembled, the default) a
+// product costs 18 flops per node block, far less than a time step (docs/solvers.md, fifth pass:
+// 2.8 % and 1.1 %; matrix-free, a Veronda–Westmann K-product costs ≈ 1.4× a gradient and the
+// share was 10.1 %). The inverse iteration it replaces took 52,859 and 61,113 inner CG steps.
 TEST_P(EstimateCost, AtMostTenPercentOfTheSolve_Sec4_1) {
   auto p = cylinder(GetParam());
   VecX u = VecX::Zero(p->size());

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <sstream>
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
@@ -586,6 +587,85 @@ __attribute__((target("avx"))) void block_gather_avx(Index first, Index last, co
 }
 #endif
 
+/// Node rows [first, last) of K·d from full 3×3 node blocks stored as rows of the gather
+/// (block t: v[3j + i] = K(3a + i, 3b + j), a = node[t]): the scalar gather of
+/// hessian_product().
+void block_gather(Index first, Index last, const int* start, const int* node, const double* val,
+                  const double* src, double* dst) {
+  for (Index b = first; b < last; ++b) {
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+    for (int t = start[b]; t < start[b + 1]; ++t) {
+      const double* x = src + 3 * node[t];
+      const double* v = val + 9 * t;
+      s0 += v[0] * x[0] + v[1] * x[1] + v[2] * x[2];
+      s1 += v[3] * x[0] + v[4] * x[1] + v[5] * x[2];
+      s2 += v[6] * x[0] + v[7] * x[1] + v[8] * x[2];
+    }
+    dst[3 * b] = s0;
+    dst[3 * b + 1] = s1;
+    dst[3 * b + 2] = s2;
+  }
+}
+
+/// K·d for all `nodes` node rows from full node blocks (val: rows of the gather, val4: padded
+/// columns for the AVX gather when `avx`), in chunks of 512 nodes on `threads` threads: every
+/// entry summed in one fixed order whatever the thread count.
+void full_block_product(int threads, bool avx, Index nodes, const int* start, const int* node,
+                        const double* val, const double* val4, const double* src, double* dst) {
+  constexpr Index kNodes = 512;
+  const Index chunks = (nodes + kNodes - 1) / kNodes;
+  std::atomic<Index> next{0};
+  run_parallel(threads, [&] {
+    for (Index k = next++; k < chunks; k = next++) {
+      const Index first = k * kNodes, last = std::min(nodes, (k + 1) * kNodes);
+#if INCISE_AVX_KERNELS
+      if (avx) {
+        block_gather_avx(first, last, start, node, val4, src, dst);
+        continue;
+      }
+#endif
+      block_gather(first, last, start, node, val, src, dst);
+    }
+  });
+  (void)avx;
+  (void)val4;
+}
+
+/// The compressed-column K of build_pattern() (every column 3b + j of node b holds whole node
+/// triples 3a + i of its neighbours a, ascending) as full 3×3 node blocks: node b's blocks are
+/// start[b] .. start[b + 1] − 1, block t couples node[t].
+void node_block_pattern(const Eigen::SparseMatrix<double>& k, std::size_t nodes,
+                        std::vector<int>& start, std::vector<int>& node) {
+  const int* outer = k.outerIndexPtr();
+  const int* inner = k.innerIndexPtr();
+  start.assign(nodes + 1, 0);
+  for (std::size_t b = 0; b < nodes; ++b)
+    start[b + 1] = start[b] + (outer[3 * b + 1] - outer[3 * b]) / 3;
+  node.resize(static_cast<std::size_t>(start[nodes]));
+  for (std::size_t b = 0; b < nodes; ++b)
+    for (int t = 0; t < start[b + 1] - start[b]; ++t)
+      node[static_cast<std::size_t>(start[b] + t)] = inner[outer[3 * b] + 3 * t] / 3;
+}
+
+/// Block t = k-th block of node b of that K: stored at dst[3j + i] (rows of the gather) or, when
+/// `padded`, at dst[4i + j] (columns for the AVX gather; dst[4i + 3] left as it was).
+void copy_node_block(const Eigen::SparseMatrix<double>& k, std::size_t b, int t, double* dst,
+                     bool padded) {
+  const int* outer = k.outerIndexPtr();
+  const double* val = k.valuePtr();
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i)
+      dst[padded ? 4 * i + j : 3 * j + i] =
+          val[outer[3 * b + static_cast<std::size_t>(j)] + 3 * t + i];
+}
+
+/// K(u) of assembled_hessian() in full node blocks: the layout of the ISA's gather.
+struct FrozenBlocks {
+  std::vector<int> start, node;
+  std::vector<double> value;  // 9 per block (rows of the gather) or 12 (padded, AVX)
+  bool avx = false;
+};
+
 }  // namespace
 
 bool kernel_isa_available(KernelIsa isa) {
@@ -802,14 +882,9 @@ EvalStatus ElasticProblem::assemble_product_matrix(const VecX& u) {
   // holds K(3a + i, 3b + j) at value index outer[3b + j] + 3k + i.
   const int* outer = k_.outerIndexPtr();
   const int* inner = k_.innerIndexPtr();
-  const double* val = k_.valuePtr();
   const auto nodes = static_cast<std::size_t>(num_nodes());
-  // Stored at dst[3j + i] (rows of the gather), or at dst[4i + j] (padded columns, AVX).
   const auto copy_block = [&](std::size_t b, int k, double* dst, bool padded) {
-    for (int j = 0; j < 3; ++j)
-      for (int i = 0; i < 3; ++i)
-        dst[padded ? 4 * i + j : 3 * j + i] =
-            val[outer[3 * b + static_cast<std::size_t>(j)] + 3 * k + i];
+    copy_node_block(k_, b, k, dst, padded);
   };
   if (need_half) {
     // Half storage: node b's diagonal block first, then its blocks with neighbours a > b.
@@ -833,16 +908,8 @@ EvalStatus ElasticProblem::assemble_product_matrix(const VecX& u) {
       }
     }
   }
-  if ((need_full || need_avx) && block_start_.empty()) {
-    block_start_.assign(nodes + 1, 0);
-    for (std::size_t b = 0; b < nodes; ++b)
-      block_start_[b + 1] = block_start_[b] + (outer[3 * b + 1] - outer[3 * b]) / 3;
-    block_node_.resize(static_cast<std::size_t>(block_start_[nodes]));
-    for (std::size_t b = 0; b < nodes; ++b)
-      for (int k = 0; k < block_start_[b + 1] - block_start_[b]; ++k)
-        block_node_[static_cast<std::size_t>(block_start_[b] + k)] =
-            inner[outer[3 * b] + 3 * k] / 3;
-  }
+  if ((need_full || need_avx) && block_start_.empty())
+    node_block_pattern(k_, nodes, block_start_, block_node_);
   if (need_full || need_avx) {
     std::vector<double>& dst = need_avx ? block_value4_ : block_value_;
     const std::size_t stride = need_avx ? 12 : 9;
@@ -907,38 +974,8 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
     }
     // K is symmetric: (K·d)_(3b+j) = Σ over the blocks of node b of Σ_i K(3a + i, 3b + j) d_(3a+i),
     // a gather per node, each entry summed in one fixed order whatever the thread count.
-    const int* start = block_start_.data();
-    const int* node = block_node_.data();
-    const double* val = block_value_.data();
-    const double* val4 = block_value4_.data();
-    constexpr Index kNodes = 512;
-    const Index chunks = (nodes + kNodes - 1) / kNodes;
-    std::atomic<Index> next{0};
-    run_parallel(threads_, [&] {
-      for (Index k = next++; k < chunks; k = next++) {
-#if INCISE_AVX_KERNELS
-        if (kernel == ProductKernel::kFullAvx) {
-          block_gather_avx(k * kNodes, std::min(nodes, (k + 1) * kNodes), start, node, val4, src,
-                           dst);
-          continue;
-        }
-#endif
-        for (Index b = k * kNodes, end = std::min(nodes, b + kNodes); b < end; ++b) {
-          double s0 = 0.0, s1 = 0.0, s2 = 0.0;
-          for (int t = start[b]; t < start[b + 1]; ++t) {
-            const double* x = src + 3 * node[t];
-            const double* v = val + 9 * t;
-            s0 += v[0] * x[0] + v[1] * x[1] + v[2] * x[2];
-            s1 += v[3] * x[0] + v[4] * x[1] + v[5] * x[2];
-            s2 += v[6] * x[0] + v[7] * x[1] + v[8] * x[2];
-          }
-          dst[3 * b] = s0;
-          dst[3 * b + 1] = s1;
-          dst[3 * b + 2] = s2;
-        }
-      }
-    });
-    (void)val4;
+    full_block_product(threads_, kernel == ProductKernel::kFullAvx, nodes, block_start_.data(),
+                       block_node_.data(), block_value_.data(), block_value4_.data(), src, dst);
     flops_ += 18 * static_cast<std::uint64_t>(block_node_.size());
     return out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
   }
@@ -963,6 +1000,63 @@ EvalStatus ElasticProblem::hessian_product(const VecX& u, const VecX& d, VecX& o
     return EvalStatus::kInverted;
   }
   return out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
+}
+
+EvalStatus ElasticProblem::hessian_curvature(const VecX& u, const VecX& d, double& curvature) {
+  INCISE_CHECK(u.size() == size() && d.size() == size(), "hessian_curvature: wrong sizes");
+  if (assembled_product_) return Problem::hessian_curvature(u, d, curvature);
+  const material::Lame p = material_.lame();
+  double sum = 0.0;
+  const bool ok = material::visit_model(material_.model_index(), [&](auto m) {
+    return sweep(false, sum, [&](const auto& el, auto& w, double& part) INCISE_LAMBDA_INLINE {
+      using T = typename std::decay_t<decltype(el)>::Scalar;
+      if constexpr (!decltype(m)::kLinearGeometry) el.gather(u.data(), w.x);
+      el.gather(d.data(), w.d);
+      if (!TetKernel<decltype(m), T>::product(p, el.z_inv(), el.b(), w.x, w.d, w.dq)) return false;
+      T c(0);
+      for (int a = 0; a < 4; ++a)
+        for (int i = 0; i < 3; ++i) c += w.d(i, a) * w.dq(i, a);
+      part += el.sum(c);
+      return true;
+    });
+  });
+  flops_ += (element_flops_.product + 24) * static_cast<std::uint64_t>(num_elements());
+  if (!ok) {
+    curvature = kInf;
+    return EvalStatus::kInverted;
+  }
+  curvature = sum;
+  return std::isfinite(sum) ? EvalStatus::kOk : EvalStatus::kNonFinite;
+}
+
+std::function<EvalStatus(const VecX&, VecX&)> ElasticProblem::assembled_hessian(const VecX& u) {
+  INCISE_CHECK(u.size() == size(), "assembled_hessian: u has the wrong size");
+  if (assembled_product_) {  // K is assembled already (linear geometry: K does not depend on u)
+    return [this, u](const VecX& d, VecX& out) { return hessian_product(u, d, out); };
+  }
+  if (assemble_tangent(u, FixedDofTreatment::kKeep) != EvalStatus::kOk) return {};
+  auto blocks = std::make_shared<FrozenBlocks>();
+  const auto nodes = static_cast<std::size_t>(num_nodes());
+  node_block_pattern(k_, nodes, blocks->start, blocks->node);
+#if INCISE_AVX_KERNELS
+  blocks->avx = isa_ == KernelIsa::kAvx;
+#endif
+  const std::size_t stride = blocks->avx ? 12 : 9;
+  blocks->value.assign(stride * blocks->node.size(), 0.0);
+  for (std::size_t b = 0; b < nodes; ++b)
+    for (int t = 0; t < blocks->start[b + 1] - blocks->start[b]; ++t)
+      copy_node_block(
+          k_, b, t, blocks->value.data() + stride * static_cast<std::size_t>(blocks->start[b] + t),
+          blocks->avx);
+  return [this, blocks](const VecX& d, VecX& out) {
+    INCISE_CHECK(d.size() == size(), "assembled_hessian: d has the wrong size");
+    out.resize(size());
+    const double* v = blocks->value.data();
+    full_block_product(threads_, blocks->avx, num_nodes(), blocks->start.data(),
+                       blocks->node.data(), v, v, d.data(), out.data());
+    flops_ += 18 * static_cast<std::uint64_t>(blocks->node.size());
+    return out.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
+  };
 }
 
 template <class Sink>

@@ -701,6 +701,19 @@ BuiltScene build_scene(const SceneSpec& spec) {
                                  "matrix-free)"));
       }
     }
+    if (method == Method::kDynamicSS22 && !b.problem->assembled_product()) {
+      // The Lanczos estimate of Δt and η multiplies by K(u) assembled once
+      // (solver::LanczosOptions::assembled) when K in node blocks fits the memory budget beside
+      // mesh and problem (with the assembled K·d above it uses that K).
+      const std::uint64_t others =
+          mesh_bytes(static_cast<std::uint64_t>(n),
+                     4 * static_cast<std::uint64_t>(b.mesh.num_cells()), 0, 0) +
+          problem_bytes(static_cast<std::uint64_t>(n),
+                        static_cast<std::uint64_t>(b.mesh.num_cells()));
+      b.lanczos_assembled = others + assembled_product_bytes(b.mesh) <= memory_budget_bytes(spec);
+    } else {
+      b.lanczos_assembled = b.problem->assembled_product();
+    }
     b.problem->fix_nodes(b.fixed_nodes);
     for (Index i = 0; i < n; ++i) {
       const Vec3 f = b.external_force.segment<3>(3 * i);

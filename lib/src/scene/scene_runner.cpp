@@ -505,10 +505,13 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
     Timer t;
     solver::DynamicParameterOptions o;
     o.lanczos = lanczos;
+    o.lanczos.assembled = lanczos.assembled && scene.lanczos_assembled;
     o.time_step_safety = kTimeStepSafety;
     est = solver::estimate_dynamic_parameters(p, u, o);
     scene.record("lambda_1 and lambda_max of M^-1 K by Lanczos (" + std::to_string(est.products) +
-                     " products K.q, " + solver::to_string(est.status) + ")",
+                     " products K.q" +
+                     (o.lanczos.assembled ? " by K(u) assembled once" : " matrix-free") + ", " +
+                     solver::to_string(est.status) + ")",
                  t.seconds(), 5 * static_cast<std::size_t>(p.size()) * sizeof(double),
                  static_cast<std::int64_t>(est.flops));
     if (est.status != solver::StopReason::kConverged) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <random>
 #include <string>
@@ -160,49 +161,100 @@ Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> scaled_tridiagonal_eigen(const Ve
   return es;
 }
 
-/// Extreme eigenvalues of the symmetric tridiagonal matrix (diag, sub); false when the QR
-/// iteration did not converge. `all` receives every eigenvalue, ascending (unscaled).
-bool tridiagonal_extremes(const std::vector<double>& diag, const std::vector<double>& sub,
-                          double& lo, double& hi, VecX& all) {
-  const auto k = static_cast<Eigen::Index>(diag.size());
-  if (k == 1) {
-    lo = hi = diag[0];
-    all = VecX::Constant(1, diag[0]);
-    return true;
+/// Number of eigenvalues below x of the symmetric tridiagonal matrix with diagonal a and
+/// squared off-diagonal e (e[i] = sub[i]²), k = size of a: the negative pivots of the LDLᵀ
+/// factorization of T − xI (Sturm count), a pivot of magnitude < pivmin replaced by −pivmin as
+/// in LAPACK's dlaebz so that the count stays monotone in x.
+int sturm_count(const std::vector<double>& a, const std::vector<double>& e, double x,
+                double pivmin) {
+  int count = 0;
+  double d = a[0] - x;
+  if (std::abs(d) < pivmin) d = -pivmin;
+  count += d < 0.0;
+  for (std::size_t i = 1; i < a.size(); ++i) {
+    d = a[i] - x - e[i - 1] / d;
+    if (std::abs(d) < pivmin) d = -pivmin;
+    count += d < 0.0;
   }
-  double scale = 1.0;
-  const auto es = scaled_tridiagonal_eigen(Eigen::Map<const VecX>(diag.data(), k),
-                                           Eigen::Map<const VecX>(sub.data(), k - 1),
-                                           Eigen::EigenvaluesOnly, scale);
-  if (es.info() != Eigen::Success) return false;
-  all = scale * es.eigenvalues();
-  lo = all.minCoeff();
-  hi = all.maxCoeff();
-  return true;
+  return count;
+}
+
+/// Eigenvalue number `index` (0-based, ascending) of the symmetric tridiagonal (a, e as in
+/// sturm_count) by bisection on the Sturm count, from the bracket guess [lo, hi] (widened until
+/// it holds the eigenvalue: count(lo) ≤ index < count(hi)) down to a width of `abstol` —
+/// O(k) per halving where a QR of all eigenvalues is O(k²) (issue 19: the QR on every Lanczos
+/// step was ≈ 40 % of the estimate's CPU on the Veronda–Westmann cube).
+double tridiagonal_eigenvalue(const std::vector<double>& a, const std::vector<double>& e, int index,
+                              double lo, double hi, double abstol, double pivmin) {
+  double width = std::max(hi - lo, abstol);
+  while (sturm_count(a, e, lo, pivmin) > index) {
+    lo -= width;
+    width *= 4.0;
+  }
+  width = std::max(hi - lo, abstol);
+  while (sturm_count(a, e, hi, pivmin) <= index) {
+    hi += width;
+    width *= 4.0;
+  }
+  while (hi - lo > abstol) {
+    const double mid = 0.5 * (lo + hi);
+    if (mid <= lo || mid >= hi) break;  // no double strictly inside
+    (sturm_count(a, e, mid, pivmin) > index ? hi : lo) = mid;
+  }
+  return 0.5 * (lo + hi);
 }
 
 /// s_k², the squared last entry of the unit eigenvector of the smallest eigenvalue θ₁ of an
-/// unreduced symmetric tridiagonal T_k, from the eigenvalues θ of T_k and μ of its leading
-/// (k−1)×(k−1) block (both ascending): s_k² = Π_{i<k}(θ₁ − μ_i) / Π_{i>1}(θ₁ − θ_i) (Parlett,
-/// "The Symmetric Eigenvalue Problem", §7.9), taken as Π (μ_i − θ₁)/(θ_{i+1} − θ₁): each factor
-/// lies in [0, 1] by the interlacing θ₁ ≤ μ_i ≤ θ_{i+1}, so nothing overflows. O(k) where the
-/// eigenvector solve is O(k³). NaN when a factor leaves [0, 1] by more than round-off
-/// (the caller then takes the eigenvector solve).
-double last_entry_squared_smallest(const VecX& theta, const VecX& mu) {
-  if (theta.size() == 1) return 1.0;
-  if (mu.size() + 1 != theta.size()) return std::numeric_limits<double>::quiet_NaN();
-  double s2 = 1.0;
-  for (Eigen::Index i = 0; i < mu.size(); ++i) {
-    const double num = mu[i] - theta[0], den = theta[i + 1] - theta[0];
-    if (!(den > 0.0)) return std::numeric_limits<double>::quiet_NaN();
-    const double f = std::max(num, 0.0) / den;  // num < 0: θ₁ and μ₁ equal up to round-off
-    if (!(f <= 1.0 + 1e-8)) return std::numeric_limits<double>::quiet_NaN();
-    s2 *= std::min(f, 1.0);
+/// unreduced symmetric tridiagonal T_k (a, e as in sturm_count), in O(k): with the pivots d_j
+/// of T − θ₁I = LDLᵀ, det(T_j − xI) = d_1⋯d_j, and for an eigenvalue θ the classical
+/// s_k² = det(θI − T_{k−1}) / (d/dx det(xI − T_k))(θ) (Parlett, "The Symmetric Eigenvalue
+/// Problem", §7.9) reduces, as d_k(θ) = 0, to s_k² = −1/d_k′(θ), with d_1′ = −1 and
+/// d_j′ = −1 + e_{j−1} d′_{j−1}/d²_{j−1}. Below the other eigenvalues of every leading block
+/// (interlacing) the pivots d_1 … d_{k−1} are positive and d_j′ ≤ −1, so s_k² ∈ (0, 1]; NaN
+/// when that does not hold (the caller then takes the eigenvector solve).
+double last_entry_squared_smallest(const std::vector<double>& a, const std::vector<double>& e,
+                                   double theta) {
+  const std::size_t k = a.size();
+  if (k == 1) return 1.0;
+  double d = a[0] - theta, dp = -1.0;
+  for (std::size_t i = 1; i < k; ++i) {
+    if (!(d > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+    const double r = e[i - 1] / d;
+    dp = -1.0 + r * dp / d;
+    d = a[i] - theta - r;
   }
-  return s2;
+  const double s2 = -1.0 / dp;
+  return s2 >= 0.0 && s2 <= 1.0 ? s2 : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace
+
+TridiagonalExtremes tridiagonal_extremes(const VecX& diag, const VecX& sub) {
+  const Eigen::Index k = diag.size();
+  INCISE_CHECK_PARAM(k >= 1 && sub.size() == k - 1,
+                     "tridiagonal_extremes: need k >= 1 diagonal and k - 1 off-diagonal entries");
+  INCISE_CHECK_PARAM(diag.allFinite() && sub.allFinite(),
+                     "tridiagonal_extremes: entries must be finite");
+  std::vector<double> a(diag.data(), diag.data() + k), e(static_cast<std::size_t>(k - 1));
+  double glo = std::numeric_limits<double>::infinity(), ghi = -glo, tnorm = 0.0, max_e = 0.0;
+  for (Eigen::Index i = 0; i < k; ++i) {
+    const double r = (i > 0 ? std::abs(sub[i - 1]) : 0.0) + (i + 1 < k ? std::abs(sub[i]) : 0.0);
+    glo = std::min(glo, diag[i] - r);
+    ghi = std::max(ghi, diag[i] + r);
+    tnorm = std::max(tnorm, std::abs(diag[i]) + r);
+    if (i + 1 < k) {
+      e[static_cast<std::size_t>(i)] = sub[i] * sub[i];
+      max_e = std::max(max_e, e[static_cast<std::size_t>(i)]);
+    }
+  }
+  TridiagonalExtremes out;
+  if (tnorm == 0.0) return out;  // the zero matrix
+  const double abstol = 2.0 * std::numeric_limits<double>::epsilon() * tnorm;
+  const double pivmin = std::numeric_limits<double>::min() * std::max(1.0, max_e);
+  out.smallest = tridiagonal_eigenvalue(a, e, 0, glo, ghi, abstol, pivmin);
+  out.largest = tridiagonal_eigenvalue(a, e, static_cast<int>(k - 1), glo, ghi, abstol, pivmin);
+  return out;
+}
 
 SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& start,
                                   const LanczosOptions& options) {
@@ -233,12 +285,19 @@ SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& s
   q /= mnorm(q);
   VecX q_prev = VecX::Zero(q.size()), w;
   double beta_prev = 0.0;
-  std::vector<double> diag, sub;
-  VecX theta, theta_prev;  // eigenvalues of T_k and of T_{k−1}, ascending
-  double lo_prev = 0.0, hi_prev = 0.0;
-  long calm = 0;  // consecutive steps with both changes ≤ tolerance
+  // T_k: diagonal, off-diagonal and its squares (the Sturm counts'); the extreme Ritz values by
+  // bisection from brackets at the previous ones (θ₁ decreases and θ_k increases with k, by
+  // interlacing), to the accuracy of a QR of T_k (≈ ε‖T_k‖).
+  std::vector<double> diag, sub, sub2;
+  double lo_prev = 0.0, hi_prev = 0.0, lo_step = 0.0, hi_step = 0.0;
+  double tnorm = 0.0, max_sub2 = 0.0;  // Gershgorin bound of ‖T_k‖; largest β²
+  long calm = 0;                       // consecutive steps with both changes ≤ tolerance
+  // K(u) assembled once when the problem offers it (an empty function otherwise, or when an
+  // element is inverted at u: then the matrix-free product reports it on the first step).
+  const std::function<EvalStatus(const VecX&, VecX&)> product =
+      options.assembled ? problem.assembled_hessian(u) : nullptr;
   for (long j = 0; j < options.max_steps; ++j) {
-    const EvalStatus st = problem.hessian_product(u, q, w);
+    const EvalStatus st = product ? product(q, w) : problem.hessian_product(u, q, w);
     if (st != EvalStatus::kOk || !w.allFinite()) {
       est.status = failure_reason(st);
       break;
@@ -257,11 +316,16 @@ SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& s
     const double beta = mnorm(w);
     meter.add(14 * nn);
     diag.push_back(alpha);
-    double lo = 0.0, hi = 0.0;
-    theta_prev.swap(theta);
-    if (!tridiagonal_extremes(diag, sub, lo, hi, theta)) {
-      est.status = StopReason::kNonFinite;
-      break;
+    tnorm = std::max(tnorm, alpha + beta_prev + (std::isfinite(beta) ? beta : 0.0));
+    double lo = alpha, hi = alpha;
+    if (j > 0) {
+      const double abstol = 2.0 * std::numeric_limits<double>::epsilon() * tnorm;
+      const double pivmin = std::numeric_limits<double>::min() * std::max(1.0, max_sub2);
+      const int k = static_cast<int>(diag.size());
+      const double lo_width = std::max({2.0 * lo_step, 16.0 * abstol, j == 1 ? beta_prev : 0.0});
+      const double hi_width = std::max({2.0 * hi_step, 16.0 * abstol, j == 1 ? beta_prev : 0.0});
+      lo = tridiagonal_eigenvalue(diag, sub2, 0, lo_prev - lo_width, lo_prev, abstol, pivmin);
+      hi = tridiagonal_eigenvalue(diag, sub2, k - 1, hi_prev, hi_prev + hi_width, abstol, pivmin);
     }
     est.steps = j + 1;
     est.smallest = lo;
@@ -272,6 +336,8 @@ SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& s
       const bool still =
           est.smallest_change <= options.tolerance && est.largest_change <= options.tolerance;
       calm = still ? calm + 1 : 0;
+      lo_step = std::abs(lo - lo_prev);
+      hi_step = std::abs(hi - hi_prev);
     }
     lo_prev = lo;
     hi_prev = hi;
@@ -285,11 +351,11 @@ SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& s
       // the Ritz residual ‖M⁻¹PKPy − θ₁y‖_M = β_k|s_k| (s: T's eigenvector of θ₁, s_k its
       // last entry) bounds the distance of θ₁ to the nearest eigenvalue (Parlett, "The
       // Symmetric Eigenvalue Problem", Thm. 13.1.1 with §13.2).
-      // s_k from the eigenvalues of T_k and T_{k−1} (O(k); issue 19: an eigenvector solve of
-      // T_k on every calm step was ≈ 2/3 of the estimate's CPU on the Veronda–Westmann cube),
-      // the eigenvector solve only when that formula is not usable.
+      // s_k from the LDLᵀ pivots of T_k − θ₁I (O(k); issue 19: an eigenvector solve of T_k on
+      // every calm step was ≈ 2/3 of the estimate's CPU on the Veronda–Westmann cube), the
+      // eigenvector solve only when that formula is not usable.
       double residual = std::numeric_limits<double>::infinity();
-      const double s2 = last_entry_squared_smallest(theta, theta_prev);
+      const double s2 = last_entry_squared_smallest(diag, sub2, lo);
       if (std::isfinite(s2)) {
         residual = beta * std::sqrt(s2);
       } else {
@@ -310,6 +376,8 @@ SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& s
         break;
       }
     }
+    sub2.push_back(beta * beta);
+    max_sub2 = std::max(max_sub2, beta * beta);
     sub.push_back(beta);
     q_prev.swap(q);
     q = w / beta;

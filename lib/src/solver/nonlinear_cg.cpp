@@ -111,18 +111,20 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
       }
     }
     if (need_product) {
+      // Only the slope c = (d, K d) is needed (a Newton trial's K·d comes with its gradient
+      // below): Problem::hessian_curvature, which an element problem sums without forming
+      // K·d (issue 19: no scatter, no global vector; the same c up to rounding).
       if (alpha != 0.0) xt = x + alpha * d;  // at α = 0 the product is taken at x itself
-      const EvalStatus st = problem.hessian_product(alpha != 0.0 ? xt : x, d, s);
+      const EvalStatus st = problem.hessian_curvature(alpha != 0.0 ? xt : x, d, c);
       ++res.evaluations;
-      meter.add(4 * nn);
-      if (st != EvalStatus::kOk || !s.allFinite()) {
+      meter.add(alpha != 0.0 ? 2 * nn : 0);
+      if (st != EvalStatus::kOk || !std::isfinite(c)) {
         if (j == 0) {
           res.status = failure_reason(st);
           return res;
         }
         break;
       }
-      c = d.dot(s);
     } else if (newton) {
       c = d.dot(s);  // K(x + α_j d)·d from the evaluation at α_j
       meter.add(2 * nn);

@@ -12,7 +12,9 @@
 
 #include <incise/core/types.hpp>
 
+#include <cmath>
 #include <cstdint>
+#include <functional>
 
 namespace incise {
 
@@ -60,6 +62,26 @@ class Problem {
     const EvalStatus s = gradient(u, g, &energy);
     if (s != EvalStatus::kOk) return s;
     return hessian_product(u, d, out);
+  }
+
+  /// c = dᵀK(u)d, the curvature of Π along d at u (the secant/Newton line search's first slope,
+  /// §4.4.2), when only that scalar is needed. The default takes hessian_product() and the dot
+  /// product; a problem may sum element curvatures d_eᵀK_e d_e without forming K·d (ElasticProblem
+  /// does): the same value up to rounding. On a non-ok status c is unspecified.
+  virtual EvalStatus hessian_curvature(const VecX& u, const VecX& d, double& curvature) {
+    VecX kd;
+    const EvalStatus s = hessian_product(u, d, kd);
+    if (s != EvalStatus::kOk) return s;
+    curvature = d.dot(kd);
+    return std::isfinite(curvature) ? EvalStatus::kOk : EvalStatus::kNonFinite;
+  }
+
+  /// d ↦ K(u)·d for many products at one fixed u (the Lanczos estimate of the automatic Δt and
+  /// η): a problem may assemble K(u) once and return its product, the same operator as
+  /// hessian_product(u, ·) up to rounding. Default: empty (not offered; callers then call
+  /// hessian_product). The function stays valid while the problem lives and is not changed.
+  virtual std::function<EvalStatus(const VecX& d, VecX& out)> assembled_hessian(const VecX& u) {
+    return {};
   }
 
   /// True when Π is exactly quadratic in u: K does not depend on u and ∇Π(u + αd) =

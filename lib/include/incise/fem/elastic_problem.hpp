@@ -25,6 +25,7 @@
 
 #include <Eigen/SparseCore>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace incise::fem {
@@ -100,8 +101,9 @@ const char* to_string(KernelIsa isa);
 /// Element loops visit the elements in an internal order (sorted by smallest node index, for
 /// memory locality) four at a time; element and node numbering seen by callers are the mesh's.
 ///
-/// Threads: every element loop (energy, gradient, fused gradient+energy, K·d, the fused
-/// gradient+energy+product, the diagonal, tangent assembly) runs on threads() threads
+/// Threads: every element loop (energy, gradient, fused gradient+energy, K·d, the curvature
+/// dᵀKd, the fused gradient+energy+product, the diagonal, tangent assembly) runs on threads()
+/// threads
 /// (core/parallel.hpp). The sweep order is cut into fixed chunks of kElementChunk elements;
 /// chunks sharing a node are coloured apart and run in colour order, so every nodal value and
 /// matrix entry is summed in one fixed order (colour, then sweep order inside the chunk), and the
@@ -148,6 +150,22 @@ class ElasticProblem : public Problem {
   /// out = K(u)·d matrix-free (element products (4.4), §3.1), not projected. On kInverted out
   /// is zero.
   [[nodiscard]] EvalStatus hessian_product(const VecX& u, const VecX& d, VecX& out) override;
+  /// c = dᵀK(u)d as Σ_τ d_τᵀ(K_τ d_τ) over the element products (4.4), summed like the energy
+  /// (per-chunk partial sums in chunk order: the same value for every thread count and
+  /// instruction set) — one sweep without the scatter of K·d and without a global vector; the
+  /// value of d·hessian_product(u, d) up to rounding. With set_assembled_product: that product
+  /// and the dot. kInverted when an element is inverted at u.
+  [[nodiscard]] EvalStatus hessian_curvature(const VecX& u, const VecX& d,
+                                             double& curvature) override;
+  /// K(u) assembled once (assemble_tangent, kKeep, then copied into 3×3 node blocks) and the
+  /// function d ↦ K(u)·d by the node-block gather of the assembled product (AVX or scalar by
+  /// kernel_isa(), on threads() threads; results independent of the thread count): the same
+  /// operator as hessian_product(u, ·) up to rounding (other summation order), 2 flops per
+  /// stored entry instead of an element sweep each. With set_assembled_product on, the product
+  /// of that K. Empty when an element is inverted at u. Overwrites tangent_matrix(); the
+  /// function holds its own copy of K (≈ 100 bytes per coupled node pair) and stays valid while
+  /// this problem lives.
+  std::function<EvalStatus(const VecX&, VecX&)> assembled_hessian(const VecX& u) override;
   /// One element sweep (TetKernel::forces_energy_and_product); results equal gradient() and
   /// hessian_product() evaluated separately.
   [[nodiscard]] EvalStatus gradient_energy_product(const VecX& u, const VecX& d, VecX& g,

@@ -73,6 +73,10 @@ struct BuiltScene {
   std::vector<NeedleUpdatePlan> needle_plan;
   /// True for a needle scene (2D or 3D).
   bool is_needle() const { return needle || needle3d; }
+  /// dynamic_parameters() may let the Lanczos estimate multiply by K(u) assembled once
+  /// (solver::LanczosOptions::assembled): the problem's assembled K·d is on, or — for a
+  /// "dynamic-ss22" scene — K in node blocks fits the memory budget beside mesh and problem.
+  bool lanczos_assembled = false;
   std::vector<BuildStep> steps;        ///< what was built, in order
   std::vector<std::string> not_built;  ///< parts skipped and why
 

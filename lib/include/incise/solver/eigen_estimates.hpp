@@ -61,6 +61,18 @@ struct [[nodiscard]] LanczosExtremes {
 /// when there are no steps or the coefficient lists differ in length.
 LanczosExtremes cg_lanczos_extremes(const CgCoefficients& coefficients);
 
+/// Smallest and largest eigenvalue of the symmetric tridiagonal matrix with diagonal `diag` and
+/// off-diagonal `sub` (diag.size() − 1 entries), by bisection on Sturm counts (O(k) per halving,
+/// no QR of all k eigenvalues) from Gershgorin brackets, each to an absolute accuracy of
+/// 2ε‖T‖ (‖T‖ bounded by Gershgorin: what a QR iteration reaches). The kernel of
+/// lanczos_spectrum()'s Ritz values. Throws ParameterError when diag is empty, sub has the wrong
+/// length or an entry is not finite.
+struct TridiagonalExtremes {
+  double smallest = 0.0;
+  double largest = 0.0;
+};
+TridiagonalExtremes tridiagonal_extremes(const VecX& diag, const VecX& sub);
+
 /// Options of lanczos_spectrum().
 struct LanczosOptions {
   long min_steps = 12;      ///< never stop before this many steps
@@ -72,6 +84,11 @@ struct LanczosOptions {
   double residual_tolerance = 0.5;
   double random_fraction = 0.1;  ///< M-norm share of a seeded random vector added to the start
   unsigned seed = 12345;         ///< seed of that random vector
+  /// Multiply by K(u) assembled once (Problem::assembled_hessian) when the problem offers it:
+  /// the same operator up to rounding at a fraction of a matrix-free product's cost (issue 19,
+  /// docs/solvers.md "Fifth pass"), at the memory of one assembled K. false: hessian_product
+  /// on every step.
+  bool assembled = true;
 };
 
 /// Extreme eigenvalue estimates of M⁻¹K(u) on the free DOFs from a Lanczos run.
@@ -92,7 +109,8 @@ struct [[nodiscard]] SpectrumEstimate
 /// orthogonality only duplicates converged Ritz values, not the extremes) on M⁻¹PK(u)P,
 /// starting from `start` (projected; typically the first acceleration M⁻¹P(f − ∇Π(u)), whose
 /// low modes dominate) plus random_fraction of a seeded random vector (for the top of the
-/// spectrum). One hessian_product per step; the Ritz values of the tridiagonal T_k are the
+/// spectrum). One product K(u)·q per step (by the assembled K when options.assembled and the
+/// problem offers it, else hessian_product); the Ritz values of the tridiagonal T_k are the
 /// estimates, θ₁ decreasing to λ₁ and θ_k increasing to λ_n. Replaces the power and the
 /// inverse iteration of largest_eigenvalue()/smallest_eigenvalue() at a fraction of their cost
 /// (docs/solvers.md). kConverged when both moved ≤ tolerance over the last `window` steps and
