@@ -73,7 +73,9 @@ Results evaluate(ElasticProblem& p, const VecX& u, const VecX& d) {
   EXPECT_TRUE(p.hessian_diagonal(u, r.diagonal));
   const auto assembled = p.assembled_hessian(u);
   EXPECT_TRUE(assembled);
-  if (assembled) EXPECT_EQ(assembled(d, r.assembled_product), EvalStatus::kOk);
+  if (assembled) {
+    EXPECT_EQ(assembled(d, r.assembled_product), EvalStatus::kOk);
+  }
   EXPECT_EQ(p.assemble_tangent(u, FixedDofTreatment::kKeep), EvalStatus::kOk);
   const auto& k = p.tangent_matrix();
   r.matrix = Eigen::Map<const VecX>(k.valuePtr(), k.nonZeros());

@@ -64,8 +64,10 @@ std::uint64_t problem_bytes(std::uint64_t points, std::uint64_t cells) {
 
 // Bytes of the assembled K of fem::ElasticProblem::set_assembled_product on `m`: per coupled
 // node pair (every node with itself, both orders of each distinct edge) the raw tangent's 9
-// values and row indices (both triangles stored) and the 3×3 block copy's 9 values and node
-// index; per element the 20-int scatter map; per DOF a column start and a diagonal index.
+// values and row indices (both triangles stored) and the block copy's values and node index —
+// 12 values, the AVX layout's padded 3×4 columns, the largest of the product's layouts (the
+// scalar layouts store 9); per element the 20-int scatter map; per DOF a column start and a
+// diagonal index.
 std::uint64_t assembled_product_bytes(const mesh::MeshData& m) {
   std::vector<std::uint64_t> edges;
   edges.reserve(6 * static_cast<std::size_t>(m.num_cells()));
@@ -81,7 +83,7 @@ std::uint64_t assembled_product_bytes(const mesh::MeshData& m) {
       static_cast<std::uint64_t>(std::unique(edges.begin(), edges.end()) - edges.begin());
   const auto points = static_cast<std::uint64_t>(m.num_points());
   const std::uint64_t pairs = points + 2 * distinct;
-  return pairs * (9 * (sizeof(double) + sizeof(int)) + 9 * sizeof(double) + sizeof(int)) +
+  return pairs * (9 * (sizeof(double) + sizeof(int)) + 12 * sizeof(double) + sizeof(int)) +
          static_cast<std::uint64_t>(m.num_cells()) * 20 * sizeof(int) +
          3 * points * 2 * sizeof(int);
 }
