@@ -265,8 +265,16 @@ TEST(SceneLanczos, AssembledKOnlyWithinTheMemoryBudget) {
     const scene::DynamicParameters dp = scene::dynamic_parameters(b, VecX::Zero(b.problem->size()));
     EXPECT_EQ(dp.status, solver::StopReason::kConverged);
     bool named = false;
-    for (const scene::BuildStep& s : b.steps)
-      named |= contains(s.what, assembled ? "by K(u) assembled once" : "matrix-free");
+    for (const scene::BuildStep& s : b.steps) {
+      if (!contains(s.what, "Lanczos") ||
+          !contains(s.what, assembled ? "by K(u) assembled once" : "matrix-free"))
+        continue;
+      named = true;
+      // The step's memory: 5 Lanczos vectors, plus the assembled K's estimate when assembled.
+      const std::size_t vectors = 5 * static_cast<std::size_t>(b.problem->size()) * sizeof(double);
+      EXPECT_EQ(s.bytes, vectors + (assembled ? b.lanczos_assembled_bytes : 0));
+      EXPECT_EQ(b.lanczos_assembled_bytes > 0, assembled);
+    }
     EXPECT_TRUE(named) << memory_mb << " MiB";
     return dp;
   };

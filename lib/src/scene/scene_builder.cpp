@@ -712,7 +712,9 @@ BuiltScene build_scene(const SceneSpec& spec) {
                      4 * static_cast<std::uint64_t>(b.mesh.num_cells()), 0, 0) +
           problem_bytes(static_cast<std::uint64_t>(n),
                         static_cast<std::uint64_t>(b.mesh.num_cells()));
-      b.lanczos_assembled = others + assembled_product_bytes(b.mesh) <= memory_budget_bytes(spec);
+      const std::uint64_t kbytes = assembled_product_bytes(b.mesh);
+      b.lanczos_assembled = others + kbytes <= memory_budget_bytes(spec);
+      b.lanczos_assembled_bytes = b.lanczos_assembled ? kbytes : 0;
     } else {
       b.lanczos_assembled = b.problem->assembled_product();
     }

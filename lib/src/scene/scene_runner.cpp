@@ -512,7 +512,9 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
                      " products K.q" +
                      (o.lanczos.assembled ? " by K(u) assembled once" : " matrix-free") + ", " +
                      solver::to_string(est.status) + ")",
-                 t.seconds(), 5 * static_cast<std::size_t>(p.size()) * sizeof(double),
+                 t.seconds(),
+                 5 * static_cast<std::size_t>(p.size()) * sizeof(double) +
+                     (o.lanczos.assembled ? scene.lanczos_assembled_bytes : 0),
                  static_cast<std::int64_t>(est.flops));
     if (est.status != solver::StopReason::kConverged) {
       dp.status = est.status;

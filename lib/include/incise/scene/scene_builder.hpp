@@ -77,6 +77,10 @@ struct BuiltScene {
   /// (solver::LanczosOptions::assembled): the problem's assembled K·d is on, or — for a
   /// "dynamic-ss22" scene — K in node blocks fits the memory budget beside mesh and problem.
   bool lanczos_assembled = false;
+  /// The estimated bytes of that assembled K when the estimate assembles its own (a
+  /// "dynamic-ss22" scene without the assembled K·d; 0 otherwise): counted in the Lanczos
+  /// build step's memory.
+  std::uint64_t lanczos_assembled_bytes = 0;
   std::vector<BuildStep> steps;        ///< what was built, in order
   std::vector<std::string> not_built;  ///< parts skipped and why
 
