@@ -429,96 +429,92 @@ TEST(ElasticProblem, AssembledProductEqualsMatrixFreeForLinearMaterial) {
 // once): for every registered material at a deformed state, the same K(u)·d as the matrix-free
 // product up to rounding (another summation order: 1e-13 of ‖K‖‖d‖), bitwise the same for every
 // thread count and instruction set, and frozen at u: later evaluations and assemblies of the
-// problem at another state do not change it. An inverted state gives no function.
-TEST(ElasticProblem, AssembledHessianIsTheTangentAtUFrozen) {
+// problem at another state do not change it. (An inverted state:
+// InvertedStateGivesNoAssembledHessianNorCurvature.)
+TEST_P(ProblemProperty, AssembledHessianIsTheTangentAtUFrozen) {
   INCISE_SEEDED_RNG(rng, 612);
-  for (const std::string& name : incise::material::registered_material_names()) {
-    SCOPED_TRACE(name);
-    const Material mat(name, incise::test::fem_test_parameters());
-    ElasticProblem p(small_box(incise::mesh::CubeSplit::kFive), mat);
-    p.fix_nodes({0, 5});
-    const VecX u = deformed_state(p, rng, 0.01);
-    const VecX d = random_vector(rng, p.size(), 1.0);
-    VecX kd, first, again;
-    ASSERT_EQ(p.hessian_product(u, d, kd), EvalStatus::kOk);
-    const auto product = p.assembled_hessian(u);
-    ASSERT_TRUE(product);
-    ASSERT_EQ(product(d, first), EvalStatus::kOk);
-    ASSERT_EQ(p.assemble_tangent(u, FixedDofTreatment::kKeep), EvalStatus::kOk);
-    const double scale = p.tangent_matrix().norm() * d.norm();
-    EXPECT_LE((kd - first).norm(), 1e-13 * scale);
-    // Frozen at u: another state's evaluations and tangent leave it unchanged.
-    const VecX u2 = deformed_state(p, rng, 0.01);
-    ASSERT_EQ(p.hessian_product(u2, d, again), EvalStatus::kOk);
-    ASSERT_EQ(p.assemble_tangent(u2, FixedDofTreatment::kKeep), EvalStatus::kOk);
-    if (!mat.linear_geometry()) {
-      ASSERT_GT((again - kd).norm(), 1e-8 * kd.norm());
-    }
-    ASSERT_EQ(product(d, again), EvalStatus::kOk);
-    EXPECT_EQ(again, first);
-    // Every thread count and instruction set: bitwise the same product.
-    for (const auto isa : {incise::fem::KernelIsa::kBaseline, incise::fem::KernelIsa::kAvx}) {
-      if (!incise::fem::kernel_isa_available(isa)) continue;
-      p.set_kernel_isa(isa);
-      for (const int t : {1, 3}) {
-        SCOPED_TRACE(std::string(incise::fem::to_string(isa)) + " threads " + std::to_string(t));
-        p.set_threads(t);
-        const auto other = p.assembled_hessian(u);
-        ASSERT_TRUE(other);
-        ASSERT_EQ(other(d, again), EvalStatus::kOk);
-        EXPECT_EQ(again, first);
-      }
-    }
-    p.set_kernel_isa(incise::fem::best_kernel_isa());
-    p.set_threads(1);
-    // The linear model with set_assembled_product: the product of that K.
-    if (mat.linear_geometry()) {
-      p.set_assembled_product(true);
-      ASSERT_EQ(p.hessian_product(u, d, kd), EvalStatus::kOk);
-      const auto assembled = p.assembled_hessian(u);
-      ASSERT_TRUE(assembled);
-      ASSERT_EQ(assembled(d, again), EvalStatus::kOk);
-      EXPECT_EQ(again, kd);
+  const Material mat = material();
+  ElasticProblem p(small_box(incise::mesh::CubeSplit::kFive), mat);
+  p.fix_nodes({0, 5});
+  const VecX u = deformed_state(p, rng, 0.01);
+  const VecX d = random_vector(rng, p.size(), 1.0);
+  VecX kd, first, again;
+  ASSERT_EQ(p.hessian_product(u, d, kd), EvalStatus::kOk);
+  const auto product = p.assembled_hessian(u);
+  ASSERT_TRUE(product);
+  ASSERT_EQ(product(d, first), EvalStatus::kOk);
+  ASSERT_EQ(p.assemble_tangent(u, FixedDofTreatment::kKeep), EvalStatus::kOk);
+  const double scale = p.tangent_matrix().norm() * d.norm();
+  EXPECT_LE((kd - first).norm(), 1e-13 * scale);
+  // Frozen at u: another state's evaluations and tangent leave it unchanged.
+  const VecX u2 = deformed_state(p, rng, 0.01);
+  ASSERT_EQ(p.hessian_product(u2, d, again), EvalStatus::kOk);
+  ASSERT_EQ(p.assemble_tangent(u2, FixedDofTreatment::kKeep), EvalStatus::kOk);
+  if (!mat.linear_geometry()) {
+    ASSERT_GT((again - kd).norm(), 1e-8 * kd.norm());
+  }
+  ASSERT_EQ(product(d, again), EvalStatus::kOk);
+  EXPECT_EQ(again, first);
+  // Every thread count and instruction set: bitwise the same product.
+  for (const auto isa : {incise::fem::KernelIsa::kBaseline, incise::fem::KernelIsa::kAvx}) {
+    if (!incise::fem::kernel_isa_available(isa)) continue;
+    p.set_kernel_isa(isa);
+    for (const int t : {1, 3}) {
+      SCOPED_TRACE(std::string(incise::fem::to_string(isa)) + " threads " + std::to_string(t));
+      p.set_threads(t);
+      const auto other = p.assembled_hessian(u);
+      ASSERT_TRUE(other);
+      ASSERT_EQ(other(d, again), EvalStatus::kOk);
+      EXPECT_EQ(again, first);
     }
   }
-  // An inverted element at u: no assembled operator.
-  ElasticProblem nh(small_box(), Material("neohookean", incise::test::fem_test_parameters()));
-  VecX inverted = VecX::Zero(nh.size());
-  for (incise::Index i = 0; i < nh.num_nodes(); ++i)
-    inverted[3 * i] = -2.0 * nh.points()(0, i);  // mirror x: every element inverted
-  EXPECT_FALSE(nh.assembled_hessian(inverted));
+  p.set_kernel_isa(incise::fem::best_kernel_isa());
+  p.set_threads(1);
+  // The linear model with set_assembled_product: the product of that K.
+  if (mat.linear_geometry()) {
+    p.set_assembled_product(true);
+    ASSERT_EQ(p.hessian_product(u, d, kd), EvalStatus::kOk);
+    const auto assembled = p.assembled_hessian(u);
+    ASSERT_TRUE(assembled);
+    ASSERT_EQ(assembled(d, again), EvalStatus::kOk);
+    EXPECT_EQ(again, kd);
+  }
 }
 
 // hessian_curvature (issue 19: the secant line search's first slope without forming K·d): for
 // every registered material at a deformed state, dᵀK(u)d as d·hessian_product(u, d) up to
 // rounding (element curvatures summed in another order; 1e-13 of ‖d‖‖K‖‖d‖); with the
-// assembled product exactly that dot product; kInverted where every element is inverted.
-TEST(ElasticProblem, HessianCurvatureIsDDotTheProduct) {
+// assembled product exactly that dot product.
+TEST_P(ProblemProperty, HessianCurvatureIsDDotTheProduct) {
   INCISE_SEEDED_RNG(rng, 613);
-  for (const std::string& name : incise::material::registered_material_names()) {
-    SCOPED_TRACE(name);
-    const Material mat(name, incise::test::fem_test_parameters());
-    ElasticProblem p(small_box(incise::mesh::CubeSplit::kFive), mat);
-    p.fix_nodes({0, 5});
-    const VecX u = deformed_state(p, rng, 0.01);
-    const VecX d = random_vector(rng, p.size(), 1.0);
-    VecX kd;
+  const Material mat = material();
+  ElasticProblem p(small_box(incise::mesh::CubeSplit::kFive), mat);
+  p.fix_nodes({0, 5});
+  const VecX u = deformed_state(p, rng, 0.01);
+  const VecX d = random_vector(rng, p.size(), 1.0);
+  VecX kd;
+  ASSERT_EQ(p.hessian_product(u, d, kd), EvalStatus::kOk);
+  double c = 0.0;
+  ASSERT_EQ(p.hessian_curvature(u, d, c), EvalStatus::kOk);
+  ASSERT_EQ(p.assemble_tangent(u, FixedDofTreatment::kKeep), EvalStatus::kOk);
+  EXPECT_NEAR(c, d.dot(kd), 1e-13 * p.tangent_matrix().norm() * d.squaredNorm());
+  EXPECT_GT(c, 0.0);
+  if (mat.linear_geometry()) {
+    p.set_assembled_product(true);
     ASSERT_EQ(p.hessian_product(u, d, kd), EvalStatus::kOk);
-    double c = 0.0;
     ASSERT_EQ(p.hessian_curvature(u, d, c), EvalStatus::kOk);
-    ASSERT_EQ(p.assemble_tangent(u, FixedDofTreatment::kKeep), EvalStatus::kOk);
-    EXPECT_NEAR(c, d.dot(kd), 1e-13 * p.tangent_matrix().norm() * d.squaredNorm());
-    EXPECT_GT(c, 0.0);
-    if (mat.linear_geometry()) {
-      p.set_assembled_product(true);
-      ASSERT_EQ(p.hessian_product(u, d, kd), EvalStatus::kOk);
-      ASSERT_EQ(p.hessian_curvature(u, d, c), EvalStatus::kOk);
-      EXPECT_EQ(c, d.dot(kd));
-    }
+    EXPECT_EQ(c, d.dot(kd));
   }
+}
+
+// An inverted state (every element mirrored): assembled_hessian gives no operator and
+// hessian_curvature reports kInverted.
+TEST(ElasticProblem, InvertedStateGivesNoAssembledHessianNorCurvature) {
   ElasticProblem nh(small_box(), Material("neohookean", incise::test::fem_test_parameters()));
   VecX inverted = VecX::Zero(nh.size());
-  for (incise::Index i = 0; i < nh.num_nodes(); ++i) inverted[3 * i] = -2.0 * nh.points()(0, i);
+  for (incise::Index i = 0; i < nh.num_nodes(); ++i)
+    inverted[3 * i] = -2.0 * nh.points()(0, i);  // mirror x: every element inverted
+  EXPECT_FALSE(nh.assembled_hessian(inverted));
   double c = 0.0;
   EXPECT_EQ(nh.hessian_curvature(inverted, VecX::Ones(nh.size()), c), EvalStatus::kInverted);
 }
