@@ -28,9 +28,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   const double eta = options.damping;
   const double fex = problem.external_force_norm();
   if (!external_force_is_finite(fex, rep)) {
-    rep.flops = meter.flops();
-    rep.seconds = meter.seconds();
-    rep.cpu_seconds = meter.cpu_seconds();
+    meter.record(rep);
     return rep;
   }
   INCISE_CHECK_PARAM(options.max_restarts >= 0, "dynamic_relaxation: max_restarts must be >= 0");
@@ -240,9 +238,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   rep.residual_norm = have_residual ? rnorm : std::numeric_limits<double>::quiet_NaN();
   rep.threshold = threshold;
   rep.energy = last_energy;
-  rep.flops = meter.flops();
-  rep.seconds = meter.seconds();
-  rep.cpu_seconds = meter.cpu_seconds();
+  meter.record(rep);
   return rep;
 }
 

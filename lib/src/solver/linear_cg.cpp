@@ -78,29 +78,14 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
   const auto nn = static_cast<std::uint64_t>(n);
   const VecX u0 = u;
 
-  VecX g;  // full (unprojected) gradient ∇Π(u) = K x − f, tracked recursively
-  double energy = 0.0;
-  EvalStatus st = problem.gradient(u, g, &energy);
-  if (st != EvalStatus::kOk || !g.allFinite()) {
-    rep.status = failure_reason(st);
-    rep.flops = meter.flops();
-    rep.seconds = meter.seconds();
-    rep.cpu_seconds = meter.cpu_seconds();
-    return rep;
-  }
-  const double fex = problem.external_force_norm();
-  if (!external_force_is_finite(fex, rep)) {
-    rep.flops = meter.flops();
-    rep.seconds = meter.seconds();
-    rep.cpu_seconds = meter.cpu_seconds();
-    return rep;
-  }
-  VecX r = -g;
-  problem.project(r);
+  GradientStart start;
+  if (!start_from_gradient(problem, u, options.stop, fixed_dofs, meter, rep, start)) return rep;
+  const double fex = start.fex;
+  VecX& g = start.g;  // full (unprojected) gradient ∇Π(u) = K x − f, tracked recursively
+  VecX& r = start.r;
+  double energy = start.energy;
+  double threshold = start.threshold;
   double rnorm = r.norm();
-  double threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
-  rep.residual_history.push_back(rnorm);
-  rep.energy_history.push_back(energy);
   VecX inv_diag;
   if (options.preconditioner == Preconditioner::kJacobi) {
     JacobiDiagonal jd = jacobi_inverse_diagonal(problem, u0);
@@ -110,9 +95,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
       rep.residual_norm = rnorm;
       rep.threshold = threshold;
       rep.energy = energy;
-      rep.flops = meter.flops();
-      rep.seconds = meter.seconds();
-      rep.cpu_seconds = meter.cpu_seconds();
+      meter.record(rep);
       return rep;
     }
     inv_diag = std::move(jd.inverse);
@@ -142,7 +125,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
       // progress: then the true residual is at its round-off floor and the run stagnated.
       VecX gt;
       double e = 0.0;
-      st = problem.gradient(u, gt, &e);
+      const EvalStatus st = problem.gradient(u, gt, &e);
       if (st != EvalStatus::kOk || !gt.allFinite()) {
         reason = failure_reason(st);
         break;
@@ -171,7 +154,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
     reason = meter.exhausted(options.budget, k);
     if (reason != StopReason::kConverged) break;
 
-    st = problem.hessian_product(u0, d, q);
+    const EvalStatus st = problem.hessian_product(u0, d, q);
     if (st != EvalStatus::kOk || !q.allFinite()) {
       reason = failure_reason(st);
       break;
@@ -233,9 +216,7 @@ SolverReport linear_cg(Problem& problem, VecX& u, const LinearCgOptions& options
   rep.residual_norm = rnorm;
   rep.threshold = threshold;
   rep.energy = energy;
-  rep.flops = meter.flops();
-  rep.seconds = meter.seconds();
-  rep.cpu_seconds = meter.cpu_seconds();
+  meter.record(rep);
   return rep;
 }
 

@@ -207,32 +207,16 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   const Eigen::Index n = u.size();
   const auto nn = static_cast<std::uint64_t>(n);
   const long restart_every = options.restart_every > 0 ? options.restart_every : long(n);
-  const double fex = problem.external_force_norm();
-  if (!external_force_is_finite(fex, rep)) {
-    rep.flops = meter.flops();
-    rep.seconds = meter.seconds();
-    rep.cpu_seconds = meter.cpu_seconds();
-    return rep;
-  }
-
-  VecX g;
-  double energy = 0.0;
-  EvalStatus st = problem.gradient(u, g, &energy);
-  if (st != EvalStatus::kOk || !g.allFinite()) {
-    rep.status = failure_reason(st);
-    rep.flops = meter.flops();
-    rep.seconds = meter.seconds();
-    rep.cpu_seconds = meter.cpu_seconds();
-    return rep;
-  }
-  VecX r = -g;
-  problem.project(r);
+  GradientStart start;
+  if (!start_from_gradient(problem, u, options.stop, fixed_dofs, meter, rep, start)) return rep;
+  const double fex = start.fex;
+  VecX& g = start.g;
+  VecX& r = start.r;
+  double energy = start.energy;
+  double threshold = start.threshold;
   VecX d = r;
   double rr = r.squaredNorm();
   double rnorm = std::sqrt(rr);
-  double threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
-  rep.residual_history.push_back(rnorm);
-  rep.energy_history.push_back(energy);
 
   long k = 0, since_restart = 0, since_evaluated = 0;
   constexpr long kReplaceEvery = 50;  // quadratic Π: recurrence steps between evaluated gradients
@@ -274,7 +258,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
       ++since_evaluated;
       if (since_evaluated >= kReplaceEvery ||
           std::sqrt(rr_new) <= residual_threshold(options.stop, fex, fixed_dofs.norm(g), n)) {
-        st = problem.gradient(u, g, &energy);
+        const EvalStatus st = problem.gradient(u, g, &energy);
         ++rep.inner_iterations;
         since_evaluated = 0;
         if (st != EvalStatus::kOk || !g.allFinite()) {
@@ -314,9 +298,7 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   rep.residual_norm = rnorm;
   rep.threshold = threshold;
   rep.energy = energy;
-  rep.flops = meter.flops();
-  rep.seconds = meter.seconds();
-  rep.cpu_seconds = meter.cpu_seconds();
+  meter.record(rep);
   return rep;
 }
 

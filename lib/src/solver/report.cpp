@@ -48,6 +48,12 @@ double CostMeter::cpu_seconds() const {
   return process_cpu_seconds() - cpu_start_ - excluded_cpu_seconds_;
 }
 
+void CostMeter::record(SolverReport& rep) const {
+  rep.flops = flops();
+  rep.seconds = seconds();
+  rep.cpu_seconds = cpu_seconds();
+}
+
 void CostMeter::observe(const IterationObserver& observer, IterationInfo info) {
   if (!observer) return;
   info.flops = flops();
@@ -91,6 +97,28 @@ double FixedDofs::norm(const VecX& v) const {
   double s = 0.0;
   for (const Eigen::Index i : dofs_) s += v[i] * v[i];
   return std::sqrt(s);
+}
+
+bool start_from_gradient(Problem& problem, const VecX& u, const StoppingRule& stop,
+                         const FixedDofs& fixed_dofs, const CostMeter& meter, SolverReport& rep,
+                         GradientStart& out) {
+  out.fex = problem.external_force_norm();
+  if (!external_force_is_finite(out.fex, rep)) {
+    meter.record(rep);
+    return false;
+  }
+  const EvalStatus st = problem.gradient(u, out.g, &out.energy);
+  if (st != EvalStatus::kOk || !out.g.allFinite()) {
+    rep.status = failure_reason(st);
+    meter.record(rep);
+    return false;
+  }
+  out.r = -out.g;
+  problem.project(out.r);
+  out.threshold = residual_threshold(stop, out.fex, fixed_dofs.norm(out.g), u.size());
+  rep.residual_history.push_back(out.r.norm());
+  rep.energy_history.push_back(out.energy);
+  return true;
 }
 
 }  // namespace incise::solver

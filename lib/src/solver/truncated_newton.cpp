@@ -17,31 +17,15 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
   const Eigen::Index n = u.size();
   const auto nn = static_cast<std::uint64_t>(n);
   const long max_inner = options.max_inner > 0 ? options.max_inner : long(n);
-  const double fex = problem.external_force_norm();
-  if (!external_force_is_finite(fex, rep)) {
-    rep.flops = meter.flops();
-    rep.seconds = meter.seconds();
-    rep.cpu_seconds = meter.cpu_seconds();
-    return rep;
-  }
-
-  VecX g;
-  double energy = 0.0;
-  EvalStatus st = problem.gradient(u, g, &energy);
-  if (st != EvalStatus::kOk || !g.allFinite()) {
-    rep.status = failure_reason(st);
-    rep.flops = meter.flops();
-    rep.seconds = meter.seconds();
-    rep.cpu_seconds = meter.cpu_seconds();
-    return rep;
-  }
-  VecX r = -g;
-  problem.project(r);
+  GradientStart start;
+  if (!start_from_gradient(problem, u, options.stop, fixed_dofs, meter, rep, start)) return rep;
+  const double fex = start.fex;
+  VecX& g = start.g;
+  VecX& r = start.r;
+  double energy = start.energy;
+  double threshold = start.threshold;
   double rnorm = r.norm();
   const double r0 = rnorm;
-  double threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
-  rep.residual_history.push_back(rnorm);
-  rep.energy_history.push_back(energy);
 
   long k = 0;
   double last_step_norm = 0.0;
@@ -101,7 +85,7 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
     double e_new = 0.0;
     for (int b = 0; b <= options.max_backtracks; ++b, alpha *= 0.5) {
       ut = u + alpha * p;
-      st = problem.gradient(ut, gt, &e_new);
+      const EvalStatus st = problem.gradient(ut, gt, &e_new);
       meter.add(2 * nn);
       ++rep.inner_iterations;
       if (st != EvalStatus::kOk || !gt.allFinite() || !std::isfinite(e_new)) continue;
@@ -140,9 +124,7 @@ SolverReport truncated_newton(Problem& problem, VecX& u, const TruncatedNewtonOp
   rep.residual_norm = rnorm;
   rep.threshold = threshold;
   rep.energy = energy;
-  rep.flops = meter.flops();
-  rep.seconds = meter.seconds();
-  rep.cpu_seconds = meter.cpu_seconds();
+  meter.record(rep);
   return rep;
 }
 

@@ -129,6 +129,8 @@ class CostMeter {
   double seconds() const;
   /// Process CPU seconds (all threads) since construction, observer excluded.
   double cpu_seconds() const;
+  /// Writes flops(), seconds() and cpu_seconds() into `rep` (every solver's return path).
+  void record(SolverReport& rep) const;
   /// Calls `observer` (if set) with `info` (cost fields filled in here) and excludes its cost.
   void observe(const IterationObserver& observer, IterationInfo info);
   /// Budget check: the StopReason for an exhausted budget, or kConverged when none is.
@@ -173,6 +175,23 @@ class FixedDofs {
  private:
   std::vector<Eigen::Index> dofs_;
 };
+
+/// The start of the gradient solvers (linear CG, nonlinear CG, truncated Newton).
+struct GradientStart {
+  VecX g;                  ///< ∇Π(u), unprojected
+  VecX r;                  ///< −∇Π(u) with the fixed DOFs projected out
+  double energy = 0.0;     ///< Π(u)
+  double fex = 0.0;        ///< ‖f_ext‖
+  double threshold = 0.0;  ///< the stopping rule's threshold on ‖r‖ at u, (6.8)/(6.9)
+};
+
+/// Checks ‖f_ext‖ (external_force_is_finite), evaluates g and Π at u, forms r and the threshold,
+/// and records iteration 0's ‖r‖ and Π in rep's histories. Returns false when the load or the
+/// evaluation is not finite (or an element is inverted): rep then carries the status and the
+/// meter's costs, u is unchanged, and the solver returns rep.
+bool start_from_gradient(Problem& problem, const VecX& u, const StoppingRule& stop,
+                         const FixedDofs& fixed_dofs, const CostMeter& meter, SolverReport& rep,
+                         GradientStart& out);
 
 /// True when every entry of v is finite.
 inline bool all_finite(const VecX& v) {
