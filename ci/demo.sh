@@ -22,7 +22,8 @@ echo "demo: wrote out/liver_coarse.vtu (open it in ParaView)"
 echo "== demo: incise run reference_data/scenes/cantilever.json"
 "$incise" run reference_data/scenes/cantilever.json \
   --summary-json out/cantilever_summary.json
-# The augmented-solver cutting demo: the solution is updated after every sweep triangle.
+# The augmented-solver cutting demo: the solution is updated after every path segment (a blade
+# advance: two sweep triangles cut, then one solve).
 echo "== demo: incise run reference_data/scenes/cube_cut_augmented.json"
 "$incise" run reference_data/scenes/cube_cut_augmented.json \
   --summary-json out/cube_cut_augmented_summary.json --progress none

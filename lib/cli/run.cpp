@@ -83,9 +83,9 @@ void print_residual_summary(std::ostream& out, const scene::SceneSpec& spec,
   if (!res.cut_steps.empty()) {
     const scene::FrameTimes t = scene::frame_times(res);
     out << "frame time:      median " << 1e3 * t.frame.median << " ms, p95 " << 1e3 * t.frame.p95
-        << " ms, max " << 1e3 * t.frame.max << " ms over " << t.frame.count << " steps (cut median "
-        << 1e3 * t.cut.median << " ms, update median " << 1e3 * t.update.median << " ms, swap max "
-        << 1e3 * t.swap.max << " ms)\n";
+        << " ms, max " << 1e3 * t.frame.max << " ms over " << t.frame.count
+        << " solves (cut median " << 1e3 * t.cut.median << " ms, update median "
+        << 1e3 * t.update.median << " ms, swap max " << 1e3 * t.swap.max << " ms)\n";
   }
   out << "solver time:     " << rep.seconds << " s";
   if (rep.seconds > 0 && rep.flops > 0)
@@ -187,7 +187,8 @@ int run_scene(RunOptions& opt, Context& ctx) {
     progress_out << (spec.tools.empty()
                          ? ", direct solve\n"
                          : ", interactive cut: " + std::to_string(built.sweep_triangles.size()) +
-                               " sweep triangles, one augmented update each\n");
+                               " sweep triangles, an augmented update per " +
+                               scene::to_string(spec.solver.solve_every) + "\n");
   else
     progress_out << ", budget " << spec.solver.max_iterations << " iterations\n";
 
@@ -320,8 +321,13 @@ int run_scene(RunOptions& opt, Context& ctx) {
     if (rep.inner_iterations > 0) out << " (inner " << rep.inner_iterations << ")";
     out << "\n";
   } else {
+    int triangles = 0;
+    for (const auto& c : res.cut_steps) triangles += c.triangles;
     out << "solves:          " << rep.iterations << " (initial + " << rep.iterations - 1
-        << " sweep triangles), " << rep.inner_iterations << " GMRES iterations in all\n";
+        << (spec.solver.solve_every == scene::SolverSpec::SolveEvery::kSegment ? " path segments"
+                                                                               : " sweep triangles")
+        << ", " << triangles << " sweep triangles cut), " << rep.inner_iterations
+        << " GMRES iterations in all\n";
   }
   if (!needle_run) print_residual_summary(out, spec, built, res);
   for (const auto& p : res.probes) {
@@ -336,17 +342,17 @@ int run_scene(RunOptions& opt, Context& ctx) {
     // Per solve: m = replaced columns, GMRES iterations on the Schur system, update time
     // (column replacements + augmented solve; wall and thread CPU), cut time.
     out << "\n== augmented cut steps\n";
-    out << "  step  tool  faces  +nodes  nodes   tets     m  GMRES  rel.res    update ms  "
+    out << "  step  tool  tris  faces  +nodes  nodes   tets     m  GMRES  rel.res    update ms  "
            "(cpu)  cut ms  status\n";
     for (const auto& c : res.cut_steps) {
       out << "  " << std::setw(4) << c.step << "  " << std::setw(4) << c.tool << "  "
-          << std::setw(5) << c.faces_dissected << "  " << std::setw(6) << c.new_nodes << "  "
-          << std::setw(5) << c.nodes << "  " << std::setw(5) << c.tetrahedra << "  " << std::setw(4)
-          << c.m << "  " << std::setw(5) << c.gmres_iterations << "  " << std::scientific
-          << std::setprecision(1) << std::setw(8) << c.gmres_relative_residual << std::fixed
-          << std::setprecision(3) << std::setw(11) << c.seconds_update * 1e3 << " " << std::setw(6)
-          << c.cpu_seconds_update * 1e3 << std::setw(8) << c.seconds_cut * 1e3 << "  " << c.status
-          << "\n"
+          << std::setw(4) << c.triangles << "  " << std::setw(5) << c.faces_dissected << "  "
+          << std::setw(6) << c.new_nodes << "  " << std::setw(5) << c.nodes << "  " << std::setw(5)
+          << c.tetrahedra << "  " << std::setw(4) << c.m << "  " << std::setw(5)
+          << c.gmres_iterations << "  " << std::scientific << std::setprecision(1) << std::setw(8)
+          << c.gmres_relative_residual << std::fixed << std::setprecision(3) << std::setw(11)
+          << c.seconds_update * 1e3 << " " << std::setw(6) << c.cpu_seconds_update * 1e3
+          << std::setw(8) << c.seconds_cut * 1e3 << "  " << c.status << "\n"
           << std::defaultfloat << std::setprecision(6);
     }
   }

@@ -721,9 +721,12 @@ TEST(SceneNeedle3D, AugmentedSolverKeyRunsTheInsertionAndMatchesCg) {
   ASSERT_GT(fmax, 0.0);
   EXPECT_LE(dev, 1e-6 * fmax) << dev << " N of " << fmax;
   // Keys: the (6.9) ones and the cutting run's are refused, refactor_at_m >= 1.
-  for (const char* key : {"tolerance", "tolerance_round", "max_iterations", "cut_configuration"}) {
+  for (const char* key :
+       {"tolerance", "tolerance_round", "max_iterations", "cut_configuration", "solve_every"}) {
     Json k = j;
-    k["solver"][key] = key == std::string("cut_configuration") ? Json("deformed") : Json(1e-3);
+    k["solver"][key] = key == std::string("cut_configuration") ? Json("deformed")
+                       : key == std::string("solve_every")     ? Json("segment")
+                                                               : Json(1e-3);
     expect_error(k, std::string("/solver/") + key, "not allowed here");
   }
   Json m = j;

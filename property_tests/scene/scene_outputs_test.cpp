@@ -160,7 +160,7 @@ TEST(SceneOutputs, InteractiveCutRunWritesOneRowAndOneFramePerSolve) {
                                           "_<step>.vtu, index " + spec.outputs.vtu + ".pvd"}));
   const std::vector<std::string> rows = lines_of(incise::test::read_file(spec.outputs.csv));
   ASSERT_EQ(rows.size(), solves + 1);
-  EXPECT_EQ(rows[0].rfind("step,tool,status,", 0), 0u) << rows[0];
+  EXPECT_EQ(rows[0].rfind("step,tool,triangles,status,", 0), 0u) << rows[0];
   // Each solve carries whether GMRES ran unpreconditioned (a dropped singular preconditioner)
   // and the amplification of its solution: the columns after the timings, and the summary's
   // cut_steps (with the amplification warning).

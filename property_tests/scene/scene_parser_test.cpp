@@ -520,6 +520,45 @@ TEST(SceneParserBad, CutConfigurationUnknownValue) {
   EXPECT_NE(e.find("\"deformed\""), std::string::npos) << e;
 }
 
+// solve_every (docs/scenes.md, interactive cutting run): "segment" (default) or "triangle",
+// only for "augmented" with tools.
+TEST(SceneParser, SolveEveryParses) {
+  using incise::scene::SolverSpec;
+  Json j = augmented_cut_scene();
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.solve_every,
+            SolverSpec::SolveEvery::kSegment);  // default
+  j["solver"]["solve_every"] = "triangle";
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.solve_every,
+            SolverSpec::SolveEvery::kTriangle);
+  j["solver"]["solve_every"] = "segment";
+  EXPECT_EQ(parse_scene(j.dump(), "scene.json", "").solver.solve_every,
+            SolverSpec::SolveEvery::kSegment);
+}
+
+TEST(SceneParserBad, SolveEveryUnknownValueOtherMethodOrNoTool) {
+  Json j = augmented_cut_scene();
+  j["solver"]["solve_every"] = "frame";
+  std::string e = error_of(j);
+  EXPECT_NE(e.find("/solver/solve_every"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"segment\""), std::string::npos) << e;
+  EXPECT_NE(e.find("\"triangle\""), std::string::npos) << e;
+  j["solver"]["solve_every"] = "triangle";
+  j["solver"]["method"] = "cg";
+  j["solver"].erase("cut_configuration");
+  e = error_of(j);
+  EXPECT_NE(e.find("/solver/solve_every: not allowed here: only the \"augmented\" method"),
+            std::string::npos)
+      << e;
+  j = augmented_cut_scene();
+  j["solver"].erase("cut_configuration");
+  j["solver"]["solve_every"] = "triangle";
+  j.erase("tools");
+  e = error_of(j);
+  EXPECT_NE(e.find("/solver/solve_every: not allowed here: the scene names no tool"),
+            std::string::npos)
+      << e;
+}
+
 // refactor_at_m (docs/scenes.md, interactive cutting run; augmented paper §3.6).
 TEST(SceneParser, RefactorAtMParses) {
   Json j = augmented_cut_scene();

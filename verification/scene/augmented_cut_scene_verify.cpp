@@ -1,9 +1,10 @@
 // The augmented-solver cutting demo (reference_data/scenes/cube_cut_augmented.json): the scene
-// runner cuts one sweep triangle at a time (thesis §3.2) and updates the static solution after
-// every step with the augmented system of Yeung, Crouch & Pothen (2016, §3) — replaced columns
-// and GMRES on the Schur system (eq. 17), never a refactorization. Checked here: every step
-// solves, m never drops and the factor never changes (no refactorization), and the final
-// displacement equals an independent CHOLMOD solve of the final cut mesh's stiffness.
+// runner cuts a path segment's two sweep triangles (thesis §3.2; or one triangle at a time with
+// solve_every "triangle") and updates the static solution after each with the augmented system
+// of Yeung, Crouch & Pothen (2016, §3) — replaced columns and GMRES on the Schur system (eq.
+// 17), never a refactorization. Checked here: every step solves, m never drops and the factor
+// never changes (no refactorization), and the final displacement equals an independent CHOLMOD
+// solve of the final cut mesh's stiffness.
 
 #include <incise/linalg/cholmod_factor.hpp>
 #include <incise/scene/scene_builder.hpp>
@@ -40,17 +41,21 @@ TEST(AugmentedCutScene, BuilderLeavesTheCutToTheRun) {
   for (const auto& s : b.not_built) EXPECT_EQ(s.find("factorization"), std::string::npos) << s;
 }
 
-TEST(AugmentedCutScene, EveryStepUpdatesWithoutRefactorization) {
+// One row per solve: 5 path segments (the default solve_every) or 10 sweep triangles.
+void check_every_step_updates(scene::SolverSpec::SolveEvery every, std::size_t solves,
+                              int triangles_per_solve) {
+  SCOPED_TRACE(scene::to_string(every));
   scene::BuiltScene b = demo();
+  b.spec.solver.solve_every = every;
   std::size_t observed = 0;
   const scene::SceneRunResult res = scene::run_scene(
       b, {},
       [&](const scene::CutStepRow&, std::size_t total, const interactive::AugmentedCutSession&) {
         ++observed;
-        EXPECT_EQ(total, 10u);
+        EXPECT_EQ(total, solves);
       });
-  ASSERT_EQ(res.cut_steps.size(), 11u);  // initial solve + one per sweep triangle
-  EXPECT_EQ(observed, 11u);
+  ASSERT_EQ(res.cut_steps.size(), solves + 1);  // initial solve + one per segment or triangle
+  EXPECT_EQ(observed, solves + 1);
   EXPECT_TRUE(res.report.ok()) << solver::to_string(res.report.status) << ": " << res.method_detail;
   EXPECT_LE(res.report.residual_norm, b.spec.solver.tolerance * res.external_force_norm);
   const std::int64_t nnz_l = res.cut_steps[0].nnz_l;
@@ -61,6 +66,7 @@ TEST(AugmentedCutScene, EveryStepUpdatesWithoutRefactorization) {
     SCOPED_TRACE("step " + std::to_string(row.step));
     EXPECT_EQ(row.status, "ok");
     EXPECT_EQ(row.step, static_cast<int>(k));
+    EXPECT_EQ(row.triangles, k == 0 ? 0 : triangles_per_solve);
     if (k > 0) {
       EXPECT_GE(row.m, res.cut_steps[k - 1].m);  // m only drops at a refactorization swap
       if (row.new_nodes > 0) {
@@ -78,6 +84,12 @@ TEST(AugmentedCutScene, EveryStepUpdatesWithoutRefactorization) {
   // The scene now holds the cut mesh: the original nodes plus the new ones.
   EXPECT_EQ(b.mesh.num_points(), 9 * 9 * 9 + new_nodes);
   EXPECT_EQ(res.u.size(), 3 * b.mesh.num_points());
+}
+
+TEST(AugmentedCutScene, EveryStepUpdatesWithoutRefactorization) {
+  EXPECT_EQ(scene::SolverSpec{}.solve_every, scene::SolverSpec::SolveEvery::kSegment);
+  check_every_step_updates(scene::SolverSpec::SolveEvery::kSegment, 5, 2);
+  check_every_step_updates(scene::SolverSpec::SolveEvery::kTriangle, 10, 1);
 }
 
 // The final displacement of a run equals a fresh CHOLMOD solve of the final cut mesh.
@@ -134,7 +146,8 @@ TEST(AugmentedCutScene, FinalDisplacementEqualsADirectSolveOfTheCutMesh) {
 
 // cube_cut.json cuts first (builder) and then solves by CG. Run interactively with the augmented
 // solver and cut_configuration "reference", the same sweep triangles hit the same reference
-// mesh, so the final cut mesh must be the same and the displacements must agree. CG is run to
+// mesh, so the final cut mesh must be the same and the displacements must agree — whether the
+// run solves per path segment (the default) or per sweep triangle. CG is run to
 // 1e-11 ||f||; cond(K) ~1e3-1e4 on this mesh bounds its displacement error by ~1e-7 relative,
 // and the augmented solution is ~1e-11 accurate: 1e-6 leaves margin without hiding a different
 // cut (a cut differing by one face changes the displacement by ~1e-4, see docs/scenes.md).
@@ -149,20 +162,26 @@ TEST(AugmentedCutScene, ReferenceConfigurationRunEqualsCutFirstThenCg) {
   const scene::SceneRunResult cg = scene::run_scene(cg_scene);
   ASSERT_TRUE(cg.report.ok()) << solver::to_string(cg.report.status);
 
-  scene::SceneSpec aug_spec = spec;
-  aug_spec.solver.method = scene::SolverSpec::Method::kAugmented;
-  aug_spec.solver.cut_configuration = scene::SolverSpec::CutConfiguration::kReference;
-  scene::BuiltScene aug_scene = scene::build_scene(aug_spec);
-  const scene::SceneRunResult aug = scene::run_scene(aug_scene);
-  ASSERT_TRUE(aug.report.ok()) << aug.method_detail;
-  EXPECT_EQ(aug.cut_steps.size(), 1 + cg_scene.sweep_triangles.size());
+  for (const auto& [every, per_solve] :
+       {std::pair{scene::SolverSpec::SolveEvery::kSegment, std::size_t{2}},
+        std::pair{scene::SolverSpec::SolveEvery::kTriangle, std::size_t{1}}}) {
+    SCOPED_TRACE(scene::to_string(every));
+    scene::SceneSpec aug_spec = spec;
+    aug_spec.solver.method = scene::SolverSpec::Method::kAugmented;
+    aug_spec.solver.cut_configuration = scene::SolverSpec::CutConfiguration::kReference;
+    aug_spec.solver.solve_every = every;
+    scene::BuiltScene aug_scene = scene::build_scene(aug_spec);
+    const scene::SceneRunResult aug = scene::run_scene(aug_scene);
+    ASSERT_TRUE(aug.report.ok()) << aug.method_detail;
+    EXPECT_EQ(aug.cut_steps.size(), 1 + cg_scene.sweep_triangles.size() / per_solve);
 
-  ASSERT_EQ(aug_scene.mesh.num_points(), cg_scene.mesh.num_points());
-  ASSERT_EQ(aug_scene.mesh.num_cells(), cg_scene.mesh.num_cells());
-  EXPECT_EQ(aug_scene.mesh.cells, cg_scene.mesh.cells);
-  EXPECT_LE((aug_scene.mesh.points - cg_scene.mesh.points).norm(),
-            1e-14 * cg_scene.mesh.points.norm());  // identical arithmetic: same snapped nodes
-  EXPECT_LE((aug.u - cg.u).norm(), kCutFirstTol * cg.u.norm());
+    ASSERT_EQ(aug_scene.mesh.num_points(), cg_scene.mesh.num_points());
+    ASSERT_EQ(aug_scene.mesh.num_cells(), cg_scene.mesh.num_cells());
+    EXPECT_EQ(aug_scene.mesh.cells, cg_scene.mesh.cells);
+    EXPECT_LE((aug_scene.mesh.points - cg_scene.mesh.points).norm(),
+              1e-14 * cg_scene.mesh.points.norm());  // identical arithmetic: same snapped nodes
+    EXPECT_LE((aug.u - cg.u).norm(), kCutFirstTol * cg.u.norm());
+  }
 }
 
 // A horizontal incision through the whole cube at z = 0.08 m separates the top slab; the cutter
@@ -181,7 +200,8 @@ TEST(AugmentedCutScene, SeparatingCutEndsWithAStatusNotAnException) {
   scene::BuiltScene b = scene::build_scene(spec);
   scene::SceneRunResult res;
   ASSERT_NO_THROW(res = scene::run_scene(b));
-  ASSERT_EQ(res.cut_steps.size(), 5u);  // initial + 4 sweep triangles, none skipped
+  ASSERT_EQ(res.cut_steps.size(), 3u);  // initial + 2 path segments (4 triangles), none skipped
+  EXPECT_EQ(res.cut_steps[1].triangles + res.cut_steps[2].triangles, 4);
   bool any_failed = false;
   for (const auto& row : res.cut_steps) any_failed = any_failed || row.status != "ok";
   if (res.report.ok()) {

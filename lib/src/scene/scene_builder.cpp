@@ -564,7 +564,8 @@ BuiltScene build_scene(const SceneSpec& spec) {
     }
     b.record("sweep triangles: " + std::to_string(b.sweep_triangles.size()) + " from " +
                  std::to_string(spec.tools.size()) +
-                 " tool(s), cut one by one during the augmented run",
+                 " tool(s), cut during the augmented run (a solve per " +
+                 to_string(spec.solver.solve_every) + ")",
              t.seconds(), b.sweep_triangles.size() * sizeof(std::array<Vec3, 3>));
   }
   // Tools: the scalpel cuts the mesh (thesis §3.2) before the problem is built, so loads,

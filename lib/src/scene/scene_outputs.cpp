@@ -112,18 +112,20 @@ std::string trace_csv(const BuiltScene& scene, const SceneRunResult& res) {
     return csv.str();
   }
   if (!res.cut_steps.empty()) {
-    csv << "step,tool,status,degenerate_sweep,faces_dissected,nodes_snapped,new_nodes,nodes,"
+    csv << "step,tool,triangles,status,degenerate_sweep,faces_dissected,nodes_snapped,new_nodes,"
+           "nodes,"
            "tetrahedra,m,dirichlet,gmres_iterations,gmres_relative_residual,nnz_l,cut_seconds,"
            "update_seconds,update_cpu_seconds,preconditioner_dropped,amplification,swap_seconds";
     probe_columns(csv, scene);
     for (const auto& c : res.cut_steps) {
       const std::string status = csv_text(c.status);
-      csv << c.step << "," << c.tool << "," << status << "," << c.degenerate_sweep << ","
-          << c.faces_dissected << "," << c.nodes_snapped << "," << c.new_nodes << "," << c.nodes
-          << "," << c.tetrahedra << "," << c.m << "," << c.dirichlet << "," << c.gmres_iterations
-          << "," << Field{c.gmres_relative_residual} << "," << c.nnz_l << "," << c.seconds_cut
-          << "," << c.seconds_update << "," << c.cpu_seconds_update << ","
-          << c.preconditioner_dropped << "," << Field{c.amplification} << "," << c.seconds_swap;
+      csv << c.step << "," << c.tool << "," << c.triangles << "," << status << ","
+          << c.degenerate_sweep << "," << c.faces_dissected << "," << c.nodes_snapped << ","
+          << c.new_nodes << "," << c.nodes << "," << c.tetrahedra << "," << c.m << ","
+          << c.dirichlet << "," << c.gmres_iterations << "," << Field{c.gmres_relative_residual}
+          << "," << c.nnz_l << "," << c.seconds_cut << "," << c.seconds_update << ","
+          << c.cpu_seconds_update << "," << c.preconditioner_dropped << ","
+          << Field{c.amplification} << "," << c.seconds_swap;
       probe_values(csv, c.probes);
     }
   } else {
@@ -497,6 +499,7 @@ std::string summary_json(const BuiltScene& scene, const SceneRunResult& result,
   for (const auto& c : result.cut_steps) {
     Json cj = {{"step", c.step},
                {"tool", c.tool},
+               {"triangles", c.triangles},
                {"status", c.status},
                {"degenerate_sweep", c.degenerate_sweep},
                {"faces_dissected", c.faces_dissected},

@@ -252,7 +252,8 @@ SolverSpec parse_solver(JsonObject o, bool slab, bool needle3d) {
       o.forbid(key, why);
     o.forbid("threads",
              "a needle scene rebuilds its problem at every update with the default thread count");
-    for (const char* key : {"cut_configuration", "solve_threads", "schur_preconditioner"})
+    for (const char* key :
+         {"cut_configuration", "solve_every", "solve_threads", "schur_preconditioner"})
       o.forbid(key, "it belongs to the interactive cutting run's augmented solver");
     o.forbid("assembled_product",
              "the augmented needle solve factors K; the needle tool's own assembled_product "
@@ -332,6 +333,7 @@ SolverSpec parse_solver(JsonObject o, bool slab, bool needle3d) {
   if (s.method == SolverSpec::Method::kAugmented) {
     s.cut_configuration = o.choice("cut_configuration", kCutConfigurationNames,
                                    SolverSpec::CutConfiguration::kDeformed);
+    s.solve_every = o.choice("solve_every", kSolveEveryNames, SolverSpec::SolveEvery::kSegment);
     s.refactor_at_m = o.integer("refactor_at_m", 0, std::numeric_limits<int>::max(), 0);
     std::vector<std::string> refactorization_names = {kNoRefactorizationName};
     for (const std::string& n : interactive::kRefactorizationModeNames.names())
@@ -354,6 +356,9 @@ SolverSpec parse_solver(JsonObject o, bool slab, bool needle3d) {
     o.forbid("cut_configuration",
              "only the \"augmented\" method solves between sweep triangles (the others cut "
              "first, in the reference configuration)");
+    o.forbid("solve_every",
+             "only the \"augmented\" method solves between sweep triangles (the others cut "
+             "first, then solve once)");
     o.forbid("refactor_at_m",
              "only the \"augmented\" method has a factorization to refactor (§3.6 of Yeung et "
              "al. 2016)");
@@ -756,6 +761,7 @@ SceneSpec parse_root(const Json& root_json, const std::string& file, const std::
   if (s.tools.empty() && solver_json && solver_json->is_object()) {
     const std::pair<const char*, const char*> cut_only_keys[] = {
         {"cut_configuration", ""},
+        {"solve_every", ""},
         {"refactor_at_m", ", so the augmented run solves once and never refactors"},
         {"refactorization", ", so the augmented run solves once and never refactors"},
         {"solve_threads",

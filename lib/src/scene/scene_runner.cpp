@@ -171,8 +171,11 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
                t.seconds(),
                static_cast<std::size_t>(init.solve.nnz_l) * (sizeof(double) + sizeof(int)));
 
+  // A solve per path segment (its two sweep triangles, AugmentedCutSession::frame) or per sweep
+  // triangle (step), as the scene's solve_every says.
+  const std::size_t per_solve = spec.solver.solve_every == SolverSpec::SolveEvery::kSegment ? 2 : 1;
   std::size_t total_steps = 0;
-  for (const ToolSpec& tool : spec.tools) total_steps += sweep_triangles(tool).size();
+  for (const ToolSpec& tool : spec.tools) total_steps += sweep_triangles(tool).size() / per_solve;
   bool failed = false;
   solver::StopReason failure = solver::StopReason::kConverged;
   std::string failure_text;
@@ -187,6 +190,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
     row.step = step;
     row.tool = tool;
     row.status = r.brief();
+    row.triangles = r.triangles;
     row.degenerate_sweep = r.cut.status == cut::CutStatus::kDegenerateSweep;
     row.faces_dissected = r.cut.faces_dissected;
     row.nodes_snapped = r.cut.nodes_snapped;
@@ -227,11 +231,14 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   };
   add_row(0, -1, init);
   int step = 0;
+  int triangles_cut = 0;
   for (std::size_t k = 0; k < spec.tools.size(); ++k) {
-    for (const auto& tri : sweep_triangles(spec.tools[k])) {
-      const interactive::AugmentedCutStepReport r = session->step(tri);
+    const std::vector<std::array<Vec3, 3>> tris = sweep_triangles(spec.tools[k]);
+    for (std::size_t i = 0; i < tris.size(); i += per_solve) {
+      const interactive::AugmentedCutStepReport r = session->frame(&tris[i], per_solve);
       totals.add(r.cut);
       add_row(++step, static_cast<int>(k), r);
+      triangles_cut += r.triangles;
     }
     session->end_incision();
   }
@@ -248,10 +255,10 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
     unused += cm.unused(v);
     if (check->is_fixed(3 * static_cast<Eigen::Index>(v))) held.push_back(v);
   }
-  scene.record("cut: " + std::to_string(step) + " sweep triangles, " +
-                   std::to_string(totals.faces_dissected) + " faces dissected, " +
-                   std::to_string(totals.nodes_snapped) + " nodes snapped, " +
-                   std::to_string(totals.collapses) + " collapses, " +
+  scene.record("cut: " + std::to_string(triangles_cut) + " sweep triangles in " +
+                   std::to_string(step) + " solves, " + std::to_string(totals.faces_dissected) +
+                   " faces dissected, " + std::to_string(totals.nodes_snapped) +
+                   " nodes snapped, " + std::to_string(totals.collapses) + " collapses, " +
                    std::to_string(totals.new_nodes) + " new nodes, " + std::to_string(unused) +
                    " unused nodes -> " + std::to_string(final_mesh.num_cells()) + " tets, " +
                    std::to_string(final_mesh.num_points()) + " nodes",
@@ -282,8 +289,9 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
   rep.cpu_seconds = process_cpu_seconds() - cpu0;
   detail << "interactive cut with the augmented solver (Yeung et al. 2016 §3): K0 factored once "
             "(CHOLMOD, |L| = "
-         << init.solve.nnz_l << "), then per sweep triangle: cut (thesis §3.2, in the "
-         << to_string(spec.solver.cut_configuration)
+         << init.solve.nnz_l << "), then per "
+         << (per_solve == 2 ? "path segment: its two sweep triangles cut" : "sweep triangle: cut")
+         << " (thesis §3.2, in the " << to_string(spec.solver.cut_configuration)
          << " configuration), element stiffness changes and new DOFs as replaced columns, GMRES "
          << "on the Schur system (preconditioner: "
          << (spec.solver.schur_solver == linalg::SchurSolver::kDirectCached
@@ -299,7 +307,7 @@ void run_augmented_cut(BuiltScene& scene, SceneRunResult& res, const CutStepObse
                        std::string(interactive::to_string(*spec.solver.refactorization)) +
                        " policy, " + std::to_string(refactorizations) + " swapped in. "
                  : std::string("no refactorization. "))
-         << step << " steps, final m = " << session->system().num_replaced() << ", " << gmres_total
+         << step << " solves, final m = " << session->system().num_replaced() << ", " << gmres_total
          << " GMRES iterations in all"
          << (dropped > 0 ? "; preconditioner dropped (singular LU, GMRES unpreconditioned) in " +
                                std::to_string(dropped) + " solves"

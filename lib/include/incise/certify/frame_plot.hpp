@@ -1,11 +1,11 @@
 #pragma once
 /// \file frame_plot.hpp
-/// The per-frame time plot of an interactive cutting run (issue 17, "Output"): per sweep step
-/// (scene::CutStepRow after the initial solve) the cut, the solver update (column replacements
-/// and augmented solve, incl. a §3.6 swap) and frame = cut + update, in wall milliseconds on a log
-/// axis (values below 0.1 ms drawn at 0.1 ms), with the 33 ms frame budget dashed. `incise run`
-/// writes it beside the trace CSV of an interactive cutting run (docs/scenes.md, `csv`). The times
-/// are reported, not asserted (the plot says so).
+/// The per-frame time plot of an interactive cutting run (issue 17, "Output"): per solve (a path
+/// segment or a sweep triangle: scene::CutStepRow after the initial solve) the cut, the solver
+/// update (column replacements and augmented solve, incl. a §3.6 swap) and frame = cut + update, in
+/// wall milliseconds on a log axis (values below 0.1 ms drawn at 0.1 ms), with the 33 ms frame
+/// budget dashed. `incise run` writes it beside the trace CSV of an interactive cutting run
+/// (docs/scenes.md, `csv`). The times are reported, not asserted (the plot says so).
 
 #include <incise/scene/scene_runner.hpp>
 

@@ -65,10 +65,11 @@ struct TraceRow {
 };
 
 /// One solve of an interactive cutting run ("augmented" with tools): the initial factorization
-/// and solve (step 0), then one row per sweep triangle.
+/// and solve (step 0), then one row per path segment or per sweep triangle (`solve_every`).
 struct CutStepRow {
-  int step = 0;                     ///< 0: initial solve; k ≥ 1: k-th sweep triangle
+  int step = 0;                     ///< 0: initial solve; k ≥ 1: the k-th solve after it
   int tool = -1;                    ///< index into SceneSpec::tools (−1 for step 0)
+  int triangles = 0;                ///< sweep triangles cut before this solve (0, 1 or 2)
   std::string status;               ///< "ok" or the interactive::CutSolveStatus name (+ advice)
   bool degenerate_sweep = false;    ///< the cutter skipped a zero-area sweep triangle
   Index faces_dissected = 0;        ///< faces dissected by this step (§3.2)

@@ -154,6 +154,12 @@ struct SolverSpec {
                 ///< space, thesis §3.2)
     kReference  ///< the reference configuration (the same cut as the builder's cut-first path)
   };
+  /// Interactive cutting run: what one solve follows (one row of the run's steps).
+  enum class SolveEvery {
+    kSegment,  ///< a path segment (one blade advance): its two sweep triangles cut, one solve
+               ///< (interactive::AugmentedCutSession::frame)
+    kTriangle  ///< every sweep triangle (AugmentedCutSession::step), two solves per segment
+  };
   Method method = Method::kCG;
   /// Stop when ‖r‖₂ ≤ tolerance·‖f_ext‖₂ (§3.1), in (0, 1). In a needle scene: ε of the (6.9)
   /// rule, ‖r‖₂ ≤ ε·√(‖f_ex‖² + ‖f_react‖²) + E·d·H/√n·ε_round (needle::InsertionOptions).
@@ -191,6 +197,10 @@ struct SolverSpec {
   double line_search_tolerance = 0.1;
   /// Interactive cutting run ("augmented" with tools) only. Scene key `cut_configuration`.
   CutConfiguration cut_configuration = CutConfiguration::kDeformed;
+  /// Interactive cutting run only. Scene key `solve_every` ("segment", the default: the
+  /// library session's one-solve frame, measured faster in docs/augmented.md "One solve per
+  /// frame"; "triangle": a solve and a row per sweep triangle).
+  SolveEvery solve_every = SolveEvery::kSegment;
   /// 3D needle scene with "augmented": needle::InsertionOptions3D::refactor_at_m (≥ 1, default
   /// 600). Otherwise interactive cutting run only: interactive::AugmentedCutOptions::refactor_at_m,
   /// the augmented paper's §3.6 background refactorization — started after a solve once m − |𝓓|
@@ -236,6 +246,12 @@ inline constexpr NameTable<SolverSpec::Method, 5> kMethodNames{{{
 inline constexpr NameTable<SolverSpec::CutConfiguration, 2> kCutConfigurationNames{{{
     {SolverSpec::CutConfiguration::kDeformed, "deformed"},
     {SolverSpec::CutConfiguration::kReference, "reference"},
+}}};
+
+/// Names of SolverSpec::SolveEvery (scene key `solve_every`).
+inline constexpr NameTable<SolverSpec::SolveEvery, 2> kSolveEveryNames{{{
+    {SolverSpec::SolveEvery::kSegment, "segment"},
+    {SolverSpec::SolveEvery::kTriangle, "triangle"},
 }}};
 
 /// The value of the scene key `schur_preconditioner` that selects linalg::SchurSolver::
@@ -364,6 +380,9 @@ inline const char* to_string(SolverSpec::Method m) {
 }
 inline const char* to_string(SolverSpec::CutConfiguration c) {
   return kCutConfigurationNames.name(c);
+}
+inline const char* to_string(SolverSpec::SolveEvery s) {
+  return kSolveEveryNames.name(s);
 }
 inline const char* to_string(Region::Kind k) {
   return kRegionKindNames.name(k);
