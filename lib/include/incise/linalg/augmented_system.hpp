@@ -147,7 +147,8 @@ struct AugmentedOptions {
 /// The options of the interactive sessions at organ scale (interactive::AugmentedCutSession,
 /// the 3D needle's augmented path): a supernodal CHOLMOD factor (METIS kept), eq. 17
 /// preconditioned by the explicit H R⁻¹ J in capacitance form (SchurSolver::kDirectCached), its
-/// factorization updated between solves, a background factor's G prepared before its swap. Why,
+/// factorization updated between solves, a background factor's G prepared before its swap by
+/// the job itself (prepare_in_job). Why,
 /// with the measurements: docs/cutting.md, docs/augmented.md.
 inline AugmentedOptions interactive_options() {
   AugmentedOptions o;
