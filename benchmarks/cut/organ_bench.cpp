@@ -213,12 +213,10 @@ void BM_LiverScalpelPath(benchmark::State& state) {
               << 1e3 * in_frame.seconds_product << ',' << 1e3 * in_frame.seconds_setup << ','
               << 1e3 * in_frame.seconds_step1 << ',' << 1e3 * in_frame.seconds_step2 << ','
               << 1e3 * in_frame.seconds_step3 << ',' << 1e3 * in_frame.seconds_swap << ','
-              << in_frame.gmres_iterations << ',' << in_frame.rank << ','
-              << in_frame.needed_rank << ',' << 1e-9 * in_frame.update_flops << ','
-              << 1e-9 * in_frame.fresh_flops << ','
-              << 1e3 * split.analyze
-              << ',' << 1e3 * split.factorize << ',' << 1e3 * split.extract << ','
-              << 1e3 * split.prepare << std::endl;
+              << in_frame.gmres_iterations << ',' << in_frame.rank << ',' << in_frame.needed_rank
+              << ',' << 1e-9 * in_frame.update_flops << ',' << 1e-9 * in_frame.fresh_flops << ','
+              << 1e3 * split.analyze << ',' << 1e3 * split.factorize << ',' << 1e3 * split.extract
+              << ',' << 1e3 * split.prepare << std::endl;
     }
     state.counters["chg_frames"] = static_cast<double>(chg_frame_cpu.size());
     put_ms_summary(state, "chg_cpu_frame", chg_frame_cpu);

@@ -448,27 +448,27 @@ bool AugmentedSystem::start_refactorization() {
   if (!second && options_.prepare_in_job && options_.prepare_swap &&
       options_.schur_solver == SchurSolver::kDirectCached)
     board = std::make_shared<KeepBoard>();
-  auto job = std::async(
-      std::launch::async, [m = std::move(snapshot), options, f = std::move(spare), board]() mutable {
-        std::unique_ptr<Base> base = make_base(std::move(m), std::move(f), options);
-        if (!board || base->status != FactorStatus::kOk) return base;
-        // G of the new factor on the published labels that it factors (prepare_in_job).
-        std::vector<int> l;
-        {
-          const std::lock_guard<std::mutex> lock(board->mutex);
-          l = board->keep;
-        }
-        const int nb = static_cast<int>(base->matrix.rows());
-        l.erase(std::lower_bound(l.begin(), l.end(), nb), l.end());
-        if (l.empty()) return base;
-        const double cpu0 = thread_cpu_seconds();
-        ClosureLdlSolver& solver = *base->solver;
-        const std::vector<int> closure = solver.closure(l);
-        solver.solve_restricted_block(l, closure, closure, l, base->g, options.blas_kernels);
-        base->g_l = std::move(l);
-        base->times.prepare = thread_cpu_seconds() - cpu0;
-        return base;
-      });
+  auto job = std::async(std::launch::async, [m = std::move(snapshot), options, f = std::move(spare),
+                                             board]() mutable {
+    std::unique_ptr<Base> base = make_base(std::move(m), std::move(f), options);
+    if (!board || base->status != FactorStatus::kOk) return base;
+    // G of the new factor on the published labels that it factors (prepare_in_job).
+    std::vector<int> l;
+    {
+      const std::lock_guard<std::mutex> lock(board->mutex);
+      l = board->keep;
+    }
+    const int nb = static_cast<int>(base->matrix.rows());
+    l.erase(std::lower_bound(l.begin(), l.end(), nb), l.end());
+    if (l.empty()) return base;
+    const double cpu0 = thread_cpu_seconds();
+    ClosureLdlSolver& solver = *base->solver;
+    const std::vector<int> closure = solver.closure(l);
+    solver.solve_restricted_block(l, closure, closure, l, base->g, options.blas_kernels);
+    base->g_l = std::move(l);
+    base->times.prepare = thread_cpu_seconds() - cpu0;
+    return base;
+  });
   if (second) {
     changed_since_snapshot2_.clear();
     job2_ = std::move(job);
@@ -955,14 +955,21 @@ const Eigen::MatrixXd& AugmentedSystem::capacitance_matrix(const Augmentation& a
       ++kept;
       for (int i = 0; i < m; ++i)
         if (prev[i] >= 0) s(i, k) = product_(prev[i], pk);
-      for (int i : fresh_rows) {
-        double v = 0;
-        if (aug.is_dirichlet[k]) {
-          v = g_entry(i, k);
+      if (aug.is_dirichlet[k]) {
+        for (int i : fresh_rows) s(i, k) = g_entry(i, k);
+        continue;
+      }
+      // Σ over the column's entries, in their order, for every new row: the entries outside and
+      // the rows inside, so that each entry reads one column of G (the same sums per row).
+      for (int i : fresh_rows) s(i, k) = 0;
+      for (const auto& [row, e] : col) {
+        const int p = pos_in_l_[row];
+        if (p < mb) {
+          const double* gp = g_.col(p).data();
+          for (int i : fresh_rows) s(i, k) += e * (i < mb ? gp[i] : 0.0);
         } else {
-          for (const auto& [row, e] : col) v += e * g_entry(i, pos_in_l_[row]);
+          for (int i : fresh_rows) s(i, k) += e * (i == p ? 1.0 : 0.0);
         }
-        s(i, k) = v;
       }
       continue;
     }
@@ -1172,7 +1179,7 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
   Timer total;
   AugmentedReport report;
   if (board_) publish_keep();  // prepare_in_job: what the pending job will prepare G for
-  if (job_.valid()) {  // §3.6: a finished background factor replaces R first
+  if (job_.valid()) {          // §3.6: a finished background factor replaces R first
     const Timer swap;
     report.refactorization_swapped = poll_refactorization();
     report.seconds_swap = swap.seconds();

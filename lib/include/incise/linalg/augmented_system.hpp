@@ -156,7 +156,7 @@ inline AugmentedOptions interactive_options() {
   o.schur_solver = SchurSolver::kDirectCached;
   o.update_capacitance = true;  // issue 17: updated, not refactored (docs/augmented.md)
   o.prepare_swap = true;        // issue 17: G of a new factor made in the background
-  o.prepare_in_job = true;               // issue 17: no poll between factorization and G
+  o.prepare_in_job = true;      // issue 17: no poll between factorization and G
   return o;
 }
 
