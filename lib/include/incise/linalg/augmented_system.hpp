@@ -318,7 +318,8 @@ class AugmentedSystem {
 
   /// Solves the current system: `displacement` (size n, prescribed values at 𝓓) and `reaction`
   /// (size n, zero off 𝓓): reaction_d = (K a)_d − f_d, the force the constraint exerts, so that
-  /// K a = f + reaction. Polls the background refactorization first.
+  /// K a = f + reaction. Polls the background refactorization first (with prepare_in_job,
+  /// after publishing the columns the pending job is to prepare G for).
   AugmentedReport solve(Eigen::VectorXd& displacement, Eigen::VectorXd& reaction);
 
   /// 𝓛: sorted indices of replaced columns (changed columns, new DOFs, Dirichlet DOFs).
