@@ -23,10 +23,13 @@
 /// snapshot), and the solves per frame: 0 one after each sweep triangle (AugmentedCutSession::step,
 /// twice per frame), 1 one per frame (AugmentedCutSession::frame: both triangles cut in the
 /// deformed configuration of the last frame, then one solve), and AugmentedCutOptions::
-/// poll_after_solve (0 off, 1 on). chg_* counters: frames that solved
+/// poll_after_solve (0 off, 1 on), and AugmentedOptions::prepare_in_job (0: the finished
+/// factorization waits for a poll before G is prepared; 1, the default: the job goes on to G
+/// itself; docs/augmented.md "Preparation in the job"). chg_* counters: frames that solved
 /// (the others reuse the last solution and cost the cut); bg_cpu_*: CPU of the background
 /// factorizations that were swapped in (their own thread). With INCISE_ORGAN_TRACE=<dir> the
-/// per-frame numbers go to <dir>/<benchmark args>.csv.
+/// per-frame numbers go to <dir>/<benchmark args>.csv, with the cost rule's inputs of the
+/// capacitance factorization and, on swap frames, the thread CPU split of the swapped-in job.
 
 #include <benchmark/benchmark.h>
 #include <incise/core/problem.hpp>
@@ -86,7 +89,8 @@ struct SolveTimes {
   double seconds_setup = 0, seconds_step1 = 0, seconds_step2 = 0, seconds_step3 = 0,
          seconds_new_columns = 0, seconds_product = 0, seconds_capfactor = 0, seconds_swap = 0,
          new_columns = 0;
-  int solves = 0, fresh = 0, gmres_iterations = 0, rank = 0;
+  int solves = 0, fresh = 0, gmres_iterations = 0, rank = 0, needed_rank = 0;
+  double update_flops = 0, fresh_flops = 0;  // of the solve with the largest needed rank
   void add(const incise::linalg::AugmentedReport& s) {
     ++solves;
     seconds_setup += s.seconds_setup;
@@ -101,6 +105,11 @@ struct SolveTimes {
     fresh += s.capacitance_refreshed ? 1 : 0;
     gmres_iterations += s.gmres.iterations;
     rank = std::max(rank, s.capacitance_rank);
+    if (s.capacitance_needed_rank >= needed_rank) {
+      needed_rank = s.capacitance_needed_rank;
+      update_flops = s.capacitance_update_flops;
+      fresh_flops = s.capacitance_fresh_flops;
+    }
   }
 };
 
@@ -119,6 +128,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
   opt.augmented.overlap_stale_columns = static_cast<int>(state.range(8));
   const bool per_frame = state.range(9) != 0;
   opt.poll_after_solve = state.range(10) != 0;
+  opt.augmented.prepare_in_job = state.range(11) != 0;
   opt.refactorization_mode = state.range(5) == 0
                                  ? incise::interactive::RefactorizationMode::kContinuous
                                  : incise::interactive::RefactorizationMode::kBreakEven;
@@ -135,11 +145,13 @@ void BM_LiverScalpelPath(benchmark::State& state) {
     std::ofstream trace;
     if (const char* dir = std::getenv("INCISE_ORGAN_TRACE")) {
       std::string name = std::string(dir) + "/scalpel";
-      for (int a = 0; a < 11; ++a) name += "_" + std::to_string(state.range(a));
+      for (int a = 0; a < 12; ++a) name += "_" + std::to_string(state.range(a));
       trace.open(name + ".csv");
       trace << "frame,cut_cpu_ms,update_cpu_ms,m_before,m_after,swapped,started,new_columns,"
                "newcol_ms,capfactor_ms,cap_fresh,bg_cpu_ms,dirichlet,product_ms,setup_ms,step1_ms,"
-               "step2_ms,step3_ms,swap_ms,gmres_iterations,cap_rank\n";
+               "step2_ms,step3_ms,swap_ms,gmres_iterations,cap_rank,cap_needed_rank,"
+               "cap_update_gflop,cap_fresh_gflop,bg_analyze_ms,bg_factorize_ms,"
+               "bg_extract_ms,bg_prepare_ms\n";
     }
     SolveTimes total;
     for (int f = 0; f < frames; ++f) {
@@ -191,6 +203,8 @@ void BM_LiverScalpelPath(benchmark::State& state) {
         chg_frame_cpu.push_back(cc + uc);
         m_after.push_back(ma);
       }
+      const incise::linalg::FactorizationCpu split =
+          sw > 0 ? session.system().factorization_cpu() : incise::linalg::FactorizationCpu{};
       if (trace.is_open())
         trace << f << ',' << 1e3 * cc << ',' << 1e3 * uc << ',' << mb << ',' << ma << ',' << sw
               << ',' << st << ',' << in_frame.new_columns << ','
@@ -199,7 +213,10 @@ void BM_LiverScalpelPath(benchmark::State& state) {
               << 1e3 * in_frame.seconds_product << ',' << 1e3 * in_frame.seconds_setup << ','
               << 1e3 * in_frame.seconds_step1 << ',' << 1e3 * in_frame.seconds_step2 << ','
               << 1e3 * in_frame.seconds_step3 << ',' << 1e3 * in_frame.seconds_swap << ','
-              << in_frame.gmres_iterations << ',' << in_frame.rank << std::endl;
+              << in_frame.gmres_iterations << ',' << in_frame.rank << ',' << in_frame.needed_rank
+              << ',' << 1e-9 * in_frame.update_flops << ',' << 1e-9 * in_frame.fresh_flops << ','
+              << 1e3 * split.analyze << ',' << 1e3 * split.factorize << ',' << 1e3 * split.extract
+              << ',' << 1e3 * split.prepare << std::endl;
     }
     state.counters["chg_frames"] = static_cast<double>(chg_frame_cpu.size());
     put_ms_summary(state, "chg_cpu_frame", chg_frame_cpu);
@@ -248,69 +265,75 @@ void BM_LiverScalpelPath(benchmark::State& state) {
 // per triangle and per frame on both livers; the frame of that section is the one-solve frame
 // (…/0/1/1/).
 BENCHMARK(BM_LiverScalpelPath)
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 0, 0, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 0, 0, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 0, 0, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 1, 1, 1, 0, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 1, 1, 1, 0, 0, 0})
-    ->Args({0, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 1, 1, 1, 0, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 0, 1, 0, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 1, 0, 1, 0, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 0, 1, 0, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 1, 0, 1, 0, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 0, 1, 0, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 1, 0, 1, 0, 0, 0})
-    ->Args({0, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 150, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 300, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 600, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 150, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 300, 0, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 600, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 150, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 300, 0, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 600, 0, 0})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({1, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0})
-    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 0})
-    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 0})
-    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 0})
-    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 1, 0})
-    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 1, 0})
-    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 1, 0})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0})
-    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 0, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1})
-    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 1})
-    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 1})
-    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 1})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1})
+    ->Args({0, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1})
+    ->Args({0, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({1, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1})
+    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1})
+    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1})
+    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 

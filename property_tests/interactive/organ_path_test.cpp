@@ -74,7 +74,7 @@ std::vector<AugmentedCutStepReport> organ_path_cut_frame(AugmentedCutSession& se
 }
 
 void run_path(double advance, int frames, const AugmentedCutOptions& options = {},
-              bool per_frame = false) {
+              bool per_frame = false, int* updated_out = nullptr) {
   const OrganPathLiverSession organ = organ_path_liver_session(options);
   AugmentedCutSession& session = *organ.session;
   ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
@@ -107,12 +107,10 @@ void run_path(double advance, int frames, const AugmentedCutOptions& options = {
     }
   }
   EXPECT_GT(dissected, 0);  // the path cuts
-  // On the long paths m grows past the point where a fresh LU is cheaper than the update:
-  // the capacitance factorization is then updated (at small m it is refreshed every solve).
-  // (Refactoring every step keeps m = |𝓓|, where the capacitance LU is always fresh.)
-  if (slow() && !options.refactor_every_step) {
-    EXPECT_GT(updated, 0);
-  }
+  // Whether the capacitance factorization is ever updated rather than refreshed depends on m,
+  // i.e. on how soon the background jobs are swapped in (timing): printed, not asserted here;
+  // Issue17UpdatedCapacitanceEqualsAFreshFactorizationWithoutBackgroundJobs1mm asserts it.
+  if (updated_out) *updated_out = updated;
   std::cout << frames << " frames at " << advance * 1e3 << " mm"
             << (per_frame ? ", one solve per frame: " : ", one solve per sweep triangle: ")
             << solved << " solves compared, " << dissected << " faces dissected, " << swaps
@@ -148,6 +146,20 @@ TEST(OrganPath, Issue17OneSolvePerFrameEqualsAFreshFactorization3mm) {
 
 TEST(OrganPath, Issue17OneSolvePerFrameEqualsAFreshFactorization10mm) {
   run_path(0.010, slow() ? 40 : 2, {}, true);
+}
+
+// The updated capacitance factorization (CapacitanceFactor: Sherman–Morrison–Woodbury on the
+// last fresh LU) on the liver path, deterministically: with the background policy off m grows
+// frame by frame, the cost rule updates instead of refreshing on some frames, and every frame
+// equals a fresh factorization (the bound of run_path). With the default background jobs
+// whether that happens depends on their timing (issue 17: prepare_in_job keeps m small enough
+// that a fresh LU is cheaper on every solve of some runs).
+TEST(OrganPath, Issue17UpdatedCapacitanceEqualsAFreshFactorizationWithoutBackgroundJobs1mm) {
+  AugmentedCutOptions options;
+  options.automatic_refactorization = false;
+  int updated = 0;
+  run_path(0.001, slow() ? 60 : 20, options, true, &updated);
+  EXPECT_GT(updated, 0);
 }
 
 // Final cut meshes equal: the same live element slots with the same nodes, the same nodes with

@@ -13,8 +13,10 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <random>
 #include <set>
+#include <thread>
 
 namespace incise::test {
 namespace {
@@ -163,17 +165,82 @@ TEST(AugmentedRefactor, PreparedSwapBringsGOfTheKeptColumnsSec3_6) {
   }
 }
 
+// AugmentedOptions::prepare_in_job (§3.6, issue 17): the job goes on from its factorization to
+// G of the columns the last solve published (changed since the snapshot, and 𝓓), so the first
+// poll that finds it finished swaps it in; without it that poll hands the factor back for a
+// second stage and a later poll swaps. Part 1 is deterministic: nothing changes after the
+// snapshot, so the published set is 𝓓 = {0} and the swap's solve makes no column of G. Part 2:
+// columns change and 𝓓 is released while the job runs (the job may read the set before or
+// after the solve publishes it, and its G may hold a label no longer in 𝓛); whatever it
+// prepared, the swap's solve makes at most the kept columns and every solve equals a fresh
+// factorization.
+TEST(AugmentedRefactor, JobPreparesGOfThePublishedColumnsWithoutAPollSec3_6) {
+  for (const bool in_job : {true, false}) {
+    CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
+    linalg::AugmentedOptions options;
+    options.schur_solver = linalg::SchurSolver::kDirectCached;
+    options.prepare_swap = true;
+    options.prepare_in_job = in_job;
+    linalg::AugmentedSystem aug(options);
+    ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
+    Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
+    std::map<int, double> dir;
+    std::vector<int> plane;
+    ASSERT_NO_FATAL_FAILURE(cut_three_mid_plane_nodes(m, aug, f, dir, plane, 6));
+    // Part 1.
+    ASSERT_TRUE(aug.start_refactorization());
+    int polls = 0;
+    bool swapped = false;
+    while (!swapped && aug.refactorization_pending()) {
+      while (!aug.refactorization_stage_finished())
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      swapped = aug.poll_refactorization();
+      ++polls;
+    }
+    ASSERT_TRUE(swapped) << "prepare_in_job " << in_job;
+    EXPECT_EQ(polls, in_job ? 1 : 2) << "prepare_in_job " << in_job;
+    EXPECT_EQ(aug.num_replaced(), 1);  // 𝓓
+    aug.set_force(f);
+    Eigen::VectorXd a, r;
+    linalg::AugmentedReport rep = aug.solve(a, r);
+    ASSERT_TRUE(rep.ok()) << rep.message;
+    EXPECT_EQ(rep.schur_solves, 0) << "prepare_in_job " << in_job;
+    expect_equivalent(aug, m, f, dir);
+    // Part 2.
+    ASSERT_TRUE(aug.start_refactorization());
+    ASSERT_TRUE(cut_node(m, aug, plane[3]));
+    expect_equivalent(aug, m, f, dir);  // publishes the kept columns; may swap
+    ASSERT_TRUE(cut_node(m, aug, plane[4]));
+    aug.release_dirichlet(0);
+    dir.clear();
+    (void)aug.wait_for_refactorization();
+    EXPECT_EQ(aug.refactorizations_pending(), 0);
+    int kept = 0;
+    for (int j : aug.replaced_columns()) kept += j < aug.factored_dofs();
+    const Eigen::Index old_size = f.size();
+    f.conservativeResize(m.num_dofs);
+    f.tail(m.num_dofs - old_size).setConstant(0.5);
+    aug.set_force(f);
+    rep = aug.solve(a, r);
+    ASSERT_TRUE(rep.ok()) << rep.message;
+    EXPECT_LE(rep.schur_solves, kept) << "prepare_in_job " << in_job;
+    expect_equivalent(aug, m, f, dir);
+  }
+}
+
 // AugmentedOptions::overlap_stale_columns (§3.6 with several jobs, issue 17): once a column has
 // changed since the pending job's snapshot (threshold 1 here), a second job may start from the
 // current K; at most two run. After both are done, 𝓛 holds only the columns changed since the
 // newer snapshot (and 𝓓), whichever job was swapped in or abandoned on the way, and every
 // solve equals a fresh factorization. With and without the prepared swap.
 TEST(AugmentedRefactor, OverlappingJobOnAStaleSnapshotLeavesOnlyTheNewerChangesSec3_6) {
-  for (const bool prepare : {true, false}) {
+  for (const int variant : {0, 1, 2}) {  // prepared swap, prepared in the job, not prepared
+    const bool prepare = variant < 2;
     CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
     linalg::AugmentedOptions options;
     options.schur_solver = linalg::SchurSolver::kDirectCached;
     options.prepare_swap = prepare;
+    options.prepare_in_job = variant == 1;
     options.overlap_stale_columns = 1;
     linalg::AugmentedSystem aug(options);
     ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
@@ -185,7 +252,7 @@ TEST(AugmentedRefactor, OverlappingJobOnAStaleSnapshotLeavesOnlyTheNewerChangesS
     EXPECT_FALSE(aug.may_start_refactorization());  // nothing changed since its snapshot
     EXPECT_FALSE(aug.start_refactorization());
     ASSERT_TRUE(cut_node(m, aug, plane[3]));  // the first snapshot goes stale
-    ASSERT_TRUE(aug.may_start_refactorization()) << "prepare_swap " << prepare;
+    ASSERT_TRUE(aug.may_start_refactorization()) << "variant " << variant;
     const int n_second = aug.num_dofs();
     ASSERT_TRUE(aug.start_refactorization());
     EXPECT_EQ(aug.refactorizations_pending(), 2);
@@ -261,6 +328,12 @@ TEST(AugmentedRefactor, ConcurrentUpdatesAndSolvesWhileFactoringAndPreparingTheS
   options.update_capacitance = true;
   options.prepare_swap = true;
   concurrent_updates_and_solves(options);
+}
+
+// The same with the preparation inside the job (prepare_in_job): the job reads the columns each
+// solve publishes (a mutex-guarded list), so three threads share that list and the factor data.
+TEST(AugmentedRefactor, ConcurrentUpdatesAndSolvesWhileTheJobPreparesTheSwap) {
+  concurrent_updates_and_solves(linalg::interactive_options());
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <sstream>
 #include <utility>
 
@@ -65,6 +66,7 @@ struct AugmentedSystem::Base {
   std::string message;
   double seconds = 0;      // wall time of make_base (factorization, LDLᵀ copy, S)
   double cpu_seconds = 0;  // CPU time of the thread that ran make_base
+  FactorizationCpu times;  // its split, and the background preparation of G
   // prepare_swap: G = (R⁻¹) of this factor on g_l (sorted), computed before the swap.
   std::vector<int> g_l;
   Eigen::MatrixXd g;
@@ -151,7 +153,17 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
   base->matrix.makeCompressed();
   if (!factor) factor = std::make_unique<CholmodFactor>(options.cholmod);
   base->factor = std::move(factor);
-  base->status = base->factor->compute(base->matrix, pattern_signature(base->matrix));
+  double cpu = thread_cpu_seconds();
+  const auto lap = [&cpu]() {
+    const double now = thread_cpu_seconds();
+    const double d = now - cpu;
+    cpu = now;
+    return d;
+  };
+  base->status = base->factor->analyze(base->matrix, pattern_signature(base->matrix));
+  base->times.analyze = lap();
+  if (base->status == FactorStatus::kOk) base->status = base->factor->factorize(base->matrix);
+  base->times.factorize = lap();
   base->message = base->factor->message();
   if (base->status != FactorStatus::kOk) return base;
   base->ldl = base->factor->extract_ldl();
@@ -168,6 +180,7 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
   if (options.preconditioner == SchurPreconditioner::kTridiagonalSpai) {
     tridiagonal_spai(base->matrix, base->spai_lower, base->spai_diag, base->spai_upper);
   }
+  base->times.extract = lap();
   base->seconds = timer.seconds();
   base->cpu_seconds = thread_cpu_seconds() - cpu0;
   return base;
@@ -200,6 +213,7 @@ FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
   reap_abandoned(true);
   job_ = {};
   job2_ = {};
+  board_.reset();
   changed_since_snapshot2_.clear();
   job_preparing_ = false;
   std::unique_ptr<CholmodFactor> reuse;
@@ -229,6 +243,10 @@ double AugmentedSystem::factorization_seconds() const {
 
 double AugmentedSystem::factorization_cpu_seconds() const {
   return base_ && base_->status == FactorStatus::kOk ? base_->cpu_seconds : 0.0;
+}
+
+FactorizationCpu AugmentedSystem::factorization_cpu() const {
+  return base_ && base_->status == FactorStatus::kOk ? base_->times : FactorizationCpu{};
 }
 
 FactorStatus AugmentedSystem::factorization_status() const {
@@ -401,6 +419,23 @@ bool AugmentedSystem::may_start_refactorization() const {
          static_cast<int>(changed_since_snapshot_.size()) >= options_.overlap_stale_columns;
 }
 
+// prepare_in_job: 𝓛 after the pending job's swap as the last solve saw it (changed since the
+// snapshot, and 𝓓), written by the frame thread, read once by the job after its factorization.
+struct AugmentedSystem::KeepBoard {
+  std::mutex mutex;
+  std::vector<int> keep;  // sorted
+};
+
+void AugmentedSystem::publish_keep() {
+  if (!board_) return;
+  std::vector<int> keep(changed_since_snapshot_.begin(), changed_since_snapshot_.end());
+  for (const auto& kv : dirichlet_)
+    if (changed_since_snapshot_.count(kv.first) == 0) keep.push_back(kv.first);
+  std::sort(keep.begin(), keep.end());
+  const std::lock_guard<std::mutex> lock(board_->mutex);
+  board_->keep = std::move(keep);
+}
+
 bool AugmentedSystem::start_refactorization() {
   INCISE_CHECK(base_ != nullptr, "start_refactorization before initialize");
   if (!may_start_refactorization()) return false;
@@ -408,17 +443,41 @@ bool AugmentedSystem::start_refactorization() {
   SparseMatrix snapshot = current_matrix();
   std::unique_ptr<CholmodFactor> spare;  // a fresh object: its own cholmod_common
   const AugmentedOptions options = options_;
-  auto job = std::async(std::launch::async,
-                        [m = std::move(snapshot), options, f = std::move(spare)]() mutable {
-                          return make_base(std::move(m), std::move(f), options);
-                        });
-  if (job_.valid()) {  // overlap: a second, newer snapshot
+  const bool second = job_.valid();  // overlap: a second, newer snapshot (no prepared G)
+  std::shared_ptr<KeepBoard> board;
+  if (!second && options_.prepare_in_job && options_.prepare_swap &&
+      options_.schur_solver == SchurSolver::kDirectCached)
+    board = std::make_shared<KeepBoard>();
+  auto job = std::async(std::launch::async, [m = std::move(snapshot), options, f = std::move(spare),
+                                             board]() mutable {
+    std::unique_ptr<Base> base = make_base(std::move(m), std::move(f), options);
+    if (!board || base->status != FactorStatus::kOk) return base;
+    // G of the new factor on the published labels that it factors (prepare_in_job).
+    std::vector<int> l;
+    {
+      const std::lock_guard<std::mutex> lock(board->mutex);
+      l = board->keep;
+    }
+    const int nb = static_cast<int>(base->matrix.rows());
+    l.erase(std::lower_bound(l.begin(), l.end(), nb), l.end());
+    if (l.empty()) return base;
+    const double cpu0 = thread_cpu_seconds();
+    ClosureLdlSolver& solver = *base->solver;
+    const std::vector<int> closure = solver.closure(l);
+    solver.solve_restricted_block(l, closure, closure, l, base->g, options.blas_kernels);
+    base->g_l = std::move(l);
+    base->times.prepare = thread_cpu_seconds() - cpu0;
+    return base;
+  });
+  if (second) {
     changed_since_snapshot2_.clear();
     job2_ = std::move(job);
   } else {
     changed_since_snapshot_.clear();
     snapshot_active_ = true;
     job_ = std::move(job);
+    board_ = std::move(board);
+    publish_keep();
   }
   return true;
 }
@@ -443,6 +502,7 @@ void AugmentedSystem::promote_second_job() {
   }
   job_ = std::move(job2_);
   job2_ = {};
+  board_.reset();  // the newer job prepares in a second stage
   job_preparing_ = false;
   changed_since_snapshot_ = std::move(changed_since_snapshot2_);
   changed_since_snapshot2_.clear();
@@ -464,10 +524,12 @@ bool AugmentedSystem::start_preparing(std::unique_ptr<Base>& base) {
   job_preparing_ = true;
   job_ = std::async(std::launch::async, [b = std::move(base), l = std::move(l),
                                          dense = options_.blas_kernels]() mutable {
+    const double cpu0 = thread_cpu_seconds();
     ClosureLdlSolver& solver = *b->solver;
     const std::vector<int> closure = solver.closure(l);
     solver.solve_restricted_block(l, closure, closure, l, b->g, dense);
     b->g_l = std::move(l);
+    b->times.prepare = thread_cpu_seconds() - cpu0;
     return std::move(b);
   });
   return true;
@@ -500,6 +562,10 @@ bool AugmentedSystem::swap_in(std::unique_ptr<Base> base, const std::set<int>& c
   return true;
 }
 
+bool AugmentedSystem::refactorization_stage_finished() const {
+  return job_.valid() && job_.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
+}
+
 bool AugmentedSystem::poll_refactorization() {
   reap_abandoned(false);
   if (!job_.valid()) return false;
@@ -512,7 +578,9 @@ bool AugmentedSystem::poll_refactorization() {
     promote_second_job();
   }
   std::unique_ptr<Base> base = job_.get();
-  if (!job_preparing_ && start_preparing(base)) return false;  // swapped by a later poll
+  board_.reset();
+  // Not yet prepared (prepare_in_job had nothing to prepare, or is off): G in a second stage.
+  if (!job_preparing_ && base->g_l.empty() && start_preparing(base)) return false;
   const bool swapped = swap_in(std::move(base), changed_since_snapshot_);
   promote_second_job();
   return swapped;
@@ -522,7 +590,8 @@ bool AugmentedSystem::wait_for_refactorization() {
   bool swapped = false;
   while (job_.valid()) {
     std::unique_ptr<Base> base = job_.get();
-    if (!job_preparing_ && start_preparing(base)) base = job_.get();
+    board_.reset();
+    if (!job_preparing_ && base->g_l.empty() && start_preparing(base)) base = job_.get();
     swapped = swap_in(std::move(base), changed_since_snapshot_) || swapped;
     promote_second_job();
   }
@@ -886,14 +955,21 @@ const Eigen::MatrixXd& AugmentedSystem::capacitance_matrix(const Augmentation& a
       ++kept;
       for (int i = 0; i < m; ++i)
         if (prev[i] >= 0) s(i, k) = product_(prev[i], pk);
-      for (int i : fresh_rows) {
-        double v = 0;
-        if (aug.is_dirichlet[k]) {
-          v = g_entry(i, k);
+      if (aug.is_dirichlet[k]) {
+        for (int i : fresh_rows) s(i, k) = g_entry(i, k);
+        continue;
+      }
+      // Σ over the column's entries, in their order, for every new row: the entries outside and
+      // the rows inside, so that each entry reads one column of G (the same sums per row).
+      for (int i : fresh_rows) s(i, k) = 0;
+      for (const auto& [row, e] : col) {
+        const int p = pos_in_l_[row];
+        if (p < mb) {
+          const double* gp = g_.col(p).data();
+          for (int i : fresh_rows) s(i, k) += e * (i < mb ? gp[i] : 0.0);
         } else {
-          for (const auto& [row, e] : col) v += e * g_entry(i, pos_in_l_[row]);
+          for (int i : fresh_rows) s(i, k) += e * (i == p ? 1.0 : 0.0);
         }
-        s(i, k) = v;
       }
       continue;
     }
@@ -977,6 +1053,9 @@ Eigen::VectorXd AugmentedSystem::solve_schur_system(Augmentation& aug, const Eig
       capacitance_generation_ = base_generation_;
       report.capacitance_refreshed = u.refreshed;
       report.capacitance_rank = u.changed;
+      report.capacitance_needed_rank = u.needed_rank;
+      report.capacitance_update_flops = u.update_flops;
+      report.capacitance_fresh_flops = u.fresh_flops;
       report.preconditioner_rcond = u.rcond;
       report.preconditioner_dropped =
           !(std::isfinite(u.rcond) && u.rcond > kMinPreconditionerRcond);
@@ -1099,7 +1178,8 @@ void AugmentedSystem::conclude(const Augmentation& aug, Eigen::VectorXd& displac
 AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::VectorXd& reaction) {
   Timer total;
   AugmentedReport report;
-  if (job_.valid()) {  // §3.6: a finished background factor replaces R first
+  if (board_) publish_keep();  // prepare_in_job: what the pending job will prepare G for
+  if (job_.valid()) {          // §3.6: a finished background factor replaces R first
     const Timer swap;
     report.refactorization_swapped = poll_refactorization();
     report.seconds_swap = swap.seconds();

@@ -229,6 +229,9 @@ CapacitanceUpdate CapacitanceFactor::update(const Eigen::MatrixXd& s,
   const double update_flops = 2.0 * dm0 * dm0 * misses + 2.0 * static_cast<double>(nu) * k2 * k2 +
                               (2.0 / 3.0) * k2 * k2 * k2;
   const double fresh_flops = (2.0 / 3.0) * mm * mm * mm;
+  out.needed_rank = static_cast<int>(rank);
+  out.update_flops = update_flops;
+  out.fresh_flops = fresh_flops;
   if (update_flops > refresh_ratio_ * fresh_flops) return fresh_report();
 
   // U = [D_{*,𝓠}, E_𝓡], W = Ŝ₀⁻¹ U (columns cached by label), Vᵀ = [E_𝓠ᵀ; D̃_{𝓡,*}].

@@ -441,8 +441,76 @@ double CholmodFactor::factor_flops() const {
   return impl_->common.fl;
 }
 
+// A supernodal LLᵀ factor read straight into unit-lower LDLᵀ arrays: column j of supernode s
+// (columns k1…k2−1, rows Ls[pi[s]…pi[s+1]), values column-major in Lx from px[s]) gives
+// d_j = L_jj² and l_ij = L_ij / L_jj, the padding of relaxed supernodes kept as explicit zeros —
+// the arrays cholmod_change_factor's simplicial LDLᵀ copy would give, in one pass and no copy
+// of the factor (issue 17: part of every background refactorization's cost).
+namespace {
+std::shared_ptr<const LdlFactorData> supernodal_to_ldl(const cholmod_factor& l) {
+  auto out = std::make_shared<LdlFactorData>();
+  const int n = static_cast<int>(l.n);
+  out->n = n;
+  out->perm.resize(n);
+  out->inverse_perm.resize(n);
+  const int* perm = static_cast<const int*>(l.Perm);
+  for (int i = 0; i < n; ++i) out->perm[i] = perm != nullptr ? perm[i] : i;
+  for (int i = 0; i < n; ++i) out->inverse_perm[out->perm[i]] = i;
+  const int nsuper = static_cast<int>(l.nsuper);
+  const int* super = static_cast<const int*>(l.super);
+  const int* pi = static_cast<const int*>(l.pi);
+  const int* px = static_cast<const int*>(l.px);
+  const int* ls = static_cast<const int*>(l.s);
+  const double* lx = static_cast<const double*>(l.x);
+  std::int64_t total = 0;
+  for (int s = 0; s < nsuper; ++s) {
+    const std::int64_t nscol = super[s + 1] - super[s], nsrow = pi[s + 1] - pi[s];
+    total += nscol * nsrow - nscol * (nscol + 1) / 2;
+  }
+  out->col_ptr.assign(n + 1, 0);
+  out->d.resize(n);
+  out->parent.assign(n, -1);
+  out->row_idx.reserve(static_cast<size_t>(total));
+  out->values.reserve(static_cast<size_t>(total));
+  std::vector<std::pair<int, double>> column;
+  for (int s = 0; s < nsuper; ++s) {
+    const int k1 = super[s], nscol = super[s + 1] - k1, nsrow = pi[s + 1] - pi[s];
+    const int* rows = ls + pi[s];
+    const bool sorted = std::is_sorted(rows + nscol, rows + nsrow);
+    for (int jj = 0; jj < nscol; ++jj) {
+      const int j = k1 + jj;
+      const double* col = lx + px[s] + static_cast<std::ptrdiff_t>(jj) * nsrow;
+      const double ljj = col[jj];
+      out->d[j] = ljj * ljj;
+      out->col_ptr[j] = static_cast<int>(out->row_idx.size());
+      if (sorted) {
+        for (int ii = jj + 1; ii < nsrow; ++ii) {
+          out->row_idx.push_back(rows[ii]);
+          out->values.push_back(col[ii] / ljj);
+        }
+      } else {
+        column.clear();
+        for (int ii = jj + 1; ii < nsrow; ++ii) column.emplace_back(rows[ii], col[ii] / ljj);
+        std::sort(column.begin(), column.end());
+        for (const auto& [row, value] : column) {
+          out->row_idx.push_back(row);
+          out->values.push_back(value);
+        }
+      }
+      if (out->col_ptr[j] < static_cast<int>(out->row_idx.size()))
+        out->parent[j] = out->row_idx[static_cast<size_t>(out->col_ptr[j])];
+    }
+  }
+  out->col_ptr[n] = static_cast<int>(out->row_idx.size());
+  return out;
+}
+}  // namespace
+
 std::shared_ptr<const LdlFactorData> CholmodFactor::extract_ldl() {
   if (!factorized_) return nullptr;
+  if (impl_->factor->is_super != 0 && impl_->factor->is_ll != 0 &&
+      impl_->factor->xtype == CHOLMOD_REAL)
+    return supernodal_to_ldl(*impl_->factor);
   cholmod_common& c = impl_->common;
   cholmod_factor* copy = cholmod_copy_factor(impl_->factor, &c);
   if (copy == nullptr) {

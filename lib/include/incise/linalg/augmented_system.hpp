@@ -130,6 +130,13 @@ struct AugmentedOptions {
   /// (its thread finishes unobserved). 0: one job at a time. Off by default: measured on the
   /// liver path, docs/augmented.md "Stale background jobs (issue 17)".
   int overlap_stale_columns = 0;
+  /// §3.6 with prepare_swap: the background job goes on from its factorization straight to G of
+  /// the columns that will stay in 𝓛 as the last solve() saw them (changed since the snapshot,
+  /// and 𝓓; each solve publishes them), without waiting for a solve to poll it; a later solve
+  /// swaps it in and makes only the columns missing from that G. Off: the finished
+  /// factorization waits for a poll, which hands it back for the preparation (two polls per
+  /// swap). Off here; AugmentedCutOptions turns it on (docs/augmented.md, issue 17).
+  bool prepare_in_job = false;
   /// Threads of step 3's full backward substitution (ClosureLdlSolver): 1 = serial, ≥ 1. The
   /// pass streams all of L and is memory-bound, so extra threads help as far as a core adds
   /// memory bandwidth (docs/augmented.md). The result is bit-identical for any value. Leave at
@@ -140,7 +147,8 @@ struct AugmentedOptions {
 /// The options of the interactive sessions at organ scale (interactive::AugmentedCutSession,
 /// the 3D needle's augmented path): a supernodal CHOLMOD factor (METIS kept), eq. 17
 /// preconditioned by the explicit H R⁻¹ J in capacitance form (SchurSolver::kDirectCached), its
-/// factorization updated between solves, a background factor's G prepared before its swap. Why,
+/// factorization updated between solves, a background factor's G prepared before its swap by
+/// the job itself (prepare_in_job). Why,
 /// with the measurements: docs/cutting.md, docs/augmented.md.
 inline AugmentedOptions interactive_options() {
   AugmentedOptions o;
@@ -148,6 +156,7 @@ inline AugmentedOptions interactive_options() {
   o.schur_solver = SchurSolver::kDirectCached;
   o.update_capacitance = true;  // issue 17: updated, not refactored (docs/augmented.md)
   o.prepare_swap = true;        // issue 17: G of a new factor made in the background
+  o.prepare_in_job = true;      // issue 17: no poll between factorization and G
   return o;
 }
 
@@ -214,8 +223,24 @@ struct [[nodiscard]] AugmentedReport
   bool capacitance_refreshed = false;
   /// kDirectCached with update_capacitance: rank of the update to the last fresh one (0: fresh)
   int capacitance_rank = 0;
+  /// kDirectCached with update_capacitance: the cost rule's inputs (CapacitanceUpdate::
+  /// needed_rank, update_flops, fresh_flops; 0 when the factorization was fresh without it)
+  int capacitance_needed_rank = 0;
+  double capacitance_update_flops = 0;
+  double capacitance_fresh_flops = 0;
   bool refactorization_swapped = false;  ///< a background factor replaced the old one here
   FactorStatus refactorization_status = FactorStatus::kOk;  ///< of a finished background job
+};
+
+/// Thread CPU seconds of the steps that made a factor of R (AugmentedSystem::factorization_cpu):
+/// CHOLMOD's symbolic analysis (ordering, elimination tree, pattern of L), its numeric
+/// factorization, the LDLᵀ copy with the closure solver and §3.5 data, and — for a background
+/// factor with prepare_swap — the preparation of G of the kept columns (0 otherwise).
+struct FactorizationCpu {
+  double analyze = 0;
+  double factorize = 0;
+  double extract = 0;
+  double prepare = 0;
 };
 
 /// Result of remove_fixed_dofs().
@@ -257,6 +282,9 @@ class AugmentedSystem {
   /// background job's own thread for a swapped-in one (threads CHOLMOD or BLAS start are not
   /// counted); 0 without a factor.
   double factorization_cpu_seconds() const;
+  /// The split of the factor in use's CPU time (zeros without a factor); prepare is not part of
+  /// factorization_cpu_seconds().
+  FactorizationCpu factorization_cpu() const;
 
   /// Current number of DOFs n = n₀ + added DOFs.
   int num_dofs() const { return n_; }
@@ -290,7 +318,8 @@ class AugmentedSystem {
 
   /// Solves the current system: `displacement` (size n, prescribed values at 𝓓) and `reaction`
   /// (size n, zero off 𝓓): reaction_d = (K a)_d − f_d, the force the constraint exerts, so that
-  /// K a = f + reaction. Polls the background refactorization first.
+  /// K a = f + reaction. Polls the background refactorization first (with prepare_in_job,
+  /// after publishing the columns the pending job is to prepare G for).
   AugmentedReport solve(Eigen::VectorXd& displacement, Eigen::VectorXd& reaction);
 
   /// 𝓛: sorted indices of replaced columns (changed columns, new DOFs, Dirichlet DOFs).
@@ -316,6 +345,9 @@ class AugmentedSystem {
   int refactorizations_abandoned() const { return abandoned_count_; }
   /// Whether a background refactorization is running or finished but not yet swapped in.
   bool refactorization_pending() const { return job_.valid(); }
+  /// Whether the pending job's current stage (factorization, or the preparation of G) has
+  /// finished, so that the next poll_refactorization() acts on it; false without a job.
+  bool refactorization_stage_finished() const;
   /// If the background job has finished, swaps its factor in (m drops to the columns changed
   /// since the job started) and returns true; a second job then becomes the pending one, and if
   /// the second finished its factorization while the first is still running, the first is
@@ -374,6 +406,11 @@ class AugmentedSystem {
   std::map<int, double> dirichlet_;          // 𝓓 with prescribed values
   Eigen::VectorXd f_;
   std::set<int> changed_since_snapshot_;
+  // prepare_in_job: the labels the pending job prepares G for once factored (published by each
+  // solve; shared with the job's thread under its mutex).
+  struct KeepBoard;
+  std::shared_ptr<KeepBoard> board_;
+  void publish_keep();
   bool snapshot_active_ = false;
   std::future<std::unique_ptr<Base>> job_;
   bool job_preparing_ = false;  // job_ is the prepare_swap stage (G of a finished factor)

@@ -33,6 +33,11 @@ struct CapacitanceUpdate {
   int changed = 0;         ///< r = |𝓠| + |𝓡|: rank of the correction to S₀ (0 if fresh)
   int new_solves = 0;      ///< columns of W computed in this update (LU solves with S₀)
   double rcond = 0;        ///< reciprocal 1-norm condition estimate of the equilibrated S
+  /// The cost rule's inputs (0 when the factorization was fresh without it: first call or
+  /// force_fresh): the rank the update needed and its predicted flops against a fresh LU's.
+  int needed_rank = 0;
+  double update_flops = 0;
+  double fresh_flops = 0;
 };
 
 /// The updatable factorization of the file comment. Not thread-safe.

@@ -194,8 +194,9 @@ class CholmodFactor {
   /// Number of symbolic analyses actually performed (cache misses), for tests.
   int analyses_performed() const { return analyses_; }
 
-  /// Copy of the factor as unit-lower LDLᵀ arrays (converts a copy of a supernodal LLᵀ
-  /// factor to simplicial LDLᵀ; the stored factor is not modified). Precondition: the last
+  /// Copy of the factor as unit-lower LDLᵀ arrays (a supernodal LLᵀ factor is read supernode
+  /// by supernode: d_j = L_jj², l_ij = L_ij/L_jj, the padding of relaxed supernodes kept as
+  /// explicit zeros; the stored factor is not modified). Precondition: the last
   /// factorize gave kOk or kTinyPivot; otherwise returns nullptr.
   std::shared_ptr<const LdlFactorData> extract_ldl();
 
