@@ -155,7 +155,7 @@ struct TetKernel {
     } else {
       nodal_from_piola(material::detail::mul(st.f, st.s), b, q);
     }
-    w = volume * Model::energy(p, st.strain);
+    w = volume * Model::energy(p, st.strain, st.m);
     return true;
   }
 
@@ -190,7 +190,7 @@ struct TetKernel {
       if constexpr (kEnergy) *w = material::detail::infinity<T>();
       return false;
     }
-    if constexpr (kEnergy) *w = volume * Model::energy(p, st.strain);
+    if constexpr (kEnergy) *w = volume * Model::energy(p, st.strain, st.m);
     const Mat3T<T> dg = material::detail::mul(differences(d), z_inv);
     Mat3T<T> dc;
     if constexpr (Model::kLinearGeometry) {
