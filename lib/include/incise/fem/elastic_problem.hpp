@@ -39,6 +39,7 @@ struct ElementFlops {
   std::uint64_t force_energy_and_product = 0;  ///< q, v·W and K_e·d (Newton line-search point)
   std::uint64_t force_and_product = 0;  ///< q and K_e·d ((4.3)+(4.4), Table 4.3 "Derivative")
   std::uint64_t product = 0;            ///< K_e·d alone (matrix-free product)
+  std::uint64_t curvature = 0;          ///< dᵀK_e d alone (the secant's slope)
   std::uint64_t force_and_tangent = 0;  ///< q and the full 12×12 K_e
   std::uint64_t tangent = 0;            ///< the 12×12 K_e alone (assembly, diagonal)
 };

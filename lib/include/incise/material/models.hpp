@@ -349,7 +349,7 @@ constexpr double kExpm1NoReduction = 0.34;
 /// eʳ − 1 = r + r²·expm1_remainder_series(r) (the series of the energy, accurate to 1e-17
 /// relative for |r| < ½), then eˣ − 1 = (2ᵏ − 1) + 2ᵏ(eʳ − 1) (2ᵏ − 1 exact for 0 ≤ k ≤ 53;
 /// k = 0 returns eʳ − 1 itself). Within 2 ulps of the exact value over the tested range
-/// (measured 1.88 at x ≈ ½ ln 2; test Expm1Lanes.WithinTwoUlpsOfLongDoubleReference; libm:
+/// (measured 1.975 at x ≈ 0.387; test Expm1Lanes.WithinTwoUlpsOfLongDoubleReference; libm:
 /// 0.78), and
 /// the same bits in every lane position and instruction set (IEEE operations only, no FMA).
 ///
