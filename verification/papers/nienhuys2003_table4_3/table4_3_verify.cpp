@@ -27,9 +27,10 @@ const std::map<std::string, Published>& table_4_3() {
   return t;
 }
 
-/// Our counts as README.md prints them (force, K_e·d, F+K_e·d, F+K_e, energy, dᵀK_e·d): the counting
-/// scalar makes them exact and deterministic (the small-deformation branch of the kernels), so
-/// they are compared for equality — a kernel change that moves a count must update the README.
+/// Our counts as README.md prints them (force, K_e·d, F+K_e·d, F+K_e, energy, dᵀK_e·d): the
+/// counting scalar makes them exact and deterministic (the small-deformation branch of the
+/// kernels), so they are compared for equality — a kernel change that moves a count must update the
+/// README.
 struct Counted {
   unsigned long long force, product, force_and_product, force_and_tangent, energy, curvature;
 };
@@ -46,8 +47,8 @@ TEST(Table4_3, CountedFlopsBesidePublished) {
   incise::material::Parameters p;
   p.gamma = 1.0;  // γ > 0: the Veronda-Westmann exponential is evaluated (and charged 50)
   std::printf("\nTable 4.3 (Nienhuys 2003) vs incise counted flops per tetrahedron\n");
-  std::printf("%-17s | %7s %7s | %7s %7s %7s %7s %7s %7s\n", "model", "T4.3 F", "T4.3 D",
-              "force", "K_e*d", "F+K_e*d", "F+K_e", "energy", "d.K_e*d");
+  std::printf("%-17s | %7s %7s | %7s %7s %7s %7s %7s %7s\n", "model", "T4.3 F", "T4.3 D", "force",
+              "K_e*d", "F+K_e*d", "F+K_e", "energy", "d.K_e*d");
   for (const auto& name : incise::material::registered_material_names()) {
     const incise::material::Material m(name, p);
     const incise::fem::ElementFlops c = incise::fem::element_flops(m);

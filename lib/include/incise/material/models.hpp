@@ -494,8 +494,7 @@ struct QuadraticEnergy {
   }
 
   template <class T>
-  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Strain<T>& s,
-                                       const MaterialState<T>&) {
+  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Strain<T>& s, const MaterialState<T>&) {
     return energy(p, s);
   }
 
@@ -584,8 +583,7 @@ struct NeoHookean {
   }
 
   template <class T>
-  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Strain<T>& s,
-                                       const MaterialState<T>&) {
+  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Strain<T>& s, const MaterialState<T>&) {
     return energy(p, s);
   }
 
@@ -704,8 +702,8 @@ struct VerondaWestmann {
     // C⁻¹ = adj C / ι3 with ι3 = J² from J − 1: the division waits for J only, not for C.
     detail::symmetric_inverse_given(detail::right_cauchy_green(s.e), T(T(1) / st.i3), st.c_inv);
     const T tre = s.e.trace();
-    st.em1 = p.gamma > 0.0 ? T(detail::expm1_stress(T(2.0 * p.gamma) * tre, st.rem, st.has_rem))
-                           : T(0);
+    st.em1 =
+        p.gamma > 0.0 ? T(detail::expm1_stress(T(2.0 * p.gamma) * tre, st.rem, st.has_rem)) : T(0);
     const T diag = T(2.0 * p.mu) * (st.em1 - tre);
     const T k = T(0.5 * p.lambda) * st.i3m1;
     for (int i = 0; i < 3; ++i)
@@ -748,8 +746,7 @@ struct VerondaWestmann {
   template <class T>
   static INCISE_KERNEL_INLINE T energy_terms(const Lame& p, const Strain<T>& s, const T& tre,
                                              const T& x, const T& rem, const T& i3m1) {
-    return T(2.0 * p.mu) * tre * x * rem -
-           T(2.0 * p.mu) * detail::symmetric_second_invariant(s.e) +
+    return T(2.0 * p.mu) * tre * x * rem - T(2.0 * p.mu) * detail::symmetric_second_invariant(s.e) +
            T(0.25 * p.lambda) * detail::x_minus_log1p(i3m1);
   }
 };
