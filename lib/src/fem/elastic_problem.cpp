@@ -260,6 +260,12 @@ ElementFlops element_flops(const material::Material& material) {
     }
     {
       FlopScope s;
+      Counted c;
+      ok = K::curvature(p, zi, Counted(ref.volume), x, d, c) && ok;
+      out.curvature = s.flops();
+    }
+    {
+      FlopScope s;
       ok = K::forces_and_tangent(p, zi, b, Counted(ref.volume), x, q, k) && ok;
       out.force_and_tangent = s.flops();
     }
@@ -1012,15 +1018,14 @@ EvalStatus ElasticProblem::hessian_curvature(const VecX& u, const VecX& d, doubl
       using T = typename std::decay_t<decltype(el)>::Scalar;
       if constexpr (!decltype(m)::kLinearGeometry) el.gather(u.data(), w.x);
       el.gather(d.data(), w.d);
-      if (!TetKernel<decltype(m), T>::product(p, el.z_inv(), el.b(), w.x, w.d, w.dq)) return false;
       T c(0);
-      for (int a = 0; a < 4; ++a)
-        for (int i = 0; i < 3; ++i) c += w.d(i, a) * w.dq(i, a);
+      if (!TetKernel<decltype(m), T>::curvature(p, el.z_inv(), el.volume(), w.x, w.d, c))
+        return false;
       part += el.sum(c);
       return true;
     });
   });
-  flops_ += (element_flops_.product + 24) * static_cast<std::uint64_t>(num_elements());
+  flops_ += (element_flops_.curvature + 1) * static_cast<std::uint64_t>(num_elements());
   if (!ok) {
     curvature = kInf;
     return EvalStatus::kInverted;

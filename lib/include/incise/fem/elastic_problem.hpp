@@ -39,6 +39,7 @@ struct ElementFlops {
   std::uint64_t force_energy_and_product = 0;  ///< q, v·W and K_e·d (Newton line-search point)
   std::uint64_t force_and_product = 0;  ///< q and K_e·d ((4.3)+(4.4), Table 4.3 "Derivative")
   std::uint64_t product = 0;            ///< K_e·d alone (matrix-free product)
+  std::uint64_t curvature = 0;          ///< dᵀK_e d alone (the secant's slope)
   std::uint64_t force_and_tangent = 0;  ///< q and the full 12×12 K_e
   std::uint64_t tangent = 0;            ///< the 12×12 K_e alone (assembly, diagonal)
 };
@@ -150,7 +151,8 @@ class ElasticProblem : public Problem {
   /// out = K(u)·d matrix-free (element products (4.4), §3.1), not projected. On kInverted out
   /// is zero.
   [[nodiscard]] EvalStatus hessian_product(const VecX& u, const VecX& d, VecX& out) override;
-  /// c = dᵀK(u)d as Σ_τ d_τᵀ(K_τ d_τ) over the element products (4.4), summed like the energy
+  /// c = dᵀK(u)d as Σ_τ d_τᵀ(K_τ d_τ) over the elements, each share v(τ)(S : dGᵀdG + ½ dS : dC)
+  /// from (4.4) without forming K_τ d_τ (TetKernel::curvature), summed like the energy
   /// (per-chunk partial sums in chunk order: the same value for every thread count and
   /// instruction set) — one sweep without the scatter of K·d and without a global vector; the
   /// value of d·hessian_product(u, d) up to rounding. With set_assembled_product: that product

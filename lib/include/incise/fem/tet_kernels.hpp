@@ -155,7 +155,7 @@ struct TetKernel {
     } else {
       nodal_from_piola(material::detail::mul(st.f, st.s), b, q);
     }
-    w = volume * Model::energy(p, st.strain);
+    w = volume * Model::energy(p, st.strain, st.m);
     return true;
   }
 
@@ -190,26 +190,37 @@ struct TetKernel {
       if constexpr (kEnergy) *w = material::detail::infinity<T>();
       return false;
     }
-    if constexpr (kEnergy) *w = volume * Model::energy(p, st.strain);
-    const Mat3T<T> dg = material::detail::mul(differences(d), z_inv);
-    Mat3T<T> dc;
+    if constexpr (kEnergy) *w = volume * Model::energy(p, st.strain, st.m);
+    Mat3T<T> dg, dc, ds;
+    derivative(p, z_inv, d, st, dg, dc, ds);
     if constexpr (Model::kLinearGeometry) {
-      for (int i = 0; i < 3; ++i)
-        for (int j = i; j < 3; ++j) dc(i, j) = dg(i, j) + dg(j, i);
-      material::detail::symmetrize_from_upper(dc);
       nodal_from_piola(st.s, b, q);
-      nodal_from_piola(Model::stress_derivative(p, st.m, dc), b, dq);
+      nodal_from_piola(ds, b, dq);
     } else {
-      const Mat3T<T> a = material::detail::mul_tn(st.f, dg);
-      for (int i = 0; i < 3; ++i)
-        for (int j = i; j < 3; ++j) dc(i, j) = a(i, j) + a(j, i);
-      material::detail::symmetrize_from_upper(dc);
       nodal_from_piola(material::detail::mul(st.f, st.s), b, q);
-      const Mat3T<T> ds = Model::stress_derivative(p, st.m, dc);
       const Mat3T<T> dp = material::detail::mul(dg, st.s) + material::detail::mul(st.f, ds);
       nodal_from_piola(dp, b, dq);
     }
     return true;
+  }
+
+  /// Along nodal direction d at the state st: dG = D·Z⁻¹ (D the differences of d), dC, the
+  /// derivative of C = FᵀF (FᵀdG + dGᵀF; linear geometry: dG + dGᵀ, twice dε) and
+  /// dS = ∂S/∂C : dC (4.4).
+  static INCISE_KERNEL_INLINE void derivative(const material::Lame& p, const Mat3T<T>& z_inv,
+                                              const Mat34T<T>& d, const State& st, Mat3T<T>& dg,
+                                              Mat3T<T>& dc, Mat3T<T>& ds) {
+    dg = material::detail::mul(differences(d), z_inv);
+    if constexpr (Model::kLinearGeometry) {
+      for (int i = 0; i < 3; ++i)
+        for (int j = i; j < 3; ++j) dc(i, j) = dg(i, j) + dg(j, i);
+    } else {
+      const Mat3T<T> a = material::detail::mul_tn(st.f, dg);
+      for (int i = 0; i < 3; ++i)
+        for (int j = i; j < 3; ++j) dc(i, j) = a(i, j) + a(j, i);
+    }
+    material::detail::symmetrize_from_upper(dc);
+    ds = Model::stress_derivative(p, st.m, dc);
   }
 
  public:
@@ -222,22 +233,41 @@ struct TetKernel {
     if constexpr (!Model::kLinearGeometry) {
       if (!kinematics(p, z_inv, x, st)) return false;
     }
-    const Mat3T<T> dg = material::detail::mul(differences(d), z_inv);
-    Mat3T<T> dc;
+    Mat3T<T> dg, dc, ds;
+    derivative(p, z_inv, d, st, dg, dc, ds);
     if constexpr (Model::kLinearGeometry) {
-      for (int i = 0; i < 3; ++i)
-        for (int j = i; j < 3; ++j) dc(i, j) = dg(i, j) + dg(j, i);
-      material::detail::symmetrize_from_upper(dc);
-      nodal_from_piola(Model::stress_derivative(p, st.m, dc), b, dq);
+      nodal_from_piola(ds, b, dq);
     } else {
-      const Mat3T<T> a = material::detail::mul_tn(st.f, dg);
-      for (int i = 0; i < 3; ++i)
-        for (int j = i; j < 3; ++j) dc(i, j) = a(i, j) + a(j, i);
-      material::detail::symmetrize_from_upper(dc);
-      const Mat3T<T> ds = Model::stress_derivative(p, st.m, dc);
       const Mat3T<T> dp = material::detail::mul(dg, st.s) + material::detail::mul(st.f, ds);
       nodal_from_piola(dp, b, dq);
     }
+    return true;
+  }
+
+  /// The curvature dᵀK_e d along nodal direction d, without the nodal product K_e·d: with
+  /// q_a = v·P·g_a, Σ_a d_a·(K_e d)_a = v·dP : dG, and with dP = dG·S + F·dS (4.4) and S, dS
+  /// symmetric, dP : dG = S : (dGᵀdG) + ½ dS : dC (linear geometry: dP = dS, ½ dS : dC).
+  /// What the secant line search needs (ElasticProblem::hessian_curvature); the same value as
+  /// Σ_a d_a·(K_e d)_a up to rounding. Returns false when inverted.
+  static INCISE_KERNEL_INLINE bool curvature(const material::Lame& p, const Mat3T<T>& z_inv,
+                                             const T& volume, const Mat34T<T>& x,
+                                             const Mat34T<T>& d, T& c) {
+    State st;
+    if constexpr (!Model::kLinearGeometry) {
+      if (!kinematics(p, z_inv, x, st)) return false;
+    }
+    Mat3T<T> dg, dc, ds;
+    derivative(p, z_inv, d, st, dg, dc, ds);
+    T k = T(0.5) * material::detail::symmetric_contract(ds, dc);
+    if constexpr (!Model::kLinearGeometry) {
+      Mat3T<T> gg;  // dGᵀdG, upper triangle
+      for (int i = 0; i < 3; ++i)
+        for (int j = i; j < 3; ++j)
+          gg(i, j) = dg(0, i) * dg(0, j) + dg(1, i) * dg(1, j) + dg(2, i) * dg(2, j);
+      material::detail::symmetrize_from_upper(gg);
+      k = material::detail::symmetric_contract(st.s, gg) + k;
+    }
+    c = volume * k;
     return true;
   }
 

@@ -19,7 +19,8 @@
 ///   term and det F ≤ 0 is reported as inverted with W = +∞), `kUsesJ` (needs
 ///   Strain::jm1), `kHasIsotropicTerms`, `kHasInverseTerms` (which tangent coefficients can be
 ///   non-zero, see TangentModuli);
-/// - `energy(lame, strain)` → W in J/m³ (+∞ when J ≤ 0 for log models);
+/// - `energy(lame, strain)` → W in J/m³ (+∞ when J ≤ 0 for log models); `energy(lame,
+///   strain, state)` the same value after `stress` filled `state` (reusing what it computed);
 /// - `stress(lame, strain, state, S)` writes S in Pa, filling `state` with quantities the
 ///   derivative reuses ("the calculations can be combined", §4.3); S is an out-parameter so
 ///   that the element kernels write it in place (docs/fem_performance.md, "Issue 14");
@@ -85,6 +86,11 @@ struct MaterialState {
   T j = T(0);      ///< J = √ι3 (neo-Hookean)
   T jm1 = T(0);    ///< J − 1 (neo-Hookean)
   T em1 = T(0);    ///< e^{γ(ι1 − 3)} − 1 (Veronda-Westmann)
+  /// (eˣ − 1 − x)/x² at x = γ(ι1 − 3), the energy's remainder, when `stress` summed it on the
+  /// way to em1 (has_rem; Veronda-Westmann on four lanes, see detail::expm1_stress): then
+  /// energy(lame, strain, state) takes it instead of summing the series again.
+  T rem = T(0);
+  bool has_rem = false;
 };
 
 /// Coefficients of ∂S/∂C : H = c1 tr(H) I + c2 H + c3 (C⁻¹:H) C⁻¹ + c4 C⁻¹·H·C⁻¹ (Pa).
@@ -103,26 +109,18 @@ INCISE_KERNEL_INLINE void symmetrize_from_upper(Mat3T<T>& m) {
   m(2, 1) = m(1, 2);
 }
 
-/// Inverse of a symmetric 3×3 matrix by cofactors; returns det C. 30 flops. Precondition:
-/// det C ≠ 0 (callers check the sign of det C / det F first).
+/// Inverse of a symmetric 3×3 matrix from its cofactors and a given 1/det C (r), for callers
+/// that know det C another way (Veronda-Westmann: ι3 = J² from J − 1, so the division does not
+/// wait for the cofactors). 24 flops. Precondition: r = 1/det C, det C ≠ 0.
 template <class T>
-INCISE_KERNEL_INLINE T symmetric_inverse(const Mat3T<T>& c, Mat3T<T>& inv) {
-  const T k00 = c(1, 1) * c(2, 2) - c(1, 2) * c(1, 2);
-  const T k01 = c(0, 2) * c(1, 2) - c(0, 1) * c(2, 2);
-  const T k02 = c(0, 1) * c(1, 2) - c(0, 2) * c(1, 1);
-  const T k11 = c(0, 0) * c(2, 2) - c(0, 2) * c(0, 2);
-  const T k12 = c(0, 1) * c(0, 2) - c(0, 0) * c(1, 2);
-  const T k22 = c(0, 0) * c(1, 1) - c(0, 1) * c(0, 1);
-  const T det = c(0, 0) * k00 + c(0, 1) * k01 + c(0, 2) * k02;
-  const T r = T(1) / det;
-  inv(0, 0) = k00 * r;
-  inv(0, 1) = k01 * r;
-  inv(0, 2) = k02 * r;
-  inv(1, 1) = k11 * r;
-  inv(1, 2) = k12 * r;
-  inv(2, 2) = k22 * r;
+INCISE_KERNEL_INLINE void symmetric_inverse_given(const Mat3T<T>& c, const T& r, Mat3T<T>& inv) {
+  inv(0, 0) = (c(1, 1) * c(2, 2) - c(1, 2) * c(1, 2)) * r;
+  inv(0, 1) = (c(0, 2) * c(1, 2) - c(0, 1) * c(2, 2)) * r;
+  inv(0, 2) = (c(0, 1) * c(1, 2) - c(0, 2) * c(1, 1)) * r;
+  inv(1, 1) = (c(0, 0) * c(2, 2) - c(0, 2) * c(0, 2)) * r;
+  inv(1, 2) = (c(0, 1) * c(0, 2) - c(0, 0) * c(1, 2)) * r;
+  inv(2, 2) = (c(0, 0) * c(1, 1) - c(0, 1) * c(0, 1)) * r;
   symmetrize_from_upper(inv);
-  return det;
 }
 
 /// det of a symmetric 3×3 matrix (14 flops).
@@ -222,14 +220,24 @@ constexpr double kExpm1SeriesLimit = 0.5;
 /// x − ln(1 + x) for x > −1 (+∞ at x = −1), to a few ulps relative for every x: the direct
 /// difference loses ≈ 2ε/|x| relative as x → 0, so for |x| < ¼ it is summed from
 /// ln(1 + x) = 2 atanh(s), s = x/(2 + x):  x − ln(1 + x) = s·x − 2s³ Σ_{k≥0} s^{2k}/(2k + 3)
-/// (|s| ≤ 1/7, nine terms reach 1e-17 relative; 24 flops). Otherwise x − log1p(x) (51 flops;
+/// (|s| ≤ 1/7, nine terms reach 1e-17 relative; 27 flops: the sum by Estrin's scheme in
+/// z = s², pairs, then z², z⁴, z⁸ — a dependency chain of 4 multiply-adds where Horner's has 8,
+/// for 3 more flops; issue 19, docs/solvers.md "Sixth pass"). Otherwise x − log1p(x) (51 flops;
 /// ≈ 4ε/|x| relative, 16 ulps at the switch). The flops executed depend on the branch.
 template <class T>
 INCISE_KERNEL_INLINE T x_minus_log1p_series(const T& x) {
   const T s = x / (T(2) + x);
   const T z = s * s;
-  T sum = T(1.0 / 19.0);
-  for (int k = 7; k >= 0; --k) sum = T(1.0 / (2 * k + 3)) + z * sum;
+  const T z2 = z * z;
+  const T z4 = z2 * z2;
+  const T z8 = z4 * z4;
+  const T p01 = T(1.0 / 3.0) + T(1.0 / 5.0) * z;
+  const T p23 = T(1.0 / 7.0) + T(1.0 / 9.0) * z;
+  const T p45 = T(1.0 / 11.0) + T(1.0 / 13.0) * z;
+  const T p67 = T(1.0 / 15.0) + T(1.0 / 17.0) * z;
+  const T q0 = p01 + p23 * z2;
+  const T q1 = p45 + p67 * z2;
+  const T sum = (q0 + q1 * z4) + T(1.0 / 19.0) * z8;
   return s * x - T(2) * (s * z) * sum;
 }
 
@@ -242,19 +250,37 @@ INCISE_KERNEL_INLINE T x_minus_log1p(const T& x) {
 }
 
 /// (eˣ − 1 − x)/x² (→ ½ at x = 0), to a few ulps relative for every x: for |x| < ½ the series
-/// Σ_{k≥0} xᵏ/(k + 2)! (14 terms reach 1e-17 relative; 26 flops), otherwise
+/// Σ_{k≥0} xᵏ/(k + 2)! (14 terms reach 1e-17 relative; 29 flops), otherwise
 /// (expm1(x) − x)/x² (53 flops; ≈ 8 ulps at the switch). The flops executed depend on the
-/// branch.
+/// branch. The series is summed by Estrin's scheme (pairs c_{2j} + c_{2j+1}x, then x², x⁴, x⁸):
+/// a dependency chain of 4 multiply-adds where Horner's has 13, for 3 more flops — the chain
+/// was ≈ 20 % of a four-lane Veronda–Westmann force sweep (issue 19, docs/solvers.md "Sixth
+/// pass"). `x2` = x·x (the caller's, when it has it).
 template <class T>
-INCISE_KERNEL_INLINE T expm1_remainder_series(const T& x) {
-  // 1/(k + 2)! for k = 0..13, Horner from the highest power.
-  constexpr double kInvFactorial[14] = {
+INCISE_KERNEL_INLINE T expm1_remainder_series(const T& x, const T& x2) {
+  // c_k = 1/(k + 2)! for k = 0..13.
+  constexpr double c[14] = {
       1.0 / 2,         1.0 / 6,          1.0 / 24,          1.0 / 120,          1.0 / 720,
       1.0 / 5040,      1.0 / 40320,      1.0 / 362880,      1.0 / 3628800,      1.0 / 39916800,
       1.0 / 479001600, 1.0 / 6227020800, 1.0 / 87178291200, 1.0 / 1307674368000};
-  T sum = T(kInvFactorial[13]);
-  for (int k = 12; k >= 0; --k) sum = T(kInvFactorial[k]) + x * sum;
-  return sum;
+  const T x4 = x2 * x2;
+  const T x8 = x4 * x4;
+  const T a0 = T(c[0]) + T(c[1]) * x;
+  const T a1 = T(c[2]) + T(c[3]) * x;
+  const T a2 = T(c[4]) + T(c[5]) * x;
+  const T a3 = T(c[6]) + T(c[7]) * x;
+  const T a4 = T(c[8]) + T(c[9]) * x;
+  const T a5 = T(c[10]) + T(c[11]) * x;
+  const T a6 = T(c[12]) + T(c[13]) * x;
+  const T b0 = a0 + a1 * x2;
+  const T b1 = a2 + a3 * x2;
+  const T b2 = a4 + a5 * x2;
+  return (b0 + b1 * x4) + (b2 + a6 * x4) * x8;
+}
+
+template <class T>
+INCISE_KERNEL_INLINE T expm1_remainder_series(const T& x) {
+  return expm1_remainder_series(x, T(x * x));
 }
 
 template <class T>
@@ -285,16 +311,37 @@ INCISE_KERNEL_INLINE Lanes4 expm1_remainder(const Lanes4& x) {
 }
 
 /// eˣ − 1 for the stress (VerondaWestmann): libm's std::expm1 for double (and the counted
-/// scalar); for Lanes4 see the overload below.
+/// scalar); for Lanes4 see the overload below. The three-argument form also reports the
+/// energy's remainder (eˣ − 1 − x)/x² when it summed it on the way (never for this scalar form).
 template <class T>
 INCISE_KERNEL_INLINE T expm1_stress(const T& x) {
   using std::expm1;
   return expm1(x);
 }
 
+template <class T>
+INCISE_KERNEL_INLINE T expm1_stress(const T& x, T& /*rem*/, bool& has_rem) {
+  has_rem = false;
+  return expm1_stress(x);
+}
+
+/// expm1_remainder(x) for the energy after the stress computed em1 = expm1_stress(x) (and
+/// maybe the remainder): the same bits as expm1_remainder(x) — the series for |x| < ½, else
+/// (em1 − x)/x² with em1 libm's expm1(x), which expm1_remainder would call again.
+template <class T>
+INCISE_KERNEL_INLINE T expm1_remainder_after(const T& x, const T& em1, const T& /*rem*/,
+                                             bool /*has_rem*/) {
+  using std::abs;
+  if (abs(x) < T(kExpm1SeriesLimit)) return expm1_remainder_series(x);
+  return (em1 - x) / (x * x);
+}
+
 /// |x| below which expm1_stress(Lanes4) takes the vector path (beyond it, or for NaN, every
 /// lane calls std::expm1; eˣ overflows at 709.8).
 constexpr double kExpm1VectorLimit = 700.0;
+/// |x| below which round(x/ln 2) is 0 (< ½ ln 2 = 0.3466 with a margin for the rounding of
+/// x/ln 2): expm1_stress(Lanes4) then skips the reduction, whose k would be 0.
+constexpr double kExpm1NoReduction = 0.34;
 
 /// eˣ − 1 on four lanes at once, without a libm call per lane (which cost ≈ 10 % of a
 /// Veronda–Westmann sweep, issue 19): x = k ln 2 + r with k = round(x/ln 2) (|r| ≤ ½ ln 2;
@@ -302,14 +349,27 @@ constexpr double kExpm1VectorLimit = 700.0;
 /// eʳ − 1 = r + r²·expm1_remainder_series(r) (the series of the energy, accurate to 1e-17
 /// relative for |r| < ½), then eˣ − 1 = (2ᵏ − 1) + 2ᵏ(eʳ − 1) (2ᵏ − 1 exact for 0 ≤ k ≤ 53;
 /// k = 0 returns eʳ − 1 itself). Within 2 ulps of the exact value over the tested range
-/// (measured 1.88 at x ≈ ½ ln 2; test Expm1Lanes.WithinTwoUlpsOfLongDoubleReference; libm:
+/// (measured 1.975 at x ≈ 0.387; test Expm1Lanes.WithinTwoUlpsOfLongDoubleReference; libm:
 /// 0.78), and
 /// the same bits in every lane position and instruction set (IEEE operations only, no FMA).
-INCISE_KERNEL_INLINE Lanes4 expm1_stress(const Lanes4& x) {
+///
+/// When |x| < kExpm1NoReduction in every lane (k = 0, r is x itself), the series summed here
+/// is the energy's remainder expm1_remainder(x) bit for bit; the three-argument form hands it
+/// back (has_rem) so that the fused gradient+energy sweep sums it once (issue 19).
+INCISE_KERNEL_INLINE Lanes4 expm1_stress(const Lanes4& x, Lanes4& rem, bool& has_rem) {
+  has_rem = false;
   if (!(abs(x) < Lanes4(kExpm1VectorLimit))) {  // also NaN lanes
     Lanes4 r;
     for (int l = 0; l < 4; ++l) r.set(l, std::expm1(x[l]));
     return r;
+  }
+  if (abs(x) < Lanes4(kExpm1NoReduction)) {
+    // k = 0 in every lane: r = x, 2ᵏ = 1 and (2ᵏ − 1) + 2ᵏ(eʳ − 1) is eʳ − 1 — the value of
+    // the general path below (up to the sign of a zero), without its reduction on the chain.
+    const Lanes4 x2 = x * x;
+    rem = expm1_remainder_series(x, x2);
+    has_rem = true;
+    return x + x2 * rem;
   }
   constexpr double kInvLn2 = 1.44269504088896338700e+00;
   constexpr double kLn2Hi = 6.93147180369123816490e-01;  // 32 significant bits: k·kLn2Hi exact
@@ -317,9 +377,24 @@ INCISE_KERNEL_INLINE Lanes4 expm1_stress(const Lanes4& x) {
   constexpr double kShift = 6755399441055744.0;  // 1.5·2⁵²: (y + kShift) − kShift rounds y
   const Lanes4 k = (x * Lanes4(kInvLn2) + Lanes4(kShift)) - Lanes4(kShift);
   const Lanes4 r = (x - k * Lanes4(kLn2Hi)) - k * Lanes4(kLn2Lo);
-  const Lanes4 em1_r = r + (r * r) * expm1_remainder_series(r);
+  const Lanes4 r2 = r * r;
+  const Lanes4 em1_r = r + r2 * expm1_remainder_series(r, r2);
   const Lanes4 s = pow2_int(k);
   return (s - Lanes4(1)) + s * em1_r;
+}
+
+INCISE_KERNEL_INLINE Lanes4 expm1_stress(const Lanes4& x) {
+  Lanes4 rem;
+  bool has_rem = false;
+  return expm1_stress(x, rem, has_rem);
+}
+
+/// expm1_remainder_after on four lanes: the stress' series when it had one (the same bits as
+/// expm1_remainder(x): r = x, and the series of x with x² = x·x), else expm1_remainder(x) (the
+/// vector em1 is not libm's, so it is not used for the other branch).
+INCISE_KERNEL_INLINE Lanes4 expm1_remainder_after(const Lanes4& x, const Lanes4& /*em1*/,
+                                                  const Lanes4& rem, bool has_rem) {
+  return has_rem ? rem : expm1_remainder(x);
 }
 
 }  // namespace detail
@@ -419,6 +494,11 @@ struct QuadraticEnergy {
   }
 
   template <class T>
+  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Strain<T>& s, const MaterialState<T>&) {
+    return energy(p, s);
+  }
+
+  template <class T>
   static INCISE_KERNEL_INLINE void stress(const Lame& p, const Strain<T>& s, MaterialState<T>&,
                                           Mat3T<T>& r) {
     const T diag = T(p.lambda) * s.e.trace();
@@ -500,6 +580,11 @@ struct NeoHookean {
     // μ(tr E − ln J) = μ((tr E − j1) + (j1 − ln(1 + j1))).
     const T dev = (T(0.5) * j1sq - T(2) * i2 - T(4) * i3) + detail::x_minus_log1p(j1);
     return T(p.mu) * dev + T(0.5 * p.lambda) * j1sq;
+  }
+
+  template <class T>
+  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Strain<T>& s, const MaterialState<T>&) {
+    return energy(p, s);
   }
 
   template <class T>
@@ -594,20 +679,31 @@ struct VerondaWestmann {
     if (!(s.jm1 > T(-1))) return detail::infinity<T>();
     const T tre = s.e.trace();
     const T x = T(2.0 * p.gamma) * tre;
-    const T i3m1 = s.jm1 * (T(2) + s.jm1);
-    return T(2.0 * p.mu) * tre * x * detail::expm1_remainder(x) -
-           T(2.0 * p.mu) * detail::symmetric_second_invariant(s.e) +
-           T(0.25 * p.lambda) * detail::x_minus_log1p(i3m1);
+    return energy_terms(p, s, tre, x, detail::expm1_remainder(x), s.jm1 * (T(2) + s.jm1));
+  }
+
+  /// energy(lame, strain) after stress(lame, strain, st, ·): the same value, with ι3 − 1 and,
+  /// when stress summed it (four lanes), the remainder (eˣ − 1 − x)/x² taken from st.
+  template <class T>
+  static INCISE_KERNEL_INLINE T energy(const Lame& p, const Strain<T>& s,
+                                       const MaterialState<T>& st) {
+    if (!(s.jm1 > T(-1))) return detail::infinity<T>();
+    const T tre = s.e.trace();
+    const T x = T(2.0 * p.gamma) * tre;
+    return energy_terms(p, s, tre, x, detail::expm1_remainder_after(x, st.em1, st.rem, st.has_rem),
+                        st.i3m1);
   }
 
   template <class T>
   static INCISE_KERNEL_INLINE void stress(const Lame& p, const Strain<T>& s, MaterialState<T>& st,
                                           Mat3T<T>& r) {
-    (void)detail::symmetric_inverse(detail::right_cauchy_green(s.e), st.c_inv);
     st.i3m1 = s.jm1 * (T(2) + s.jm1);
     st.i3 = T(1) + st.i3m1;
+    // C⁻¹ = adj C / ι3 with ι3 = J² from J − 1: the division waits for J only, not for C.
+    detail::symmetric_inverse_given(detail::right_cauchy_green(s.e), T(T(1) / st.i3), st.c_inv);
     const T tre = s.e.trace();
-    st.em1 = p.gamma > 0.0 ? T(detail::expm1_stress(T(2.0 * p.gamma) * tre)) : T(0);
+    st.em1 =
+        p.gamma > 0.0 ? T(detail::expm1_stress(T(2.0 * p.gamma) * tre, st.rem, st.has_rem)) : T(0);
     const T diag = T(2.0 * p.mu) * (st.em1 - tre);
     const T k = T(0.5 * p.lambda) * st.i3m1;
     for (int i = 0; i < 3; ++i)
@@ -643,6 +739,15 @@ struct VerondaWestmann {
     r(2, 2) += d;
     detail::symmetrize_from_upper(r);
     return r;
+  }
+
+ private:
+  /// W from tr E, x = 2γ tr E, the remainder (eˣ − 1 − x)/x² and ι3 − 1 (the formula above).
+  template <class T>
+  static INCISE_KERNEL_INLINE T energy_terms(const Lame& p, const Strain<T>& s, const T& tre,
+                                             const T& x, const T& rem, const T& i3m1) {
+    return T(2.0 * p.mu) * tre * x * rem - T(2.0 * p.mu) * detail::symmetric_second_invariant(s.e) +
+           T(0.25 * p.lambda) * detail::x_minus_log1p(i3m1);
   }
 };
 
