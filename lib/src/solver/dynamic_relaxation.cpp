@@ -9,6 +9,31 @@
 
 namespace incise::solver {
 
+namespace {
+
+/// acc = −g, and whether every entry of g is finite, in one pass over g (issue 19: the SS22
+/// step's vector passes). x − x is 0 for finite x and NaN otherwise; four partial sums.
+bool negate_if_finite(const VecX& g, VecX& acc) {
+  const Eigen::Index n = g.size();
+  acc.resize(n);
+  const double* gi = g.data();
+  double* ai = acc.data();
+  double s[4] = {0.0, 0.0, 0.0, 0.0};
+  Eigen::Index i = 0;
+  for (; i + 4 <= n; i += 4)
+    for (int l = 0; l < 4; ++l) {
+      ai[i + l] = -gi[i + l];
+      s[l] += gi[i + l] - gi[i + l];
+    }
+  for (; i < n; ++i) {
+    ai[i] = -gi[i];
+    s[0] += gi[i] - gi[i];
+  }
+  return ((s[0] + s[1]) + (s[2] + s[3])) == 0.0;
+}
+
+}  // namespace
+
 SolverReport dynamic_relaxation(Problem& problem, VecX& u,
                                 const DynamicRelaxationOptions& options) {
   INCISE_CHECK(u.size() == problem.size(), "dynamic_relaxation: u has the wrong size");
@@ -54,7 +79,8 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   VecX delta, k_delta;
 
   VecX v = VecX::Zero(n), ubar = u, g, acc(n), last_good = u;
-  VecX u_best = u;  // displacement of lowest total energy: where a restart resumes (at rest)
+  VecX u_best = u;         // displacement of lowest total energy: where a restart resumes (at rest)
+  bool best_is_u = false;  // this step's u is the new u_best: the update pass swaps it there
   double energy = 0.0, last_energy = 0.0, rnorm = 0.0, threshold = 0.0;
   double e_start = 0.0, e_min = 0.0;
   bool have_e = false;
@@ -82,6 +108,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
     // run only decreases, as at the start (with the old velocity, Π at ū = u + ½Δt·u̇ and the
     // kinetic energy at u̇ can move E up by O(Δt) and fake energy growth).
     u = u_best;
+    best_is_u = false;
     v.setZero();
     have_e = false;
     have_previous = false;  // E at the new Δt is measured afresh from the resumed state
@@ -89,6 +116,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
     meter.add(4 * nn);
     return true;
   };
+  double unorm = 0.0;  // ‖u‖ after the update pass (the blow-up test)
   while (true) {
     if (!ubar_ready) ubar = u + (0.5 * dt) * v;  // (2.56), θ₁ = ½
     ubar_ready = false;
@@ -123,7 +151,9 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
       ++since_evaluated;
     }
     since_energy = has_energy ? 0 : since_energy + 1;
-    if (st != EvalStatus::kOk || !g.allFinite() || (has_energy && !std::isfinite(energy))) {
+    // acc = −g on the way (the residual's first pass; g is not changed before it is used).
+    if (st != EvalStatus::kOk || !negate_if_finite(g, acc) ||
+        (has_energy && !std::isfinite(energy))) {
       const StopReason why =
           st == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
       if (restart(why, why == StopReason::kInverted ? "inverted element" : "non-finite value"))
@@ -145,12 +175,11 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
       }
       if (e <= e_min) {
         e_min = e;
-        u_best = u;
+        best_is_u = true;  // u_best = u, by the update pass below (no copy)
         meter.add(nn);
       }
     }
-    acc = -g;
-    problem.project(acc);  // r = −P∇Π(ū)
+    problem.project(acc);  // r = −P∇Π(ū) (acc = −g above)
     rnorm = acc.norm();
     threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
     if (recurrence && rnorm <= threshold) {
@@ -196,24 +225,39 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
       const double* mi = m.data();
       const double* wi = inv_mass.data();
       const double* ai = acc.data();
+      // u_best = u without a copy: u's buffer becomes u_best and the update reads it from there
+      // and writes the new u into u_best's former buffer (the same operations, the same bits).
+      const double* u0 = u.data();
+      if (best_is_u) {
+        u.swap(u_best);
+        u0 = u_best.data();
+        best_is_u = false;
+      }
       double* ui = u.data();
       double* vi = v.data();
       ubar.resize(n);
       double* bi = ubar.data();
-      for (Eigen::Index i = 0; i < n; ++i) {
+      // ‖u‖² for the blow-up test on the way (four partial sums: the loop stays vectorizable).
+      double s2[4] = {0.0, 0.0, 0.0, 0.0};
+      const auto update = [&](Eigen::Index i, int l) {
         const double a = (ai[i] - eta * (mi[i] * vi[i])) * wi[i];
-        const double un = ui[i] + (dt * vi[i] + h2 * a);
+        const double un = u0[i] + (dt * vi[i] + h2 * a);
         const double vn = vi[i] + dt * a;
         ui[i] = un;
         vi[i] = vn;
         bi[i] = un + half_dt * vn;
-      }
+        s2[l] += un * un;
+      };
+      Eigen::Index i = 0;
+      for (; i + 4 <= n; i += 4)
+        for (int l = 0; l < 4; ++l) update(i + l, l);
+      for (; i < n; ++i) update(i, 0);
+      unorm = std::sqrt((s2[0] + s2[1]) + (s2[2] + s2[3]));
     }
     ubar_ready = true;
     meter.add(16 * nn);
     ++k;
     t += dt;
-    const double unorm = u.norm();
     if (!std::isfinite(unorm) || unorm > options.blowup_norm) {
       if (restart(StopReason::kUnstable, "blow-up")) continue;
       break;
