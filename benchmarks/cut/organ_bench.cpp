@@ -25,10 +25,11 @@
 /// deformed configuration of the last frame, then one solve), and AugmentedCutOptions::
 /// poll_after_solve (0 off, 1 on), and AugmentedOptions::prepare_in_job (0: the finished
 /// factorization waits for a poll before G is prepared; 1, the default: the job goes on to G
-/// itself; docs/augmented.md "Preparation in the job"). chg_* counters: frames that solved
-/// (the others reuse the last solution and cost the cut); bg_cpu_*: CPU of the background
-/// factorizations that were swapped in (their own thread). With INCISE_ORGAN_TRACE=<dir> the
-/// per-frame numbers go to <dir>/<benchmark args>.csv, with the cost rule's inputs of the
+/// itself; docs/augmented.md "Preparation in the job"), and AugmentedOptions::
+/// eliminate_constrained (1, the default; 0: 𝓓 stays in 𝓛 after a swap). chg_* counters: frames
+/// that solved (the others reuse the last solution and cost the cut); bg_cpu_*: CPU of the
+/// background factorizations that were swapped in (their own thread). With INCISE_ORGAN_TRACE=<dir>
+/// the per-frame numbers go to <dir>/<benchmark args>.csv, with the cost rule's inputs of the
 /// capacitance factorization and, on swap frames, the thread CPU split of the swapped-in job.
 
 #include <benchmark/benchmark.h>
@@ -129,6 +130,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
   const bool per_frame = state.range(9) != 0;
   opt.poll_after_solve = state.range(10) != 0;
   opt.augmented.prepare_in_job = state.range(11) != 0;
+  opt.augmented.eliminate_constrained = state.range(12) != 0;
   opt.refactorization_mode = state.range(5) == 0
                                  ? incise::interactive::RefactorizationMode::kContinuous
                                  : incise::interactive::RefactorizationMode::kBreakEven;
@@ -145,19 +147,19 @@ void BM_LiverScalpelPath(benchmark::State& state) {
     std::ofstream trace;
     if (const char* dir = std::getenv("INCISE_ORGAN_TRACE")) {
       std::string name = std::string(dir) + "/scalpel";
-      for (int a = 0; a < 12; ++a) name += "_" + std::to_string(state.range(a));
+      for (int a = 0; a < 13; ++a) name += "_" + std::to_string(state.range(a));
       trace.open(name + ".csv");
       trace << "frame,cut_cpu_ms,update_cpu_ms,m_before,m_after,swapped,started,new_columns,"
                "newcol_ms,capfactor_ms,cap_fresh,bg_cpu_ms,dirichlet,product_ms,setup_ms,step1_ms,"
                "step2_ms,step3_ms,swap_ms,gmres_iterations,cap_rank,cap_needed_rank,"
                "cap_update_gflop,cap_fresh_gflop,bg_analyze_ms,bg_factorize_ms,"
-               "bg_extract_ms,bg_prepare_ms\n";
+               "bg_extract_ms,bg_prepare_ms,dirichlet_eliminated\n";
     }
     SolveTimes total;
     for (int f = 0; f < frames; ++f) {
       const auto tris = path.frame(f, advance);
       double c = 0, u = 0, cc = 0, uc = 0, bgc = 0;
-      int mb = 0, ma = 0, sw = 0, st = 0, dir = 0;
+      int mb = 0, ma = 0, sw = 0, st = 0, dir = 0, dir_elim = 0;
       SolveTimes in_frame;
       bool solved = false;
       // One solve per frame (AugmentedCutSession::frame) or one per sweep triangle (step).
@@ -173,6 +175,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
           mb = std::max(mb, r.m_before_solve);
           ma = r.m_after_solve;
           dir = r.solve.dirichlet;
+          dir_elim = r.solve.dirichlet_eliminated;
           in_frame.add(r.solve);
           total.add(r.solve);
           st += r.refactorization_started ? 1 : 0;
@@ -216,7 +219,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
               << in_frame.gmres_iterations << ',' << in_frame.rank << ',' << in_frame.needed_rank
               << ',' << 1e-9 * in_frame.update_flops << ',' << 1e-9 * in_frame.fresh_flops << ','
               << 1e3 * split.analyze << ',' << 1e3 * split.factorize << ',' << 1e3 * split.extract
-              << ',' << 1e3 * split.prepare << std::endl;
+              << ',' << 1e3 * split.prepare << ',' << dir_elim << std::endl;
     }
     state.counters["chg_frames"] = static_cast<double>(chg_frame_cpu.size());
     put_ms_summary(state, "chg_cpu_frame", chg_frame_cpu);
@@ -265,75 +268,78 @@ void BM_LiverScalpelPath(benchmark::State& state) {
 // per triangle and per frame on both livers; the frame of that section is the one-solve frame
 // (…/0/1/1/).
 BENCHMARK(BM_LiverScalpelPath)
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1})
-    ->Args({0, 10, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1})
-    ->Args({0, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1})
-    ->Args({0, 10, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1})
-    ->Args({0, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({1, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1})
-    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1})
-    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1})
-    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1})
-    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1})
-    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1})
-    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1})
-    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1})
-    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1})
-    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1})
-    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({1, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
+    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
+    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
+    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 0})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 

@@ -90,9 +90,13 @@ void run_path(double advance, int frames, const AugmentedCutOptions& options = {
       two_pending += session.system().refactorizations_pending() == 2;
       if (!r.solved) continue;
       ++solved;
-      // Refactor every step: the factor in use is the current K's, so only 𝓓 stays augmented.
+      // Refactor every step: the factor in use is the current K's, so only 𝓓 stays augmented,
+      // and not even 𝓓 when the refactorization eliminates it (eliminate_constrained, on in
+      // the session's defaults).
       if (options.refactor_every_step) {
-        EXPECT_EQ(r.m_after_solve, r.solve.dirichlet);
+        EXPECT_EQ(r.m_after_solve, options.augmented.eliminate_constrained ? 0 : r.solve.dirichlet);
+        EXPECT_EQ(r.solve.dirichlet_eliminated,
+                  options.augmented.eliminate_constrained ? r.solve.dirichlet : 0);
       }
       updated += r.solve.m > 0 && !r.solve.capacitance_refreshed;
       const test::Reference ref = test::reference_solution(session, organ.material, organ.forces);

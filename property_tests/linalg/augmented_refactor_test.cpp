@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <random>
 #include <set>
@@ -129,6 +130,83 @@ TEST(AugmentedRefactor, SwapDropsMToChangesSinceStartSec3_6) {
   dir.clear();
   EXPECT_EQ(aug.num_replaced(), 0);
   expect_equivalent(aug, m, f, dir);
+}
+
+// AugmentedOptions::eliminate_constrained (§3.6 with the treatment of "Fixed DOFs of K⁰",
+// issue 17): a refactorization factors K with the rows and columns of the DOFs constrained at
+// its snapshot replaced by their diagonal entry, so after the swap 𝓛 holds no constrained DOF
+// (m = 0 with nothing changed since the snapshot; without the option m = |𝓓|). Then a new
+// cut, a new constraint (augmented, eq. 5), a changed prescribed value, the release of an
+// eliminated DOF (it rejoins 𝓛 with its coupled columns) — also while a job whose snapshot
+// eliminates it is pending — and its re-imposition: every solve equals a fresh factorization
+// (displacements and reactions). GMRES + HSJ (the paper's default) and the capacitance form
+// with its updated factorization and the swap prepared in the job (interactive_options()).
+TEST(AugmentedRefactor, RefactorizationEliminatesTheConstrainedDofsSec3_6) {
+  for (const bool interactive : {false, true}) {
+    for (const bool eliminate : {true, false}) {
+      SCOPED_TRACE(::testing::Message()
+                   << "interactive " << interactive << " eliminate " << eliminate);
+      CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
+      linalg::AugmentedOptions options =
+          interactive ? linalg::interactive_options() : linalg::AugmentedOptions{};
+      options.eliminate_constrained = eliminate;
+      linalg::AugmentedSystem aug(options);
+      ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
+      Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
+      std::map<int, double> dir;
+      std::vector<int> plane;
+      ASSERT_NO_FATAL_FAILURE(cut_three_mid_plane_nodes(m, aug, f, dir, plane, 6));
+      for (const auto& [d, v] : {std::pair<int, double>{4, -0.005}, {7, 0.002}}) {
+        aug.impose_dirichlet(d, v);
+        dir[d] = v;
+      }
+      expect_equivalent(aug, m, f, dir);
+      ASSERT_TRUE(aug.start_refactorization());
+      ASSERT_TRUE(aug.wait_for_refactorization());
+      EXPECT_EQ(aug.num_replaced(), eliminate ? 0 : 3);  // 𝓓 = {0, 4, 7}
+      aug.set_force(f);
+      Eigen::VectorXd a, r;
+      const linalg::AugmentedReport rep = aug.solve(a, r);
+      ASSERT_TRUE(rep.ok()) << rep.message;
+      EXPECT_EQ(rep.m, eliminate ? 0 : 3);
+      EXPECT_EQ(rep.dirichlet, 3);
+      EXPECT_EQ(rep.dirichlet_eliminated, eliminate ? 3 : 0);
+      expect_equivalent(aug, m, f, dir);
+      // A cut, a new (augmented) constraint, a changed prescribed value.
+      ASSERT_TRUE(cut_node(m, aug, plane[3]));
+      aug.impose_dirichlet(10, 0.003);
+      dir[10] = 0.003;
+      aug.impose_dirichlet(4, -0.004);
+      dir[4] = -0.004;
+      expect_equivalent(aug, m, f, dir);
+      // The release of an eliminated DOF: it and its coupled columns rejoin 𝓛 (without the
+      // option, its unchanged column leaves 𝓛).
+      const std::vector<int> before = aug.replaced_columns();
+      aug.release_dirichlet(7);
+      dir.erase(7);
+      const std::vector<int> after = aug.replaced_columns();
+      EXPECT_EQ(std::count(after.begin(), after.end(), 7), eliminate ? 1 : 0);
+      if (eliminate) EXPECT_GT(after.size(), before.size() + 1);
+      expect_equivalent(aug, m, f, dir);
+      aug.impose_dirichlet(7, 0.001);
+      dir[7] = 0.001;
+      expect_equivalent(aug, m, f, dir);
+      // Released while a job whose snapshot eliminates it runs, with a cut beside it.
+      ASSERT_TRUE(aug.start_refactorization());
+      aug.release_dirichlet(4);
+      dir.erase(4);
+      ASSERT_TRUE(cut_node(m, aug, plane[4]));
+      expect_equivalent(aug, m, f, dir);
+      (void)aug.wait_for_refactorization();
+      EXPECT_EQ(aug.refactorizations_pending(), 0);
+      expect_equivalent(aug, m, f, dir);
+      expect_equivalent(aug, m, f, dir);  // after the pruning of the second solve
+      // refactor_now: m drops to 0 with the option, to |𝓓| = 3 without.
+      ASSERT_TRUE(aug.refactor_now());
+      EXPECT_EQ(aug.num_replaced(), eliminate ? 0 : 3);
+      expect_equivalent(aug, m, f, dir);
+    }
+  }
 }
 
 // AugmentedOptions::prepare_swap (§3.6, issue 17): the swap brings G of the new factor for the

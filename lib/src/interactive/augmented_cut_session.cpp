@@ -351,14 +351,17 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
         r.refactorization_swapped || r.solve.refactorization_swapped || late_swap;
     r.m_after_solve = system_->num_replaced();
     // §3.6: bound m by refactoring the current K in the background once the columns a
-    // refactorization can remove (m − |𝓓|: Dirichlet DOFs stay in 𝓛) reach the threshold; the
-    // next solve that finds the job finished swaps it in.
+    // refactorization can remove (m − |𝓓|: Dirichlet DOFs stay in 𝓛; all of m with
+    // AugmentedOptions::eliminate_constrained, where 𝓛 holds only the DOFs constrained since
+    // the last snapshot, which the next one eliminates) reach the threshold; the next solve
+    // that finds the job finished swaps it in.
     // Not in the solve that dropped a failed job (its snapshot was not positive definite): the
     // next solve makes the next attempt, so a stuck K costs one factorization every other solve.
     const bool may_start = r.solve.status != linalg::AugmentedStatus::kNoFactor &&
                            r.solve.refactorization_status == linalg::FactorStatus::kOk &&
                            system_->may_start_refactorization();
-    const int removable = r.m_after_solve - r.solve.dirichlet;
+    const int removable =
+        r.m_after_solve - (options_.augmented.eliminate_constrained ? 0 : r.solve.dirichlet);
     if (options_.refactor_every_step) {
       // no background job: every step refactors in refactor_now() above
     } else if (options_.refactor_at_m > 0) {

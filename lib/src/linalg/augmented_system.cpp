@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <mutex>
 #include <sstream>
@@ -56,7 +57,11 @@ ReducedMatrix remove_fixed_dofs(const SparseMatrix& k, const std::vector<bool>& 
 // Base: the factored matrix R (= K at the time of the last (re)factorization) and S of §3.5.
 
 struct AugmentedSystem::Base {
-  SparseMatrix matrix;
+  SparseMatrix matrix;  // K at the snapshot (the factored matrix but for `eliminated_diag`)
+  // eliminate_constrained: K_dd > 0 for the DOFs d whose rows and columns the factored matrix
+  // replaces by K_dd e_d, 0 elsewhere; empty when none.
+  Eigen::VectorXd eliminated_diag;
+  bool eliminated(int j) const { return j < eliminated_diag.size() && eliminated_diag(j) > 0; }
   std::unique_ptr<CholmodFactor> factor;
   std::shared_ptr<const LdlFactorData> ldl;
   std::unique_ptr<ClosureLdlSolver> solver;
@@ -145,12 +150,33 @@ void tridiagonal_spai(const SparseMatrix& r, Eigen::VectorXd& lower, Eigen::Vect
 // Factors `matrix` and prepares S (§3.5). Runs in the caller's thread or in the background job;
 // touches nothing but its arguments.
 std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
-    SparseMatrix matrix, std::unique_ptr<CholmodFactor> factor, const AugmentedOptions& options) {
+    SparseMatrix matrix, std::unique_ptr<CholmodFactor> factor, const AugmentedOptions& options,
+    const std::vector<int>& eliminated) {
   const Timer timer;
   const double cpu0 = thread_cpu_seconds();
   auto base = std::make_unique<AugmentedSystem::Base>();
   base->matrix = std::move(matrix);
   base->matrix.makeCompressed();
+  // The factored matrix: K with the rows and columns of the eliminated DOFs replaced by their
+  // diagonal entry ("Fixed DOFs of K⁰", but kept in place so that a release can undo it).
+  const int nm = static_cast<int>(base->matrix.rows());
+  SparseMatrix masked;
+  for (int d : eliminated) {
+    if (d < 0 || d >= nm) continue;
+    const double kdd = base->matrix.coeff(d, d);
+    if (!(kdd > 0) || !std::isfinite(kdd)) continue;  // stays an augmented Dirichlet column
+    if (base->eliminated_diag.size() == 0) base->eliminated_diag = Eigen::VectorXd::Zero(nm);
+    base->eliminated_diag(d) = kdd;
+  }
+  if (base->eliminated_diag.size() != 0) {
+    masked = base->matrix;
+    const Base& b = *base;
+    masked.prune([&b](const Eigen::Index& r, const Eigen::Index& c, const double&) {
+      return r == c || (!b.eliminated(static_cast<int>(r)) && !b.eliminated(static_cast<int>(c)));
+    });
+    masked.makeCompressed();
+  }
+  const SparseMatrix& factored = base->eliminated_diag.size() != 0 ? masked : base->matrix;
   if (!factor) factor = std::make_unique<CholmodFactor>(options.cholmod);
   base->factor = std::move(factor);
   double cpu = thread_cpu_seconds();
@@ -160,9 +186,9 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
     cpu = now;
     return d;
   };
-  base->status = base->factor->analyze(base->matrix, pattern_signature(base->matrix));
+  base->status = base->factor->analyze(factored, pattern_signature(factored));
   base->times.analyze = lap();
-  if (base->status == FactorStatus::kOk) base->status = base->factor->factorize(base->matrix);
+  if (base->status == FactorStatus::kOk) base->status = base->factor->factorize(factored);
   base->times.factorize = lap();
   base->message = base->factor->message();
   if (base->status != FactorStatus::kOk) return base;
@@ -178,7 +204,7 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
   base->s_diag.resize(n);
   for (int i = 0; i < n; ++i) base->s_diag(i) = 1.0 / base->ldl->d[base->ldl->inverse_perm[i]];
   if (options.preconditioner == SchurPreconditioner::kTridiagonalSpai) {
-    tridiagonal_spai(base->matrix, base->spai_lower, base->spai_diag, base->spai_upper);
+    tridiagonal_spai(factored, base->spai_lower, base->spai_diag, base->spai_upper);
   }
   base->times.extract = lap();
   base->seconds = timer.seconds();
@@ -215,6 +241,8 @@ FactorStatus AugmentedSystem::initialize(const SparseMatrix& k0) {
   job2_ = {};
   board_.reset();
   changed_since_snapshot2_.clear();
+  job_eliminated_.clear();
+  job2_eliminated_.clear();
   job_preparing_ = false;
   std::unique_ptr<CholmodFactor> reuse;
   if (base_) reuse = std::move(base_->factor);
@@ -324,7 +352,29 @@ void AugmentedSystem::impose_dirichlet(int dof, double value) {
 
 void AugmentedSystem::release_dirichlet(int dof) {
   INCISE_CHECK(dof >= 0 && dof < n_, "release_dirichlet: DOF index out of range");
-  dirichlet_.erase(dof);
+  if (dirichlet_.erase(dof) == 0) return;
+  // eliminate_constrained: a DOF eliminated in the factored matrix (or in a pending snapshot's)
+  // brings back its row and column of K, so it and every column coupled to it differ from R.
+  const auto in = [dof](const std::vector<int>& v) {
+    return std::binary_search(v.begin(), v.end(), dof);
+  };
+  if (base_->eliminated(dof) || in(job_eliminated_) || in(job2_eliminated_)) {
+    const Column col = column_of(dof);
+    touch_column(dof);
+    for (const auto& e : col) touch_column(e.first);
+  }
+}
+
+std::vector<int> AugmentedSystem::constrained_to_eliminate() const {
+  std::vector<int> d;
+  if (!options_.eliminate_constrained) return d;
+  d.reserve(dirichlet_.size());
+  for (const auto& kv : dirichlet_) d.push_back(kv.first);  // sorted (std::map)
+  return d;
+}
+
+bool AugmentedSystem::eliminated_now(int j) const {
+  return base_->eliminated(j) && dirichlet_.count(j) != 0;
 }
 
 void AugmentedSystem::set_force(const Eigen::VectorXd& f) {
@@ -335,9 +385,10 @@ void AugmentedSystem::set_force(const Eigen::VectorXd& f) {
 std::vector<int> AugmentedSystem::replaced_columns() const {
   std::vector<int> l;
   l.reserve(changed_.size() + dirichlet_.size());
-  for (const auto& kv : changed_) l.push_back(kv.first);
+  for (const auto& kv : changed_)
+    if (!eliminated_now(kv.first)) l.push_back(kv.first);
   for (const auto& kv : dirichlet_) {
-    if (changed_.count(kv.first) == 0) l.push_back(kv.first);
+    if (changed_.count(kv.first) == 0 && !base_->eliminated(kv.first)) l.push_back(kv.first);
   }
   std::sort(l.begin(), l.end());
   return l;
@@ -381,7 +432,13 @@ int AugmentedSystem::prune_unchanged_columns() {
   int pruned = 0;
   for (auto it = changed_.begin(); it != changed_.end();) {
     const int j = it->first;
-    bool same = j < n_base_;
+    // A released eliminated DOF differs from R in its column and in its row, i.e. in every
+    // column coupled to it (eliminate_constrained).
+    const auto released = [this](int r) {
+      return base_->eliminated(r) && dirichlet_.count(r) == 0;
+    };
+    bool same = j < n_base_ && !released(j);
+    for (const auto& e : it->second) same = same && !released(e.first);
     if (same) {
       const Column& c = it->second;
       SparseMatrix::InnerIterator b(base_->matrix, j);
@@ -430,7 +487,9 @@ void AugmentedSystem::publish_keep() {
   if (!board_) return;
   std::vector<int> keep(changed_since_snapshot_.begin(), changed_since_snapshot_.end());
   for (const auto& kv : dirichlet_)
-    if (changed_since_snapshot_.count(kv.first) == 0) keep.push_back(kv.first);
+    if (changed_since_snapshot_.count(kv.first) == 0 &&
+        !std::binary_search(job_eliminated_.begin(), job_eliminated_.end(), kv.first))
+      keep.push_back(kv.first);
   std::sort(keep.begin(), keep.end());
   const std::lock_guard<std::mutex> lock(board_->mutex);
   board_->keep = std::move(keep);
@@ -441,6 +500,7 @@ bool AugmentedSystem::start_refactorization() {
   if (!may_start_refactorization()) return false;
   reap_abandoned(false);
   SparseMatrix snapshot = current_matrix();
+  std::vector<int> eliminated = constrained_to_eliminate();
   std::unique_ptr<CholmodFactor> spare;  // a fresh object: its own cholmod_common
   const AugmentedOptions options = options_;
   const bool second = job_.valid();  // overlap: a second, newer snapshot (no prepared G)
@@ -449,8 +509,8 @@ bool AugmentedSystem::start_refactorization() {
       options_.schur_solver == SchurSolver::kDirectCached)
     board = std::make_shared<KeepBoard>();
   auto job = std::async(std::launch::async, [m = std::move(snapshot), options, f = std::move(spare),
-                                             board]() mutable {
-    std::unique_ptr<Base> base = make_base(std::move(m), std::move(f), options);
+                                             board, eliminated]() mutable {
+    std::unique_ptr<Base> base = make_base(std::move(m), std::move(f), options, eliminated);
     if (!board || base->status != FactorStatus::kOk) return base;
     // G of the new factor on the published labels that it factors (prepare_in_job).
     std::vector<int> l;
@@ -472,10 +532,12 @@ bool AugmentedSystem::start_refactorization() {
   if (second) {
     changed_since_snapshot2_.clear();
     job2_ = std::move(job);
+    job2_eliminated_ = std::move(eliminated);
   } else {
     changed_since_snapshot_.clear();
     snapshot_active_ = true;
     job_ = std::move(job);
+    job_eliminated_ = std::move(eliminated);
     board_ = std::move(board);
     publish_keep();
   }
@@ -502,6 +564,8 @@ void AugmentedSystem::promote_second_job() {
   }
   job_ = std::move(job2_);
   job2_ = {};
+  job_eliminated_ = std::move(job2_eliminated_);
+  job2_eliminated_.clear();
   board_.reset();  // the newer job prepares in a second stage
   job_preparing_ = false;
   changed_since_snapshot_ = std::move(changed_since_snapshot2_);
@@ -518,7 +582,7 @@ bool AugmentedSystem::start_preparing(std::unique_ptr<Base>& base) {
   for (int j : changed_since_snapshot_)
     if (j < nb) keep.insert(j);
   for (const auto& kv : dirichlet_)
-    if (kv.first < nb) keep.insert(kv.first);
+    if (kv.first < nb && !base->eliminated(kv.first)) keep.insert(kv.first);
   if (keep.empty()) return false;
   std::vector<int> l(keep.begin(), keep.end());
   job_preparing_ = true;
@@ -537,6 +601,7 @@ bool AugmentedSystem::start_preparing(std::unique_ptr<Base>& base) {
 
 bool AugmentedSystem::swap_in(std::unique_ptr<Base> base, const std::set<int>& changed_since) {
   job_preparing_ = false;
+  job_eliminated_.clear();
   snapshot_active_ = false;
   last_refactor_status_ = base->status;
   if (base->status != FactorStatus::kOk) return false;
@@ -602,7 +667,7 @@ bool AugmentedSystem::refactor_now() {
   INCISE_CHECK(base_ != nullptr, "refactor_now before initialize");
   if (job_.valid()) (void)wait_for_refactorization();
   changed_since_snapshot_.clear();
-  return swap_in(make_base(current_matrix(), nullptr, options_), {});
+  return swap_in(make_base(current_matrix(), nullptr, options_, constrained_to_eliminate()), {});
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -615,6 +680,8 @@ struct AugmentedSystem::Augmentation {
   std::vector<int> l_base;            // the entries of 𝓛 below n_base (its first ones)
   std::vector<char> is_dirichlet;     // per entry of 𝓛: in 𝓓 (J column e_{𝓛ᵢ})
   std::vector<const Column*> j_cols;  // per entry of 𝓛: the stored column K_{*,𝓛ᵢ} (not 𝓓)
+  std::deque<Column> masked;          // columns of J without the rows of eliminated DOFs
+  std::vector<int> eliminated;        // 𝓓 ∩ eliminated in R (eliminate_constrained), sorted
   Eigen::VectorXd fhat;               // f̂ of eq. 11 (size n)
   std::vector<int> f_idx;             // struct(f̂) on the base rows, ascending
   std::vector<double> f_val;          // f̂ there
@@ -703,6 +770,16 @@ bool AugmentedSystem::augment(Augmentation& aug, AugmentedReport& report) {
   report.dirichlet = static_cast<int>(dirichlet_.size());
   pos_in_l_.assign(static_cast<size_t>(n), -1);
   for (int i = 0; i < m; ++i) pos_in_l_[aug.l[i]] = i;
+  // Constrained DOFs eliminated in R (eliminate_constrained): row and column K_dd e_d in both R
+  // and the current system, so they are not in 𝓛 and their rows leave the columns of J.
+  std::vector<char> elim_row;
+  for (const auto& kv : dirichlet_) {
+    if (!base_->eliminated(kv.first)) continue;
+    if (elim_row.empty()) elim_row.assign(static_cast<size_t>(nb), 0);
+    elim_row[static_cast<size_t>(kv.first)] = 1;
+    aug.eliminated.push_back(kv.first);
+  }
+  report.dirichlet_eliminated = static_cast<int>(aug.eliminated.size());
 
   // J columns (eq. 5) as pointers to stored columns; Dirichlet columns are e_{𝓛ᵢ}.
   aug.j_cols.assign(m, nullptr);
@@ -714,6 +791,19 @@ bool AugmentedSystem::augment(Augmentation& aug, AugmentedReport& report) {
       continue;
     }
     aug.j_cols[i] = changed_column(j);
+    if (!elim_row.empty() && aug.j_cols[i] != nullptr) {
+      const Column& c = *aug.j_cols[i];
+      const auto is_elim = [&elim_row, nb](const std::pair<int, double>& e) {
+        return e.first < nb && elim_row[static_cast<size_t>(e.first)] != 0;
+      };
+      if (std::any_of(c.begin(), c.end(), is_elim)) {
+        Column& mc = aug.masked.emplace_back();
+        mc.reserve(c.size());
+        for (const auto& e : c)
+          if (!is_elim(e)) mc.push_back(e);
+        aug.j_cols[i] = &mc;
+      }
+    }
     bool any = false;
     if (aug.j_cols[i] != nullptr) {
       for (const auto& e : *aug.j_cols[i]) {
@@ -745,6 +835,8 @@ bool AugmentedSystem::augment(Augmentation& aug, AugmentedReport& report) {
         aug.fhat(static_cast<int>(it.row())) -= it.value() * value;
     }
   }
+  // Eliminated rows: K_dd a_d = K_dd ā_d (the row of R).
+  for (int d : aug.eliminated) aug.fhat(d) = base_->eliminated_diag(d) * dirichlet_.at(d);
   for (int i = 0; i < nb; ++i) {
     if (aug.fhat(i) != 0) {
       aug.f_idx.push_back(i);
@@ -909,8 +1001,10 @@ const Eigen::MatrixXd& AugmentedSystem::capacitance_matrix(const Augmentation& a
     };
     size_t a = 0;
     if (j < nb) {
+      const bool j_elim = base_->eliminated(j);  // released: R_{*j} = K_jj e_j
       for (SparseMatrix::InnerIterator it(base_->matrix, j); it; ++it) {
         const int row = static_cast<int>(it.row());
+        if (row != j && (j_elim || base_->eliminated(row))) continue;  // not an entry of R
         for (; a < kc.size() && kc[a].first < row; ++a) add_e(kc[a].first, kc[a].second);
         if (a < kc.size() && kc[a].first == row) {
           add_e(row, kc[a].second - it.value());
@@ -1113,6 +1207,19 @@ void AugmentedSystem::scatter_schur_solution(const Augmentation& aug, const Eige
     } else {
       displacement(j) = a2(i);
     }
+  }
+  // Eliminated constrained DOFs: the prescribed value, and the reaction (K a)_d − f_d from the
+  // current column of K (symmetric), once every displacement is known.
+  for (int d : aug.eliminated) displacement(d) = dirichlet_.at(d);
+  for (int d : aug.eliminated) {
+    double r = -f_(d);
+    if (const Column* c = changed_column(d)) {
+      for (const auto& [row, v] : *c) r += v * displacement(row);
+    } else {
+      for (SparseMatrix::InnerIterator it(base_->matrix, d); it; ++it)
+        r += it.value() * displacement(static_cast<int>(it.row()));
+    }
+    reaction(d) = r;
   }
 }
 

@@ -142,6 +142,16 @@ struct AugmentedOptions {
   /// memory bandwidth (docs/augmented.md). The result is bit-identical for any value. Leave at
   /// 1 when the core is needed elsewhere, e.g. by a background refactorization (§3.6).
   int solve_threads = 1;
+  /// §3.6 and "Fixed DOFs of K⁰": a refactorization (background job or refactor_now()) factors
+  /// K with the rows and columns of the DOFs constrained at its snapshot replaced by their
+  /// diagonal entry (the prescribed values go to the right-hand side, f̂_d = K_dd ā_d), so
+  /// those DOFs leave 𝓛 while they stay constrained: m after a swap excludes 𝓓. A DOF of that
+  /// set released later rejoins 𝓛 with the columns coupled to it (their row of K is no longer
+  /// that of the factored matrix). False: the base is the unconstrained K and 𝓓 stays in 𝓛
+  /// (the paper's eq. 5 second case). Off here (the paper's form); interactive_options() turns
+  /// it on. Measured: docs/augmented.md, "Constrained DOFs eliminated at a refactorization
+  /// (issue 17)".
+  bool eliminate_constrained = false;
 };
 
 /// The options of the interactive sessions at organ scale (interactive::AugmentedCutSession,
@@ -154,9 +164,10 @@ inline AugmentedOptions interactive_options() {
   AugmentedOptions o;
   o.cholmod.kind = CholmodKind::kSupernodal;
   o.schur_solver = SchurSolver::kDirectCached;
-  o.update_capacitance = true;  // issue 17: updated, not refactored (docs/augmented.md)
-  o.prepare_swap = true;        // issue 17: G of a new factor made in the background
-  o.prepare_in_job = true;      // issue 17: no poll between factorization and G
+  o.update_capacitance = true;     // issue 17: updated, not refactored (docs/augmented.md)
+  o.prepare_swap = true;           // issue 17: G of a new factor made in the background
+  o.prepare_in_job = true;         // issue 17: no poll between factorization and G
+  o.eliminate_constrained = true;  // issue 17: 𝓓 leaves 𝓛 at a refactorization
   return o;
 }
 
@@ -182,9 +193,10 @@ inline constexpr double kMinPreconditionerRcond = 1e-13;
 /// message: what the caller can do when status != kOk.
 struct [[nodiscard]] AugmentedReport
     : Outcome<AugmentedStatus, AugmentedStatus::kOk, AugmentedStatus::kNoFactor> {
-  int n = 0;               ///< current number of DOFs
-  int m = 0;               ///< replaced columns |𝓛| (changed columns + Dirichlet DOFs)
-  int dirichlet = 0;       ///< |𝓓|
+  int n = 0;                     ///< current number of DOFs
+  int m = 0;                     ///< replaced columns |𝓛| (changed columns + Dirichlet DOFs)
+  int dirichlet = 0;             ///< |𝓓|
+  int dirichlet_eliminated = 0;  ///< of 𝓓, DOFs eliminated in the factored matrix (not in 𝓛)
   GmresReport gmres;       ///< step 2 (kGmres; with kDirectCached: iterations 0, the LU residual)
   int schur_solves = 0;    ///< kDirectCached: restricted solves spent on new columns of G
   int pruned_columns = 0;  ///< columns dropped from 𝓛 because K equals R there again
@@ -306,7 +318,8 @@ class AugmentedSystem {
   /// Re-imposing updates the value.
   void impose_dirichlet(int dof, double value);
   /// Releases the constraint of `dof` (no-op when not constrained). The column leaves 𝓛 when K
-  /// agrees with R there.
+  /// agrees with R there. A DOF eliminated in the factored matrix (or in a pending job's
+  /// snapshot; eliminate_constrained) rejoins 𝓛 with every column coupled to it.
   void release_dirichlet(int dof);
   /// Whether `dof` is constrained.
   bool is_constrained(int dof) const { return dirichlet_.count(dof) != 0; }
@@ -322,7 +335,8 @@ class AugmentedSystem {
   /// after publishing the columns the pending job is to prepare G for).
   AugmentedReport solve(Eigen::VectorXd& displacement, Eigen::VectorXd& reaction);
 
-  /// 𝓛: sorted indices of replaced columns (changed columns, new DOFs, Dirichlet DOFs).
+  /// 𝓛: sorted indices of replaced columns (changed columns, new DOFs, Dirichlet DOFs), without
+  /// the constrained DOFs eliminated in the factored matrix (eliminate_constrained).
   std::vector<int> replaced_columns() const;
   /// Number of replaced columns m = |𝓛|.
   int num_replaced() const;
@@ -358,9 +372,10 @@ class AugmentedSystem {
   /// (overlapping) job, then also that one, so that none is pending on return.
   bool wait_for_refactorization();
   /// Factors the current K now, in the calling thread (a pending background job is waited for
-  /// and swapped first), and swaps it in: m drops to |𝓓|. The per-frame "refactor every step"
-  /// strategy of docs/augmented.md (organ scale). Returns whether a factor was swapped in (false:
-  /// the factorization failed, the old factor stays; last_refactorization_status() says why).
+  /// and swapped first), and swaps it in: m drops to |𝓓| (to 0 with eliminate_constrained). The
+  /// per-frame "refactor every step" strategy of docs/augmented.md (organ scale). Returns whether a
+  /// factor was swapped in (false: the factorization failed, the old factor stays;
+  /// last_refactorization_status() says why).
   bool refactor_now();
   /// Status of the last finished background factorization.
   FactorStatus last_refactorization_status() const { return last_refactor_status_; }
@@ -373,8 +388,15 @@ class AugmentedSystem {
   struct Augmentation;
   // Dense LU of an m×m approximation of H R⁻¹ J (GMRES's right preconditioner).
   struct SchurLu;
+  // `eliminated`: sorted DOFs whose rows and columns are replaced by their diagonal entry in
+  // the factored matrix (eliminate_constrained; those with a positive diagonal).
   static std::unique_ptr<Base> make_base(SparseMatrix matrix, std::unique_ptr<CholmodFactor> factor,
-                                         const AugmentedOptions& options);
+                                         const AugmentedOptions& options,
+                                         const std::vector<int>& eliminated = {});
+  // The DOFs a refactorization of the current K eliminates (𝓓 when eliminate_constrained).
+  std::vector<int> constrained_to_eliminate() const;
+  // Whether DOF j is eliminated in the factored matrix and still constrained (not in 𝓛).
+  bool eliminated_now(int j) const;
   Column column_of(int j) const;
   const Column* changed_column(int j) const;
   void touch_column(int j);
@@ -418,6 +440,9 @@ class AugmentedSystem {
   // promoted to job_ when job_ is swapped in or abandoned.
   std::future<std::unique_ptr<Base>> job2_;
   std::set<int> changed_since_snapshot2_;
+  // eliminate_constrained: the DOFs the pending jobs' snapshots eliminate (both jobs); a release
+  // of one of them touches its coupled columns so that they stay in 𝓛 after the swap.
+  std::vector<int> job_eliminated_, job2_eliminated_;
   // Abandoned jobs: std::async futures block on destruction, so they are kept until ready.
   std::vector<std::future<std::unique_ptr<Base>>> abandoned_;
   int abandoned_count_ = 0;
