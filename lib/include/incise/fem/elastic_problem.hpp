@@ -250,9 +250,9 @@ class ElasticProblem : public Problem {
     Lanes4 volume;
   };
   /// The one element loop behind every evaluation: calls `visit(el, w, sum)` for each block of
-  /// four elements (el: a Lanes4 view, elastic_problem.cpp `Elements`; w: work arrays; sum: the
-  /// chunk's partial energy), and for the elements of a block whose visit returned false (some
-  /// lane inverted; the visit must not have had side effects) and for the tail, with a double
+  /// four elements (el: a Lanes4 view, fem/element_sweep.hpp `detail::Elements`; w: work arrays;
+  /// sum: the chunk's partial energy), and for the elements of a block whose visit returned false
+  /// (some lane inverted; the visit must not have had side effects) and for the tail, with a double
   /// view. Chunks run on threads_ threads by schedule_ when `scatters` (the visit adds into
   /// shared arrays), else in any order. `total` receives the chunks' partial sums added in chunk
   /// order. Returns false when a double visit fails.
