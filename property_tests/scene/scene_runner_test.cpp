@@ -44,8 +44,9 @@ bool contains(const std::string& s, const std::string& part) {
 }
 
 // With the default budget the Lanczos estimate converges, and Δt, η are the §4.1 values of its
-// extreme Ritz values (η with the damping ratio of the scene's tolerance); those agree with the power and inverse iterations (λ_max to 1e-3, λ₁
-// from above to 3 %: Lanczos stops when θ₁ moved ≤ 1 % over each of 8 steps).
+// extreme Ritz values (η with the damping ratio of the scene's tolerance); those agree with the
+// power and inverse iterations (λ_max to 1e-3, λ₁ from above to 3 %: Lanczos stops when θ₁ moved ≤
+// 1 % over each of 8 steps).
 TEST(DynamicParameters, ConvergedEstimatesBecomeTheParameters) {
   scene::BuiltScene b = build(dynamic_beam());
   const VecX u = VecX::Zero(b.problem->size());

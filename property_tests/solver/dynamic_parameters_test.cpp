@@ -166,8 +166,8 @@ class EstimateOnKuhnCube : public ::testing::TestWithParam<std::string> {};
 // (0.1 m, face x = 0 fixed, gravity 9.8 m/s² sideways), Table 4.1 materials, error measured in
 // the energy norm against û (linear CG to 1e-13, truncated Newton to 1e-11). The automatic η =
 // 2ζ√θ₁ (ζ for ε = 1e-6) is within 1.3× of the best of a sweep of η over 2^{±½} around it
-// and critical damping (issue 19), and for the linear material needs fewer steps than critical damping 2√θ₁ (the
-// one-mode closed form: 0.80×; docs/solvers.md, "Eighth pass").
+// and critical damping (issue 19), and for the linear material needs fewer steps than critical
+// damping 2√θ₁ (the one-mode closed form: 0.80×; docs/solvers.md, "Eighth pass").
 TEST_P(EstimateOnKuhnCube, WithinSweepAndBelowCriticalDamping_Sec4_1) {
   const mesh::MeshData m = mesh::make_kuhn_cube(6, 0.1);
   fem::ElasticProblem p(m, material::Material(GetParam(), table_4_1(GetParam())));
@@ -202,10 +202,10 @@ TEST_P(EstimateOnKuhnCube, WithinSweepAndBelowCriticalDamping_Sec4_1) {
       best_eta = eta;
     }
   }
-  std::printf("[%s] steps to 1e-6: estimate (zeta %.4f, eta %.4g) %ld, critical (eta %.4g) %ld, "
-              "sweep best (eta %.4g) %ld\n",
-              GetParam().c_str(), d.damping_ratio, d.damping, n_est, eta_crit, n_crit, best_eta,
-              best);
+  std::printf(
+      "[%s] steps to 1e-6: estimate (zeta %.4f, eta %.4g) %ld, critical (eta %.4g) %ld, "
+      "sweep best (eta %.4g) %ld\n",
+      GetParam().c_str(), d.damping_ratio, d.damping, n_est, eta_crit, n_crit, best_eta, best);
   ASSERT_GT(n_est, 0);
   ASSERT_GT(n_crit, 0);
   if (n_est < best) {

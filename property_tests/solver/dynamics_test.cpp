@@ -452,7 +452,6 @@ TEST(DynamicRelaxation, EnergyEveryKthStepSameTrajectoryAndStillRestarts_Sec4_4_
   EXPECT_THROW((void)dynamic_relaxation(s.p, u, o), ParameterError);
 }
 
-
 namespace damping_ratio_test {
 
 // SS22 on one DOF, K = M = 1, f = 1 (û = 1), from rest at u = 0, with η = 2ζ and a step

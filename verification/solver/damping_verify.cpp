@@ -125,7 +125,7 @@ TEST_P(DampingOnCylinder, ThreeWaysAgainstSweep_Sec4_1_Sec4_4_1) {
       "[%s] eta: Lanczos 2*zeta*sqrt(theta_1) %.3g 1/s (zeta %.4f, %ld products; %ld steps, "
       "%.2fx best)\n",
       GetParam().c_str(), lz.damping, lz.damping_ratio, lz.products, n_lz,
-              double(n_lz) / sweep.best_iterations);
+      double(n_lz) / sweep.best_iterations);
   // Issue 19: within 1.3× of the swept-optimal step count.
   EXPECT_LE(double(n_lz), 1.3 * double(sweep.best_iterations));
   std::printf(

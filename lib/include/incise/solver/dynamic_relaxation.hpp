@@ -87,13 +87,13 @@ double damping_ratio_for(double overshoot);
 /// Automatic Δt and η of dynamic relaxation (§4.1) and what they cost.
 struct [[nodiscard]] DynamicParameterEstimate
     : Outcome<StopReason, StopReason::kConverged, StopReason::kMaxIterations> {
-  double time_step = 0.0;   ///< Δt = safety·critical_time_step(θ_max) (s)
-  double damping = 0.0;     ///< η = ζ·critical_damping(θ₁) = 2ζ√θ₁ (1/s)
+  double time_step = 0.0;      ///< Δt = safety·critical_time_step(θ_max) (s)
+  double damping = 0.0;        ///< η = ζ·critical_damping(θ₁) = 2ζ√θ₁ (1/s)
   double damping_ratio = 1.0;  ///< ζ = damping_ratio_for(options.target_reduction / 2)
-  double lambda_min = 0.0;  ///< θ₁ ≥ λ₁ (1/s²)
-  double lambda_max = 0.0;  ///< θ_max ≤ λ_n (1/s²)
-  long products = 0;        ///< K·q products spent (= Lanczos steps)
-  std::uint64_t flops = 0;  ///< counted flops
+  double lambda_min = 0.0;     ///< θ₁ ≥ λ₁ (1/s²)
+  double lambda_max = 0.0;     ///< θ_max ≤ λ_n (1/s²)
+  long products = 0;           ///< K·q products spent (= Lanczos steps)
+  std::uint64_t flops = 0;     ///< counted flops
 };
 
 /// Δt and η at u from one lanczos_spectrum() run started at the first acceleration
