@@ -14,7 +14,8 @@
 /// (DynamicRelaxationOptions::energy_every = 4). BM_PerIteration/<material>/<method>: CPU ms per
 /// iteration in a long run (best of batches; the per-iteration table of docs/solvers.md),
 /// BM_Evaluation: CPU ms per evaluation at û; BM_EstimateShare/<material>: the automatic Δt/η
-/// estimate's CPU against the SS22 solve to 1e-6 it serves (counter estimate_share). Command:
+/// estimate's CPU against the SS22 solve to 1e-6 it serves (counter estimate_share);
+/// BM_DampingSweep/<material>: iterations to 1e-6 over η = factor·2√θ₁. Command:
 /// build/release/benchmarks/solver/time_to_error_bench [--benchmark_filter=...]
 #include <incise/fem/elastic_problem.hpp>
 #include <incise/material/material.hpp>
@@ -32,6 +33,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -239,6 +241,32 @@ void BM_EstimateShare(benchmark::State& state, const std::string& material) {
     state.counters["eta"] = dp.damping;
   }
 }
+
+/// The room in η (docs/solvers.md, "Eighth pass"): SS22 iterations to the relative energy-norm
+/// error 1e-6 (time_to_level) with the automatic Δt and η = factor·2√θ₁ (θ₁ of the automatic
+/// estimate; factor 1 is the critical damping used before the eighth pass) for the factors of
+/// kSweepFactors, and with the automatic η = 2ζ√θ₁. Counters: iters_f<factor> (−1: not reached
+/// in 200,000 steps), iters_auto, zeta. Step counts are deterministic.
+constexpr double kSweepFactors[] = {0.9, 0.94, 0.96, 0.98, 0.99, 1.0, 1.011, 1.02, 1.05, 1.1};
+
+void BM_DampingSweep(benchmark::State& state, const std::string& material) {
+  Case& c = get_case(material);
+  fem::ElasticProblem& p = *c.problem;
+  for (auto _ : state) {
+    const solver::DynamicParameterEstimate dp =
+        solver::estimate_dynamic_parameters(p, VecX::Zero(p.size()));
+    for (double f : kSweepFactors) {
+      const LevelHit h = time_to_level(c, Method::kSs22, dp.time_step,
+                                       f * solver::critical_damping(dp.lambda_min));
+      char name[32];
+      std::snprintf(name, sizeof name, "iters_f%.3f", f);
+      state.counters[name] = double(h.iteration);
+    }
+    state.counters["iters_auto"] =
+        double(time_to_level(c, Method::kSs22, dp.time_step, dp.damping).iteration);
+    state.counters["zeta"] = dp.damping_ratio;
+  }
+}
 #endif
 
 /// One evaluation at the reference solution û (the per-iteration breakdown: an NCG iteration is
@@ -334,6 +362,11 @@ const bool kRegistered = [] {
   for (const std::string m : {"linear", "linear-assembled", "veronda-westmann"})
     benchmark::RegisterBenchmark(("BM_EstimateShare/" + m).c_str(),
                                  [m](benchmark::State& s) { BM_EstimateShare(s, m); })
+        ->Iterations(1)
+        ->Unit(benchmark::kMillisecond);
+  for (const std::string m : {"linear", "veronda-westmann"})
+    benchmark::RegisterBenchmark(("BM_DampingSweep/" + m).c_str(),
+                                 [m](benchmark::State& s) { BM_DampingSweep(s, m); })
         ->Iterations(1)
         ->Unit(benchmark::kMillisecond);
 #endif

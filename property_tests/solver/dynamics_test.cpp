@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <string>
@@ -449,6 +450,69 @@ TEST(DynamicRelaxation, EnergyEveryKthStepSameTrajectoryAndStillRestarts_Sec4_4_
   o.energy_every = 0;
   VecX u = VecX::Zero(24);
   EXPECT_THROW((void)dynamic_relaxation(s.p, u, o), ParameterError);
+}
+
+namespace damping_ratio_test {
+
+// SS22 on one DOF, K = M = 1, f = 1 (û = 1), from rest at u = 0, with η = 2ζ and a step
+// Δt = 1e-3 far below the critical 2 (the scheme then follows (4.2) to O(Δt²)); the error
+// e = u − 1 starts at −1. Returns the largest e after its first sign change (the first
+// overshoot) and the simulated time after which |e| ≤ level for good.
+struct OneMode {
+  double overshoot = 0.0;
+  double settle_time = 0.0;
+};
+
+OneMode one_mode(double zeta, double level) {
+  QuadraticProblem p(Eigen::MatrixXd::Ones(1, 1), VecX::Ones(1), std::vector<bool>(1, false),
+                     VecX::Ones(1));
+  DynamicRelaxationOptions o;
+  o.time_step = 1e-3;
+  o.damping = 2.0 * zeta;
+  o.stop.rule = ResidualRule::kExternalForce;
+  o.stop.epsilon = 0.0;  // never met: run the whole budget
+  o.budget.max_iterations = 30000;
+  OneMode out;
+  bool crossed = false;
+  o.observer = [&](const IterationInfo& info) {
+    const double e = (*info.u)[0] - 1.0;
+    crossed = crossed || e > 0.0;
+    if (crossed) out.overshoot = std::max(out.overshoot, e);
+    if (std::abs(e) > level) out.settle_time = info.time;
+  };
+  VecX u = VecX::Zero(1);
+  (void)dynamic_relaxation(p, u, o);
+  return out;
+}
+
+}  // namespace damping_ratio_test
+
+// ζ = damping_ratio_for(o) solves exp(−πζ/√(1 − ζ²)) = o, and a mode of (4.2) from rest with
+// η = 2ζ√λ overshoots by o (1 % for the O(Δt²) of the scheme and the sampled peak). With
+// o = ½·1e-6 (what estimate_dynamic_parameters uses for ε = 1e-6) the mode stays within 1e-6
+// from x = √λt ≈ 13.3 on, critical damping from x ≈ 16.7 ((1 + x)e^{−x} = 1e-6): the closed
+// forms give 0.80 (and no ζ gives less than 12.98/16.69 = 0.78).
+TEST(DampingRatio, FirstOvershootIsTheGivenOneAndSettlesSoonerThanCritical_Sec4_1) {
+  for (double o : {1e-2, 1e-4, 5e-7, 1e-8}) {
+    const double z = damping_ratio_for(o);
+    EXPECT_NEAR(std::exp(-kPi * z / std::sqrt(1.0 - z * z)), o, 1e-12 * o) << "overshoot " << o;
+  }
+  EXPECT_EQ(damping_ratio_for(0.0), 1.0);
+  EXPECT_THROW((void)damping_ratio_for(1.0), ParameterError);
+  EXPECT_THROW((void)damping_ratio_for(-1e-3), ParameterError);
+  for (double o : {1e-4, 5e-7}) {
+    const damping_ratio_test::OneMode m = damping_ratio_test::one_mode(damping_ratio_for(o), 1.0);
+    EXPECT_NEAR(m.overshoot, o, 0.01 * o);
+  }
+  const damping_ratio_test::OneMode fast =
+      damping_ratio_test::one_mode(damping_ratio_for(5e-7), 1e-6);
+  const damping_ratio_test::OneMode critical = damping_ratio_test::one_mode(1.0, 1e-6);
+  std::printf("settling to 1e-6: zeta %.5f at t = %.3f, critical at t = %.3f (ratio %.3f)\n",
+              damping_ratio_for(5e-7), fast.settle_time, critical.settle_time,
+              fast.settle_time / critical.settle_time);
+  EXPECT_NEAR(critical.settle_time, 16.7, 0.05);
+  EXPECT_GE(fast.settle_time / critical.settle_time, 0.77);
+  EXPECT_LE(fast.settle_time / critical.settle_time, 0.82);
 }
 
 }  // namespace

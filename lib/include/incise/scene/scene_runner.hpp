@@ -187,7 +187,8 @@ struct [[nodiscard]] DynamicParameters : Outcome<solver::StopReason, solver::Sto
 
 /// Δt and η of scene.spec.solver at u: given values (time_step > 0, damping ≥ 0) as they
 /// are; otherwise estimated from K(u) and the lumped M (§4.1) by one Lanczos run
-/// (solver::estimate_dynamic_parameters with `lanczos`): Δt = 0.9·2/√θ_max, η = 2√θ₁ or, with
+/// (solver::estimate_dynamic_parameters with `lanczos`, target_reduction = the scene tolerance):
+/// Δt = 0.9·2/√θ_max, η = 2ζ√θ₁ (ζ = solver::damping_ratio_for(tolerance / 2)) or, with
 /// spectral_tuning, η = 4πf from the FFT of 8192 undamped steps at Δt. An estimate that did
 /// not converge is never used: a Lanczos run with any status but kConverged (steps exhausted,
 /// indefinite or non-finite K), an undamped run that did not complete (its status: unstable,

@@ -68,27 +68,45 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u, const DynamicRelaxati
 struct DynamicParameterOptions {
   LanczosOptions lanczos;         ///< the one Lanczos run (its max_steps caps the cost)
   double time_step_safety = 0.9;  ///< Δt = safety·2/√θ_max: θ_max ≤ λ_n underestimates λ_n
+  /// ε, the error reduction the run is to reach (the relative energy-norm error, or the relative
+  /// residual of the stopping rule), in (0, 1); 0 asks for critical damping (§4.1). η = 2ζ√θ₁
+  /// with ζ = damping_ratio_for(ε/2): the slowest mode's first overshoot takes half the band, the
+  /// other half is left to the other modes and to where the steps fall (docs/solvers.md,
+  /// "Eighth pass").
+  double target_reduction = 1e-6;
 };
+
+/// The damping ratio whose first overshoot is `overshoot`: ζ with exp(−πζ/√(1 − ζ²)) =
+/// overshoot, i.e. ζ = L/√(π² + L²), L = ln(1/overshoot) (0.9773 for 5e-7; 1 for 0: critical
+/// damping). A mode of (4.2) started from rest, y(0) = 1, ẏ(0) = 0, with η = 2ζ√λ stays within
+/// |y| ≤ overshoot from its first zero crossing on (x = √λ·t ≈ 13.3 at 5e-7), where critical
+/// damping, (1 + x)e^{−x}, needs x ≈ 16.7 to reach 1e-6 — the O(t) factor of §4.1 (the minimum
+/// settling time of a second-order system). Throws ParameterError unless 0 ≤ overshoot < 1.
+double damping_ratio_for(double overshoot);
 
 /// Automatic Δt and η of dynamic relaxation (§4.1) and what they cost.
 struct [[nodiscard]] DynamicParameterEstimate
     : Outcome<StopReason, StopReason::kConverged, StopReason::kMaxIterations> {
-  double time_step = 0.0;   ///< Δt = safety·critical_time_step(θ_max) (s)
-  double damping = 0.0;     ///< η = critical_damping(θ₁) = 2√θ₁ (1/s)
-  double lambda_min = 0.0;  ///< θ₁ ≥ λ₁ (1/s²)
-  double lambda_max = 0.0;  ///< θ_max ≤ λ_n (1/s²)
-  long products = 0;        ///< K·q products spent (= Lanczos steps)
-  std::uint64_t flops = 0;  ///< counted flops
+  double time_step = 0.0;      ///< Δt = safety·critical_time_step(θ_max) (s)
+  double damping = 0.0;        ///< η = ζ·critical_damping(θ₁) = 2ζ√θ₁ (1/s)
+  double damping_ratio = 1.0;  ///< ζ = damping_ratio_for(options.target_reduction / 2)
+  double lambda_min = 0.0;     ///< θ₁ ≥ λ₁ (1/s²)
+  double lambda_max = 0.0;     ///< θ_max ≤ λ_n (1/s²)
+  long products = 0;           ///< K·q products spent (= Lanczos steps)
+  std::uint64_t flops = 0;     ///< counted flops
 };
 
 /// Δt and η at u from one lanczos_spectrum() run started at the first acceleration
 /// M⁻¹P(−∇Π(u)) (the load shape, rich in the lowest mode): a few dozen K-products where the
-/// power and inverse iterations took thousands (docs/solvers.md). The two are estimates (θ₁ ≥
-/// λ₁ over-damps slightly; θ_max ≤ λ_n, and λ_n may grow as a stiffening material deforms):
+/// power and inverse iterations took thousands (docs/solvers.md). Δt = safety·2/√θ_max,
+/// η = 2ζ√θ₁ with ζ = damping_ratio_for(options.target_reduction / 2). The two are estimates
+/// (θ₁ ≥ λ₁ raises ζ slightly; λ₁ at the solution of a nonlinear problem differs from λ₁(u);
+/// θ_max ≤ λ_n, and λ_n may grow as a stiffening material deforms):
 /// run dynamic_relaxation() with max_restarts > 0 so that a too large Δt restarts instead of
-/// diverging. Status: the Lanczos run's (kMaxIterations keeps usable bounds), or the failed
-/// gradient's. The result depends only on the problem and u, so a caller relaxing the same
-/// mesh again (the same material, fixed set and masses) may reuse it.
+/// diverging. Status: the Lanczos run's, or the failed gradient's; Δt, η and the θ are set
+/// only when it is kConverged (with kMaxIterations they stay 0). The result depends only on the
+/// problem and u, so a caller relaxing the same mesh again (the same material, fixed set and
+/// masses) may reuse it.
 DynamicParameterEstimate estimate_dynamic_parameters(Problem& problem, const VecX& u,
                                                      const DynamicParameterOptions& options = {});
 
