@@ -349,12 +349,12 @@ BENCHMARK(BM_LiverScalpelPath)
     ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1})
     ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1})
     ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1})
-        ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 0})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 0})
     ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 0})
     ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 0})
     ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 2})
     ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 3})
-->Iterations(1)
+    ->Iterations(1)
     ->Unit(benchmark::kSecond);
 
 // The cut step alone on the path (issue 17's "cut step independent of the mesh size"): a

@@ -75,8 +75,7 @@ std::vector<AugmentedCutStepReport> organ_path_cut_frame(AugmentedCutSession& se
 }
 
 void run_path(double advance, int frames, const AugmentedCutOptions& options = {},
-              bool per_frame = false, int* updated_out = nullptr,
-              int* synchronous_out = nullptr) {
+              bool per_frame = false, int* updated_out = nullptr, int* synchronous_out = nullptr) {
   const OrganPathLiverSession organ = organ_path_liver_session(options);
   AugmentedCutSession& session = *organ.session;
   ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
@@ -125,8 +124,7 @@ void run_path(double advance, int frames, const AugmentedCutOptions& options = {
             << " with an updated capacitance factorization, "
             << session.system().refactorizations_abandoned() << " abandoned, "
             << session.synchronous_refactorizations() << " synchronous refactorizations, "
-            << two_pending
-            << " steps left two jobs pending, worst relative "
+            << two_pending << " steps left two jobs pending, worst relative "
             << "difference " << worst << "\n";
 }
 
@@ -338,9 +336,8 @@ TEST(OrganPath, Issue17OverlappingJobsWithoutPausesEndEqualToAFreshFactorization
   std::cout << frames << " frames at 10 mm without pauses: " << swaps << " swaps, "
             << session.system().refactorizations_abandoned() << " abandoned, "
             << session.synchronous_refactorizations() << " synchronous refactorizations, "
-            << two_pending
-            << " steps left two jobs pending; relative difference " << before << " (last step), "
-            << after << " (after the last swap)\n";
+            << two_pending << " steps left two jobs pending; relative difference " << before
+            << " (last step), " << after << " (after the last swap)\n";
 }
 
 // The cut step alone on the path (the session's cut options, nodes at their reference

@@ -251,8 +251,7 @@ TEST(AugmentedRefactor, SynchronousRefactorizationAbandonsThePendingJobForEveryO
       // refactorization made (without the elimination they are in 𝓛 there).
       const int without_g = aug.columns_without_g();
       int uncached = 0;
-      for (int j : aug.replaced_columns())
-        uncached += j < aug.factored_dofs() && dir.count(j) == 0;
+      for (int j : aug.replaced_columns()) uncached += j < aug.factored_dofs() && dir.count(j) == 0;
       EXPECT_EQ(without_g, uncached);
       EXPECT_GT(without_g, 0);
       aug.set_force(f);

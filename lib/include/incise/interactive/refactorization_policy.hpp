@@ -106,9 +106,9 @@ class SynchronousRefactorRule {
   double predict(int m, int k) const;
   /// predict(m, k) > refactor_cpu > 0 (false while predict is NaN).
   bool should_refactor(int m, int k, double refactor_cpu) const;
-  double lu_rate() const { return lu_rate_; }         ///< r (flop/s; NaN: none observed)
-  double column_cost() const { return column_; }     ///< γ (seconds; NaN: none observed)
-  double rest_per_column() const { return rest_; }   ///< ρ (seconds; NaN: none observed)
+  double lu_rate() const { return lu_rate_; }       ///< r (flop/s; NaN: none observed)
+  double column_cost() const { return column_; }    ///< γ (seconds; NaN: none observed)
+  double rest_per_column() const { return rest_; }  ///< ρ (seconds; NaN: none observed)
 
  private:
   double lu_rate_ = std::numeric_limits<double>::quiet_NaN();
