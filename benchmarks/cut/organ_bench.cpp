@@ -26,7 +26,9 @@
 /// poll_after_solve (0 off, 1 on), and AugmentedOptions::prepare_in_job (0: the finished
 /// factorization waits for a poll before G is prepared; 1, the default: the job goes on to G
 /// itself; docs/augmented.md "Preparation in the job"), and AugmentedOptions::
-/// eliminate_constrained (1, the default; 0: 𝓓 stays in 𝓛 after a swap). chg_* counters: frames
+/// eliminate_constrained (1, the default; 0: 𝓓 stays in 𝓛 after a swap), and AugmentedCutOptions::
+/// synchronous_refactorization (1, the default: on, with the extended ordering; 2 on with AMD, 3
+/// on with METIS; 0 off; docs/augmented.md "Synchronous refactorization"). chg_* counters: frames
 /// that solved (the others reuse the last solution and cost the cut); bg_cpu_*: CPU of the
 /// background factorizations that were swapped in (their own thread). With INCISE_ORGAN_TRACE=<dir>
 /// the per-frame numbers go to <dir>/<benchmark args>.csv, with the cost rule's inputs of the
@@ -131,6 +133,9 @@ void BM_LiverScalpelPath(benchmark::State& state) {
   opt.poll_after_solve = state.range(10) != 0;
   opt.augmented.prepare_in_job = state.range(11) != 0;
   opt.augmented.eliminate_constrained = state.range(12) != 0;
+  opt.synchronous_refactorization = state.range(13) != 0;
+  if (state.range(13) == 2) opt.synchronous_ordering = incise::linalg::RefactorOrdering::kAmd;
+  if (state.range(13) == 3) opt.synchronous_ordering = incise::linalg::RefactorOrdering::kOptions;
   opt.refactorization_mode = state.range(5) == 0
                                  ? incise::interactive::RefactorizationMode::kContinuous
                                  : incise::interactive::RefactorizationMode::kBreakEven;
@@ -147,19 +152,19 @@ void BM_LiverScalpelPath(benchmark::State& state) {
     std::ofstream trace;
     if (const char* dir = std::getenv("INCISE_ORGAN_TRACE")) {
       std::string name = std::string(dir) + "/scalpel";
-      for (int a = 0; a < 13; ++a) name += "_" + std::to_string(state.range(a));
+      for (int a = 0; a < 14; ++a) name += "_" + std::to_string(state.range(a));
       trace.open(name + ".csv");
       trace << "frame,cut_cpu_ms,update_cpu_ms,m_before,m_after,swapped,started,new_columns,"
                "newcol_ms,capfactor_ms,cap_fresh,bg_cpu_ms,dirichlet,product_ms,setup_ms,step1_ms,"
                "step2_ms,step3_ms,swap_ms,gmres_iterations,cap_rank,cap_needed_rank,"
                "cap_update_gflop,cap_fresh_gflop,bg_analyze_ms,bg_factorize_ms,"
-               "bg_extract_ms,bg_prepare_ms,dirichlet_eliminated\n";
+               "bg_extract_ms,bg_prepare_ms,dirichlet_eliminated,sync\n";
     }
     SolveTimes total;
     for (int f = 0; f < frames; ++f) {
       const auto tris = path.frame(f, advance);
       double c = 0, u = 0, cc = 0, uc = 0, bgc = 0;
-      int mb = 0, ma = 0, sw = 0, st = 0, dir = 0, dir_elim = 0;
+      int mb = 0, ma = 0, sw = 0, st = 0, dir = 0, dir_elim = 0, sync = 0;
       SolveTimes in_frame;
       bool solved = false;
       // One solve per frame (AugmentedCutSession::frame) or one per sweep triangle (step).
@@ -179,6 +184,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
           in_frame.add(r.solve);
           total.add(r.solve);
           st += r.refactorization_started ? 1 : 0;
+          sync += r.synchronous_refactorization ? 1 : 0;
         }
         if (r.refactorization_swapped) {
           ++sw;
@@ -219,7 +225,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
               << in_frame.gmres_iterations << ',' << in_frame.rank << ',' << in_frame.needed_rank
               << ',' << 1e-9 * in_frame.update_flops << ',' << 1e-9 * in_frame.fresh_flops << ','
               << 1e3 * split.analyze << ',' << 1e3 * split.factorize << ',' << 1e3 * split.extract
-              << ',' << 1e3 * split.prepare << ',' << dir_elim << std::endl;
+              << ',' << 1e3 * split.prepare << ',' << dir_elim << ',' << sync << std::endl;
     }
     state.counters["chg_frames"] = static_cast<double>(chg_frame_cpu.size());
     put_ms_summary(state, "chg_cpu_frame", chg_frame_cpu);
@@ -252,6 +258,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
     state.counters["mean_product_ms"] = 1e3 * total.seconds_product / frames;
     state.counters["mean_capfactor_ms"] = 1e3 * total.seconds_capfactor / frames;
     state.counters["abandoned"] = session.system().refactorizations_abandoned();
+    state.counters["sync_refactors"] = session.synchronous_refactorizations();
     state.counters["grid_builds"] = static_cast<double>(session.cutter().grid_builds());
     state.counters["grid_reentries"] = static_cast<double>(session.cutter().grid_reentries());
   }
@@ -266,80 +273,87 @@ void BM_LiverScalpelPath(benchmark::State& state) {
 // (10 and 30 frames) both ways; all of these with poll_after_solve off (last arg 0). Last: the
 // session's defaults since "One solve per frame" (docs/augmented.md) — poll_after_solve on —
 // per triangle and per frame on both livers; the frame of that section is the one-solve frame
-// (…/0/1/1/).
+// (…/0/1/1/). Every row has the synchronous refactorization on (last arg 1); the last three rows
+// are the defaults with it off, then at 10 mm with AMD and METIS orderings for it, for the
+// comparison of "Synchronous refactorization".
 BENCHMARK(BM_LiverScalpelPath)
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1, 1})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({1, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
-    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
-    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
-    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
-    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
-    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
-    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1})
-    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1})
-    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
-    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
-    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
-    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 0})
-    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 0})
-    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 0})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1})
-    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
-    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
-    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 0, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 1, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 0, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 1, 0, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 150, 0, 0, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 300, 0, 0, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 600, 0, 0, 1, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({1, 30, 100, 0, 0, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1, 1})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1, 1})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1, 1})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1, 1})
+    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1, 1})
+    ->Args({1, 30, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1, 1})
+    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 0, 1, 1, 1})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({1, 10, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({1, 100, 30, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1, 1})
+    ->Args({1, 10, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1})
+    ->Args({1, 30, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1})
+    ->Args({1, 100, 10, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 0, 1, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 0, 1})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 0, 1})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 0, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1, 1})
+    ->Args({1, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1})
+    ->Args({1, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1})
+    ->Args({1, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 1})
+    ->Args({0, 10, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 0})
+    ->Args({0, 30, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 0})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 2})
+    ->Args({0, 100, 100, 0, 1, 0, 1, 1, 0, 1, 1, 1, 1, 3})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 
@@ -903,3 +917,60 @@ BENCHMARK(BM_LiverStrategies)
 }  // namespace
 
 INCISE_BENCHMARK_MAIN();
+
+// The synchronous refactorization's elimination order (issue 17, docs/augmented.md "Synchronous
+// refactorization"): the shipped liver's K after `frames` frames of the 10 mm path (no background
+// jobs, so the same K every run), factored supernodally with METIS, AMD and the factor in use's
+// ordering extended to the new DOFs (AugmentedSystem::extended_ordering, the default), in turn,
+// `rounds` times. Counters: thread CPU of the symbolic analysis, numeric factorization and LDLᵀ
+// export (median over the rounds, ms), nnz(L) and CHOLMOD's flop count.
+void BM_SynchronousOrdering(benchmark::State& state) {
+  const int frames = static_cast<int>(state.range(0)), rounds = static_cast<int>(state.range(1));
+  const incise::mesh::MeshData& body = liver(false);
+  const incise::fixtures::OrganPath path = incise::fixtures::organ_path(body);
+  incise::interactive::AugmentedCutOptions opt;
+  opt.automatic_refactorization = false;
+  incise::interactive::AugmentedCutSession session(body, incise::fixtures::organ_material(),
+                                                   path.fixed, path.forces, opt);
+  for (int f = 0; f < frames; ++f) (void)session.frame(path.frame(f, 1e-2));
+  incise::linalg::SparseMatrix k = session.system().current_matrix();
+  k.makeCompressed();
+  const std::vector<int> extended = session.system().extended_ordering(k);
+  const char* names[3] = {"metis", "amd", "extended"};
+  for (auto _ : state) {
+    std::vector<double> t[3][3];
+    for (int rep = 0; rep < rounds; ++rep) {
+      for (int o = 0; o < 3; ++o) {
+        incise::linalg::CholmodOptions co;
+        co.kind = incise::linalg::CholmodKind::kSupernodal;
+        co.ordering = o == 1 ? incise::linalg::CholmodOrdering::kAmd
+                             : incise::linalg::CholmodOrdering::kMetis;
+        incise::linalg::CholmodFactor fac(co);
+        const double t0 = incise::thread_cpu_seconds();
+        const auto st = o == 2 ? fac.analyze(k, 1, extended) : fac.analyze(k, 1);
+        const double t1 = incise::thread_cpu_seconds();
+        const auto sf = fac.factorize(k);
+        const double t2 = incise::thread_cpu_seconds();
+        const auto ldl = fac.extract_ldl();
+        const double t3 = incise::thread_cpu_seconds();
+        if (st != incise::linalg::FactorStatus::kOk || sf != incise::linalg::FactorStatus::kOk ||
+            !ldl) {
+          state.SkipWithError("factorization failed");
+          return;
+        }
+        t[o][0].push_back(t1 - t0);
+        t[o][1].push_back(t2 - t1);
+        t[o][2].push_back(t3 - t2);
+        state.counters[std::string(names[o]) + "_nnz_l"] = static_cast<double>(fac.nnz_l());
+        state.counters[std::string(names[o]) + "_gflop"] = 1e-9 * fac.factor_flops();
+      }
+    }
+    for (int o = 0; o < 3; ++o) {
+      state.counters[std::string(names[o]) + "_analyze_ms"] = 1e3 * summarize(t[o][0]).median;
+      state.counters[std::string(names[o]) + "_factorize_ms"] = 1e3 * summarize(t[o][1]).median;
+      state.counters[std::string(names[o]) + "_extract_ms"] = 1e3 * summarize(t[o][2]).median;
+    }
+    state.counters["n"] = static_cast<double>(k.rows());
+  }
+}
+BENCHMARK(BM_SynchronousOrdering)->Args({8, 5})->Iterations(1)->Unit(benchmark::kSecond);

@@ -563,6 +563,106 @@ TEST(AugmentedCut, Sec3_6AutomaticPolicyStartsAtTheBreakEvenSolveAndStaysExact) 
   EXPECT_EQ(swapped, started);
 }
 
+// SynchronousRefactorRule (issue 17): c(m, k) = ⅔m³/r + γk + ρm from what it is fed — NaN (never
+// refactor) until r, γ and ρ are known; a fresh LU below kMinRateM or fewer than kMinColumns new
+// columns do not set r or γ; the later observation replaces the earlier; should_refactor is
+// c > the refactorization's cost > 0.
+TEST(RefactorizationPolicy, SynchronousRuleOnInjectedCosts) {
+  SynchronousRefactorRule rule;
+  EXPECT_TRUE(std::isnan(rule.predict(1000, 100)));
+  EXPECT_FALSE(rule.should_refactor(1000, 100, 1e-9));
+  // m = 100 < kMinRateM: no rate; k = 10 < kMinColumns: no γ; ρ = (3 − 1 − 0.5) / 100.
+  rule.observe(100, 10, 3.0, 1.0, true, 0.5);
+  EXPECT_TRUE(std::isnan(rule.lu_rate()));
+  EXPECT_TRUE(std::isnan(rule.column_cost()));
+  EXPECT_DOUBLE_EQ(rule.rest_per_column(), 0.015);
+  EXPECT_TRUE(std::isnan(rule.predict(1000, 100)));
+  // m = 300, fresh LU of 2 s: r = ⅔·300³/2 = 9e6; k = 40 in 4 s: γ = 0.1; ρ = (10 − 2 − 4)/300.
+  rule.observe(300, 40, 10.0, 2.0, true, 4.0);
+  EXPECT_DOUBLE_EQ(rule.lu_rate(), 9e6);
+  EXPECT_DOUBLE_EQ(rule.column_cost(), 0.1);
+  const double rho = 4.0 / 300;
+  EXPECT_DOUBLE_EQ(rule.rest_per_column(), rho);
+  const double c = (2.0 / 3.0) * 600.0 * 600.0 * 600.0 / 9e6 + 0.1 * 50 + rho * 600;  // 16 + 5 + 8
+  EXPECT_DOUBLE_EQ(rule.predict(600, 50), c);
+  EXPECT_TRUE(rule.should_refactor(600, 50, c - 1e-9));
+  EXPECT_FALSE(rule.should_refactor(600, 50, c));
+  EXPECT_FALSE(rule.should_refactor(600, 50, 0.0));  // no measured refactorization: never
+  // An updated (not fresh) capacitance factorization keeps r; the next ρ and γ replace the old.
+  rule.observe(400, 20, 5.0, 0.5, false, 1.0);
+  EXPECT_DOUBLE_EQ(rule.lu_rate(), 9e6);
+  EXPECT_DOUBLE_EQ(rule.column_cost(), 0.05);
+  EXPECT_DOUBLE_EQ(rule.rest_per_column(), 3.5 / 400);
+}
+
+// The synchronous choice in the session (AugmentedCutOptions::synchronous_refactorization, on by
+// default) with an injected cost model — solve cost m + k (columns, new columns of G), a
+// refactorization kSync — and no background job (break-even with an infinite factorization
+// cost): before each solve the current K is refactored exactly when m + k > kSync (m, k as the
+// session sees them: m_before_solve, and columns_without_g() recomputed from the last state);
+// after it m is 0 (|𝓓| without the elimination), the step reports the swap, and every
+// solution equals a fresh factorization's. Deterministic: counts, no clocks.
+TEST(AugmentedCut, SynchronousRefactorizationOnInjectedCostsStaysExact) {
+  INCISE_SEEDED_RNG(rng, 1717);
+  const Body body = small_cube();
+  constexpr double kSync = 120;  // "seconds" of a refactorization: about two cutting steps
+  const int sequences = incise::test::scaled(5);
+  int synced = 0, skipped = 0;
+  for (int s = 0; s < sequences; ++s) {
+    const int synced_before = synced;
+    AugmentedCutOptions opt = test_options();
+    ASSERT_TRUE(opt.synchronous_refactorization);  // the default
+    opt.refactorization_mode = RefactorizationMode::kBreakEven;
+    opt.factorization_cost = [](const linalg::AugmentedSystem&) {
+      return std::numeric_limits<double>::infinity();
+    };
+    opt.cut.seed = rng();
+    int last_k = -1;  // k the model saw at the last decision
+    opt.synchronous_solve_cost = [&last_k](int m, int k) {
+      last_k = k;
+      return static_cast<double>(m + k);
+    };
+    opt.synchronous_refactor_cost = [](const linalg::AugmentedSystem&) { return kSync; };
+    AugmentedCutSession session(body.mesh, linear_material(), body.fixed, force_matrix(body), opt);
+    ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
+    RandomBlade blade(body, rng);
+    for (int k = 0; k < blade.moves(); ++k) {
+      for (const std::array<Vec3, 3>& tri : blade.next_move()) {
+        last_k = -1;
+        const AugmentedCutStepReport r = session.step(tri);
+        ASSERT_TRUE(admissible(r));
+        if (!r.ok()) break;
+        EXPECT_FALSE(r.refactorization_started);  // no background job in this model
+        if (!r.solved) continue;
+        if (r.m_before_solve == 0) {
+          EXPECT_EQ(last_k, -1);  // nothing to decide
+          EXPECT_FALSE(r.synchronous_refactorization);
+          continue;
+        }
+        ASSERT_GE(last_k, 0);
+        const bool expect = r.m_before_solve + last_k > kSync;
+        ASSERT_EQ(r.synchronous_refactorization, expect)
+            << "m " << r.m_before_solve << " k " << last_k;
+        if (expect) {
+          ++synced;
+          EXPECT_TRUE(r.refactorization_swapped);
+          EXPECT_EQ(r.m_after_solve, m_left_by_an_unchanged_swap(opt, r));
+          EXPECT_EQ(r.solve.m, m_left_by_an_unchanged_swap(opt, r));
+        } else {
+          ++skipped;
+          EXPECT_FALSE(r.refactorization_swapped);
+        }
+        const Reference ref = reference_solution(session, linear_material(), body.forces);
+        ASSERT_TRUE(ref.ok);
+        ASSERT_LE(relative_difference(session, ref), tolerance(ref)) << "sequence " << s;
+      }
+    }
+    EXPECT_EQ(session.synchronous_refactorizations(), synced - synced_before);
+  }
+  EXPECT_GE(synced, 1);   // the model must trigger, or the test proves nothing
+  EXPECT_GE(skipped, 1);  // and not always
+}
+
 // RefactorizationMode::kContinuous: a start whenever asked (the caller checks m − |𝓓| > 0 and
 // that no job is pending), the costs still recorded; it is the default (with prepare_swap).
 TEST(RefactorizationPolicy, Sec3_6ContinuousModeAlwaysStartsAndIsTheDefault) {

@@ -21,6 +21,7 @@
 
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -74,7 +75,7 @@ std::vector<AugmentedCutStepReport> organ_path_cut_frame(AugmentedCutSession& se
 }
 
 void run_path(double advance, int frames, const AugmentedCutOptions& options = {},
-              bool per_frame = false, int* updated_out = nullptr) {
+              bool per_frame = false, int* updated_out = nullptr, int* synchronous_out = nullptr) {
   const OrganPathLiverSession organ = organ_path_liver_session(options);
   AugmentedCutSession& session = *organ.session;
   ASSERT_TRUE(session.initial_report().ok()) << session.initial_report().message;
@@ -115,13 +116,15 @@ void run_path(double advance, int frames, const AugmentedCutOptions& options = {
   // i.e. on how soon the background jobs are swapped in (timing): printed, not asserted here;
   // Issue17UpdatedCapacitanceEqualsAFreshFactorizationWithoutBackgroundJobs1mm asserts it.
   if (updated_out) *updated_out = updated;
+  if (synchronous_out) *synchronous_out = session.synchronous_refactorizations();
   std::cout << frames << " frames at " << advance * 1e3 << " mm"
             << (per_frame ? ", one solve per frame: " : ", one solve per sweep triangle: ")
             << solved << " solves compared, " << dissected << " faces dissected, " << swaps
             << " refactorizations swapped in, " << updated
             << " with an updated capacitance factorization, "
-            << session.system().refactorizations_abandoned() << " abandoned, " << two_pending
-            << " steps left two jobs pending, worst relative "
+            << session.system().refactorizations_abandoned() << " abandoned, "
+            << session.synchronous_refactorizations() << " synchronous refactorizations, "
+            << two_pending << " steps left two jobs pending, worst relative "
             << "difference " << worst << "\n";
 }
 
@@ -164,6 +167,25 @@ TEST(OrganPath, Issue17UpdatedCapacitanceEqualsAFreshFactorizationWithoutBackgro
   int updated = 0;
   run_path(0.001, slow() ? 60 : 20, options, true, &updated);
   EXPECT_GT(updated, 0);
+}
+
+// The synchronous refactorization (AugmentedCutOptions::synchronous_refactorization, issue 17)
+// on the liver's 10 mm path, deterministically: no background job (break-even with an infinite
+// factorization cost) and an injected cost model — the solve costs m, a refactorization 500 —
+// so the frame thread refactors (the factor in use's ordering extended to the new DOFs) before
+// every solve that starts with m > 500, from frame 3 on (m = 639 there); every frame equals a
+// fresh factorization (the bound of run_path). 4 frames by default, 40 in the slow run.
+TEST(OrganPath, Issue17SynchronousRefactorizationEqualsAFreshFactorization10mm) {
+  AugmentedCutOptions options;
+  options.refactorization_mode = RefactorizationMode::kBreakEven;
+  options.factorization_cost = [](const linalg::AugmentedSystem&) {
+    return std::numeric_limits<double>::infinity();
+  };
+  options.synchronous_solve_cost = [](int m, int) { return static_cast<double>(m); };
+  options.synchronous_refactor_cost = [](const linalg::AugmentedSystem&) { return 500.0; };
+  int synchronous = 0;
+  run_path(0.010, slow() ? 40 : 4, options, true, nullptr, &synchronous);
+  EXPECT_GE(synchronous, 1);
 }
 
 // Final cut meshes equal: the same live element slots with the same nodes, the same nodes with
@@ -312,9 +334,10 @@ TEST(OrganPath, Issue17OverlappingJobsWithoutPausesEndEqualToAFreshFactorization
   const double after = test::relative_difference(session, ref);
   EXPECT_LE(after, 1e-9);
   std::cout << frames << " frames at 10 mm without pauses: " << swaps << " swaps, "
-            << session.system().refactorizations_abandoned() << " abandoned, " << two_pending
-            << " steps left two jobs pending; relative difference " << before << " (last step), "
-            << after << " (after the last swap)\n";
+            << session.system().refactorizations_abandoned() << " abandoned, "
+            << session.synchronous_refactorizations() << " synchronous refactorizations, "
+            << two_pending << " steps left two jobs pending; relative difference " << before
+            << " (last step), " << after << " (after the last swap)\n";
 }
 
 // The cut step alone on the path (the session's cut options, nodes at their reference

@@ -209,6 +209,62 @@ TEST(AugmentedRefactor, RefactorizationEliminatesTheConstrainedDofsSec3_6) {
   }
 }
 
+// refactor_now(RefactorOrdering, abandon_pending) (issue 17's synchronous refactorization): with
+// every ordering, after cuts (new DOFs, which kExtendCurrent places after their latest
+// neighbour) and constraints, while a background job is pending, the job is abandoned (counted,
+// none pending), m drops to 0 (|𝓓| without the elimination), the solves equal a fresh
+// factorization (expect_equivalent's bound), and G is cached afresh on the new factor: the next
+// solve makes one column per column of 𝓛 on the factored DOFs (a solve after a cut, kDirectCached).
+TEST(AugmentedRefactor, SynchronousRefactorizationAbandonsThePendingJobForEveryOrdering) {
+  using linalg::RefactorOrdering;
+  for (const RefactorOrdering ordering :
+       {RefactorOrdering::kExtendCurrent, RefactorOrdering::kAmd, RefactorOrdering::kOptions}) {
+    for (const bool eliminate : {true, false}) {
+      SCOPED_TRACE(::testing::Message()
+                   << "ordering " << static_cast<int>(ordering) << " eliminate " << eliminate);
+      CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
+      linalg::AugmentedOptions options = linalg::interactive_options();
+      options.eliminate_constrained = eliminate;
+      linalg::AugmentedSystem aug(options);
+      ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
+      Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
+      std::map<int, double> dir;
+      std::vector<int> plane;
+      ASSERT_NO_FATAL_FAILURE(cut_three_mid_plane_nodes(m, aug, f, dir, plane, 6));
+      aug.impose_dirichlet(4, -0.005);
+      dir[4] = -0.005;
+      expect_equivalent(aug, m, f, dir);
+      ASSERT_TRUE(aug.start_refactorization());
+      ASSERT_TRUE(cut_node(m, aug, plane[3]));  // changed while the job runs
+      ASSERT_EQ(aug.refactorizations_pending(), 1);
+      ASSERT_TRUE(aug.refactor_now(ordering, /*abandon_pending=*/true));
+      EXPECT_EQ(aug.refactorizations_pending(), 0);
+      EXPECT_EQ(aug.refactorizations_abandoned(), 1);
+      EXPECT_EQ(aug.num_replaced(), eliminate ? 0 : static_cast<int>(dir.size()));
+      EXPECT_EQ(aug.factored_dofs(), m.num_dofs);
+      expect_equivalent(aug, m, f, dir);
+      ASSERT_TRUE(cut_node(m, aug, plane[4]));
+      const Eigen::Index old_size = f.size();
+      f.conservativeResize(m.num_dofs);
+      f.tail(m.num_dofs - old_size).setConstant(0.5);
+      // Uncached: the columns of 𝓛 on the factored DOFs but 𝓓's, whose G the solve after the
+      // refactorization made (without the elimination they are in 𝓛 there).
+      const int without_g = aug.columns_without_g();
+      int uncached = 0;
+      for (int j : aug.replaced_columns()) uncached += j < aug.factored_dofs() && dir.count(j) == 0;
+      EXPECT_EQ(without_g, uncached);
+      EXPECT_GT(without_g, 0);
+      aug.set_force(f);
+      Eigen::VectorXd a, r;
+      const linalg::AugmentedReport rep = aug.solve(a, r);
+      ASSERT_TRUE(rep.ok()) << rep.message;
+      EXPECT_EQ(rep.schur_solves, without_g);
+      EXPECT_EQ(aug.columns_without_g(), 0);  // all cached now
+      expect_equivalent(aug, m, f, dir);
+    }
+  }
+}
+
 // AugmentedOptions::prepare_swap (§3.6, issue 17): the swap brings G of the new factor for the
 // columns that stay in 𝓛 (changed since the snapshot, and 𝓓), so the solve after it makes no
 // new column of G; without it, that solve makes one per kept column of the factored DOFs.

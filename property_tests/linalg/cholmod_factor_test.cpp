@@ -14,11 +14,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <limits>
 #include <random>
 #include <string>
 #include <tuple>
+#include <vector>
 
 namespace incise::test {
 namespace {
@@ -159,6 +161,54 @@ TEST(CholmodFactor, SupernodalExportEqualsTheSimplicialLdlOfTheSameOrdering) {
   const Eigen::MatrixXd lx = dense_l(*x), ly = dense_l(*y);
   EXPECT_LE((lx - ly).norm(), 1e-12 * ly.norm());
   for (int j = 0; j < x->n; ++j) EXPECT_NEAR(x->d[j], y->d[j], 1e-12 * std::abs(y->d[j])) << j;
+}
+
+// analyze() with a given ordering (issue 17's synchronous refactorization extends the factor in
+// use's instead of computing one): a random permutation of a random SPD matrix, both kinds —
+// the solve equals a dense one (kSolveTol), the exported factor is valid (P A Pᵀ = L D Lᵀ), and
+// its elimination order is the given one up to CHOLMOD's postordering, so the pivots are those
+// of the dense LDLᵀ of the matrix permuted by it: equal as multisets (sorted, 1e-10 relative).
+// Not a permutation (a repeated index, a wrong length) is kInvalidInput.
+TEST(CholmodFactor, GivenOrderingFactorsThePermutedMatrix) {
+  INCISE_SEEDED_RNG(rng, 1701);
+  const SparseMatrix a = random_sparse_spd(120, 4, 0.1, rng);
+  const int n = static_cast<int>(a.rows());
+  std::vector<int> perm(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) perm[static_cast<std::size_t>(i)] = i;
+  std::shuffle(perm.begin(), perm.end(), rng);
+  Eigen::MatrixXd pap(n, n);
+  const Eigen::MatrixXd dense(a);
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c)
+      pap(r, c) = dense(perm[static_cast<std::size_t>(r)], perm[static_cast<std::size_t>(c)]);
+  // The unpivoted LDLᵀ of pap: D = diag(L_chol)².
+  const Eigen::MatrixXd lc = Eigen::LLT<Eigen::MatrixXd>(pap).matrixL();
+  Eigen::VectorXd pivots = lc.diagonal().cwiseAbs2();
+  std::sort(pivots.data(), pivots.data() + n);
+  for (CholmodKind kind : {CholmodKind::kSupernodal, CholmodKind::kSimplicialLdl}) {
+    CholmodFactor f({kind, CholmodOrdering::kMetis});
+    ASSERT_EQ(f.analyze(a, 1, perm), FactorStatus::kOk) << f.message();
+    ASSERT_EQ(f.factorize(a), FactorStatus::kOk) << f.message();
+    const Eigen::VectorXd b = random_vector(n, rng);
+    Eigen::VectorXd x;
+    ASSERT_EQ(f.solve(b, x), FactorStatus::kOk);
+    const Eigen::VectorXd want = dense.ldlt().solve(b);
+    EXPECT_LE((x - want).norm(), kSolveTol * want.norm());
+    const auto ldl = f.extract_ldl();
+    ASSERT_NE(ldl, nullptr);
+    expect_valid_ldl(*ldl, dense);
+    std::vector<double> d(ldl->d.begin(), ldl->d.end());
+    std::sort(d.begin(), d.end());
+    for (int j = 0; j < n; ++j)
+      EXPECT_NEAR(d[static_cast<std::size_t>(j)], pivots(j), 1e-10 * std::abs(pivots(j))) << j;
+  }
+  CholmodFactor g;
+  std::vector<int> bad = perm;
+  bad[0] = bad[1];
+  EXPECT_EQ(g.analyze(a, 1, bad), FactorStatus::kInvalidInput);
+  bad = perm;
+  bad.pop_back();
+  EXPECT_EQ(g.analyze(a, 2, bad), FactorStatus::kInvalidInput);
 }
 
 TEST(CholmodFactor, SymbolicAnalysisCachedPerPatternVersion) {

@@ -334,7 +334,50 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
     Eigen::VectorXd a, reaction;
     if (options_.refactor_every_step && system_->num_replaced() > 0)
       r.refactorization_swapped = system_->refactor_now();
+    // Issue 17, the synchronous choice: a finished background job is swapped in first (as the
+    // solve would), then the predicted solve at the current m is compared with a refactorization
+    // now (AugmentedCutOptions::synchronous_refactorization).
+    bool early_swap = false, early_failed = false;
+    const bool sync_on = options_.synchronous_refactorization && !options_.refactor_every_step &&
+                         options_.refactor_at_m == 0 && options_.automatic_refactorization &&
+                         system_->factorization_status() == linalg::FactorStatus::kOk;
+    if (sync_on && system_->num_replaced() > 0) {
+      if (system_->refactorization_pending()) {
+        early_swap = system_->poll_refactorization();
+        early_failed = !early_swap && !system_->refactorization_pending() &&
+                       system_->last_refactorization_status() != linalg::FactorStatus::kOk;
+      }
+      const int m = system_->num_replaced();
+      const int k = system_->columns_without_g();
+      const double predicted = options_.synchronous_solve_cost
+                                   ? options_.synchronous_solve_cost(m, k)
+                                   : sync_rule_.predict(m, k);
+      double refactor = 0;
+      if (options_.synchronous_refactor_cost) {
+        refactor = options_.synchronous_refactor_cost(*system_);
+      } else if (sync_cpu_ > 0) {
+        refactor = sync_cpu_;
+      } else {
+        const linalg::FactorizationCpu c = system_->factorization_cpu();
+        refactor = c.analyze + c.factorize + c.extract;
+      }
+      if (m > 0 && refactor > 0 && predicted > refactor) {
+        r.synchronous_refactorization = true;
+        ++sync_count_;
+        if (system_->refactor_now(options_.synchronous_ordering, /*abandon_pending=*/true)) {
+          r.refactorization_swapped = true;
+          const linalg::FactorizationCpu c = system_->factorization_cpu();
+          sync_cpu_ = c.analyze + c.factorize + c.extract;
+        }
+      }
+    }
     r.solve = system_->solve(a, reaction);  // swaps in a finished background factor first
+    if (early_failed) r.solve.refactorization_status = system_->last_refactorization_status();
+    if (sync_on && r.solve.m > 0)
+      sync_rule_.observe(r.solve.m, r.solve.schur_solves, r.solve.cpu_seconds_total,
+                         r.solve.cpu_seconds_capacitance_factor,
+                         r.solve.capacitance_refreshed || !options_.augmented.update_capacitance,
+                         r.solve.cpu_seconds_new_columns);
     r.solved = true;
     // §3.6 pipeline after the solve (AugmentedCutOptions::poll_after_solve): a job that finished
     // meanwhile goes on now (to the preparation of its G, or swapped in) instead of at the next
@@ -348,7 +391,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
       if (late_failed) r.solve.refactorization_status = system_->last_refactorization_status();
     }
     r.refactorization_swapped =
-        r.refactorization_swapped || r.solve.refactorization_swapped || late_swap;
+        r.refactorization_swapped || early_swap || r.solve.refactorization_swapped || late_swap;
     r.m_after_solve = system_->num_replaced();
     // §3.6: bound m by refactoring the current K in the background once the columns a
     // refactorization can remove (m − |𝓓|: Dirichlet DOFs stay in 𝓛; all of m with
@@ -372,7 +415,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
       // RefactorizationPolicy (break-even or continuous) on measured or injected costs.
       const double update =
           options_.update_cost ? options_.update_cost(r.solve) : r.solve.seconds_total;
-      policy_.observe(update, r.solve.refactorization_swapped || late_swap);
+      policy_.observe(update, r.refactorization_swapped);
       const double factorization = options_.factorization_cost
                                        ? options_.factorization_cost(*system_)
                                        : system_->factorization_seconds();

@@ -151,7 +151,7 @@ void tridiagonal_spai(const SparseMatrix& r, Eigen::VectorXd& lower, Eigen::Vect
 // touches nothing but its arguments.
 std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
     SparseMatrix matrix, std::unique_ptr<CholmodFactor> factor, const AugmentedOptions& options,
-    const std::vector<int>& eliminated) {
+    const std::vector<int>& eliminated, const std::vector<int>& ordering) {
   const Timer timer;
   const double cpu0 = thread_cpu_seconds();
   auto base = std::make_unique<AugmentedSystem::Base>();
@@ -186,7 +186,7 @@ std::unique_ptr<AugmentedSystem::Base> AugmentedSystem::make_base(
     cpu = now;
     return d;
   };
-  base->status = base->factor->analyze(factored, pattern_signature(factored));
+  base->status = base->factor->analyze(factored, pattern_signature(factored), ordering);
   base->times.analyze = lap();
   if (base->status == FactorStatus::kOk) base->status = base->factor->factorize(factored);
   base->times.factorize = lap();
@@ -396,6 +396,17 @@ std::vector<int> AugmentedSystem::replaced_columns() const {
 
 int AugmentedSystem::num_replaced() const {
   return static_cast<int>(replaced_columns().size());
+}
+
+int AugmentedSystem::columns_without_g() const {
+  if (!base_) return 0;
+  const bool cached = g_generation_ == base_generation_;
+  int k = 0;
+  for (int j : replaced_columns()) {
+    if (j >= n_base_) continue;  // a new DOF: R is the identity there, no column of G
+    if (!cached || !std::binary_search(g_l_.begin(), g_l_.end(), j)) ++k;
+  }
+  return k;
 }
 
 SparseMatrix AugmentedSystem::current_matrix() const {
@@ -668,6 +679,68 @@ bool AugmentedSystem::refactor_now() {
   if (job_.valid()) (void)wait_for_refactorization();
   changed_since_snapshot_.clear();
   return swap_in(make_base(current_matrix(), nullptr, options_, constrained_to_eliminate()), {});
+}
+
+// RefactorOrdering::kExtendCurrent: the factor in use's elimination order, each DOF added since
+// (≥ n_base_) placed right after the latest-eliminated of its neighbours on the factored DOFs
+// (in index order among equals; at the end without one). A DOF a cut adds copies a node, so its
+// neighbours are a subset of the original's (and of other new DOFs): eliminated after them, it
+// joins the separator of the latest, which keeps the nested dissection's fill (measured on the
+// liver: docs/augmented.md, "Synchronous refactorization").
+std::vector<int> AugmentedSystem::extended_ordering(const SparseMatrix& k) const {
+  INCISE_CHECK(base_ != nullptr && base_->ldl != nullptr, "extended_ordering without a factor");
+  INCISE_CHECK(k.rows() == k.cols() && k.rows() >= n_base_,
+               "extended_ordering: the matrix must be square of order >= factored_dofs()");
+  const int n = static_cast<int>(k.rows());
+  const std::vector<int>& inverse = base_->ldl->inverse_perm;  // DOF → position
+  const int nb = static_cast<int>(inverse.size());
+  std::vector<double> key(static_cast<std::size_t>(n));
+  for (int j = 0; j < n; ++j) {
+    if (j < nb) {
+      key[static_cast<std::size_t>(j)] = inverse[static_cast<std::size_t>(j)];
+      continue;
+    }
+    double latest = -1;
+    for (SparseMatrix::InnerIterator it(k, j); it; ++it)
+      if (it.row() < nb) latest = std::max(latest, key[static_cast<std::size_t>(it.row())]);
+    key[static_cast<std::size_t>(j)] = (latest >= 0 ? latest : n) + 0.5;
+  }
+  std::vector<int> perm(static_cast<std::size_t>(n));
+  for (int j = 0; j < n; ++j) perm[static_cast<std::size_t>(j)] = j;
+  std::stable_sort(perm.begin(), perm.end(), [&key](int a, int b) {
+    return key[static_cast<std::size_t>(a)] < key[static_cast<std::size_t>(b)];
+  });
+  return perm;
+}
+
+bool AugmentedSystem::refactor_now(RefactorOrdering ordering, bool abandon_pending) {
+  INCISE_CHECK(base_ != nullptr, "refactor_now before initialize");
+  if (!abandon_pending) {
+    if (job_.valid()) (void)wait_for_refactorization();
+  } else {
+    // The pending jobs' snapshots are older than the current K: their results are dropped
+    // (std::async futures block on destruction, so they wait in abandoned_ until ready).
+    reap_abandoned(false);
+    for (auto* j : {&job_, &job2_}) {
+      if (!j->valid()) continue;
+      abandoned_.push_back(std::move(*j));
+      *j = {};
+      ++abandoned_count_;
+    }
+    board_.reset();
+    job_eliminated_.clear();
+    job2_eliminated_.clear();
+    changed_since_snapshot2_.clear();
+    job_preparing_ = false;
+    snapshot_active_ = false;
+  }
+  changed_since_snapshot_.clear();
+  AugmentedOptions options = options_;
+  SparseMatrix k = current_matrix();
+  std::vector<int> perm;
+  if (ordering == RefactorOrdering::kAmd) options.cholmod.ordering = CholmodOrdering::kAmd;
+  if (ordering == RefactorOrdering::kExtendCurrent) perm = extended_ordering(k);
+  return swap_in(make_base(std::move(k), nullptr, options, constrained_to_eliminate(), perm), {});
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -959,6 +1032,7 @@ const Eigen::MatrixXd& AugmentedSystem::capacitance_matrix(const Augmentation& a
   }
   solves = 0;
   const Timer new_columns;
+  const double cpu_new_columns0 = thread_cpu_seconds();
   // The new columns R⁻¹e_{𝓛ₖ} in one blocked pass (ClosureLdlSolver::solve_restricted_block).
   std::vector<int> fresh_k, fresh_dofs;
   for (int k = 0; k < mb; ++k) {
@@ -983,6 +1057,7 @@ const Eigen::MatrixXd& AugmentedSystem::capacitance_matrix(const Augmentation& a
   g_l_ = l_base;
   g_ = std::move(g);  // the cache is also this solve's G
   report.seconds_new_columns = new_columns.seconds();
+  report.cpu_seconds_new_columns = thread_cpu_seconds() - cpu_new_columns0;
   const Timer product;
 
   // Φ + G Ψ, column by column: for each entry (𝓛 position p, value v) of Ψ_{*k}, add v·G_{*p}.
@@ -1142,7 +1217,9 @@ Eigen::VectorXd AugmentedSystem::solve_schur_system(Augmentation& aug, const Eig
       const bool fresh = capacitance_generation_ != base_generation_;
       const Eigen::MatrixXd& s = capacitance_matrix(aug, report.schur_solves, report);
       const Timer factor;
+      const double cpu0 = thread_cpu_seconds();
       const CapacitanceUpdate u = capacitance_.update(s, aug.l, fresh);
+      report.cpu_seconds_capacitance_factor = thread_cpu_seconds() - cpu0;
       report.seconds_capacitance_factor = factor.seconds();
       capacitance_generation_ = base_generation_;
       report.capacitance_refreshed = u.refreshed;
@@ -1161,7 +1238,9 @@ Eigen::VectorXd AugmentedSystem::solve_schur_system(Augmentation& aug, const Eig
     } else {
       const Eigen::MatrixXd& s = capacitance_matrix(aug, report.schur_solves, report);
       const Timer factor;
+      const double cpu0 = thread_cpu_seconds();
       direct.factor(s, /*equilibrate=*/true);
+      report.cpu_seconds_capacitance_factor = thread_cpu_seconds() - cpu0;
       report.seconds_capacitance_factor = factor.seconds();
       direct.note(report);
       if (direct.usable) {
@@ -1284,6 +1363,7 @@ void AugmentedSystem::conclude(const Augmentation& aug, Eigen::VectorXd& displac
 
 AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::VectorXd& reaction) {
   Timer total;
+  const double cpu_total0 = thread_cpu_seconds();
   AugmentedReport report;
   if (board_) publish_keep();  // prepare_in_job: what the pending job will prepare G for
   if (job_.valid()) {          // §3.6: a finished background factor replaces R first
@@ -1339,6 +1419,7 @@ AugmentedReport AugmentedSystem::solve(Eigen::VectorXd& displacement, Eigen::Vec
   scatter_schur_solution(aug, a2, displacement, reaction);
   conclude(aug, displacement, reaction, report);
   report.seconds_total = total.seconds();
+  report.cpu_seconds_total = thread_cpu_seconds() - cpu_total0;
   return report;
 }
 

@@ -140,9 +140,27 @@ CholmodFactor::CholmodFactor(CholmodFactor&&) noexcept = default;
 CholmodFactor& CholmodFactor::operator=(CholmodFactor&&) noexcept = default;
 
 FactorStatus CholmodFactor::analyze(const SparseMatrix& a, std::uint64_t pattern_version) {
+  return analyze(a, pattern_version, {});
+}
+
+FactorStatus CholmodFactor::analyze(const SparseMatrix& a, std::uint64_t pattern_version,
+                                    const std::vector<int>& permutation) {
   if (a.rows() != a.cols() || !a.isCompressed()) {
     message_ = "analyze: matrix must be square and compressed";
     return status_ = FactorStatus::kInvalidInput;
+  }
+  if (!permutation.empty()) {
+    std::vector<char> seen(static_cast<std::size_t>(a.rows()), 0);
+    bool ok = static_cast<Eigen::Index>(permutation.size()) == a.rows();
+    for (std::size_t k = 0; ok && k < permutation.size(); ++k) {
+      const int i = permutation[k];
+      ok = i >= 0 && i < a.rows() && !seen[static_cast<std::size_t>(i)];
+      if (ok) seen[static_cast<std::size_t>(i)] = 1;
+    }
+    if (!ok) {
+      message_ = "analyze: the given ordering is not a permutation of the rows";
+      return status_ = FactorStatus::kInvalidInput;
+    }
   }
   if (impl_->factor != nullptr && pattern_version == pattern_version_ && n_ == a.rows() &&
       analyzed_nnz_ == a.nonZeros()) {
@@ -151,7 +169,22 @@ FactorStatus CholmodFactor::analyze(const SparseMatrix& a, std::uint64_t pattern
   if (impl_->factor != nullptr) cholmod_free_factor(&impl_->factor, &impl_->common);
   factorized_ = false;
   cholmod_sparse s = view_lower(a);
-  impl_->factor = cholmod_analyze(&s, &impl_->common);
+  if (permutation.empty()) {
+    impl_->factor = cholmod_analyze(&s, &impl_->common);
+  } else {
+    // The given ordering only (postordered, as the computed ones); the options' methods are
+    // restored afterwards.
+    cholmod_common& c = impl_->common;
+    const int nmethods = c.nmethods, ordering = c.method[0].ordering, postorder = c.postorder;
+    c.nmethods = 1;
+    c.method[0].ordering = CHOLMOD_GIVEN;
+    c.postorder = 1;
+    std::vector<int> perm = permutation;
+    impl_->factor = cholmod_analyze_p(&s, perm.data(), nullptr, 0, &c);
+    c.nmethods = nmethods;
+    c.method[0].ordering = ordering;
+    c.postorder = postorder;
+  }
   ++analyses_;
   status_ = status_from_common(impl_->common, message_);
   if (impl_->factor == nullptr) {

@@ -93,6 +93,26 @@ struct AugmentedCutOptions {
   /// the next solve — a frame earlier with one solve per frame. On by default; measured:
   /// docs/augmented.md, "One solve per frame".
   bool poll_after_solve = true;
+  /// Issue 17, with the automatic policy (automatic_refactorization, refactor_at_m = 0): before
+  /// a solve, refactor the current K in the calling thread (AugmentedSystem::refactor_now with
+  /// `synchronous_ordering`, pending background jobs abandoned) when SynchronousRefactorRule
+  /// predicts that the augmented solve at the current m would cost more CPU than that
+  /// refactorization — the measured CPU (symbolic analysis, numeric factorization, LDLᵀ copy)
+  /// of the last synchronous one, before the first the factor in use's. m then drops to 0.
+  /// On by default; measured: docs/augmented.md, "Synchronous refactorization (issue 17)".
+  bool synchronous_refactorization = true;
+  /// Elimination order of a synchronous refactorization: by default the factor in use's,
+  /// extended to the DOFs added since (no ordering computed; on the liver ≈ 5 ms of symbolic
+  /// analysis against METIS's ≈ 27 ms, for ≈ 13% more flops; docs/augmented.md). Background
+  /// jobs keep AugmentedOptions::cholmod's (METIS).
+  linalg::RefactorOrdering synchronous_ordering = linalg::RefactorOrdering::kExtendCurrent;
+  /// Predicted CPU of the next augmented solve at m with k new columns of G (AugmentedSystem::
+  /// columns_without_g) for the synchronous choice; empty: SynchronousRefactorRule on the
+  /// measured solves. Tests inject a deterministic model.
+  std::function<double(int m, int k)> synchronous_solve_cost;
+  /// CPU of a synchronous refactorization for the synchronous choice; empty: measured (see
+  /// synchronous_refactorization). Tests inject a deterministic model.
+  std::function<double(const linalg::AugmentedSystem&)> synchronous_refactor_cost;
   /// Cost of one solver update for the automatic policy; empty: its measured wall time
   /// (AugmentedReport::seconds_total). Tests inject a deterministic model.
   std::function<double(const linalg::AugmentedReport&)> update_cost;
@@ -144,6 +164,10 @@ struct [[nodiscard]] AugmentedCutStepReport
   /// After the solve, m ≥ refactor_at_m with no job pending: a background refactorization of
   /// the current K was started.
   bool refactorization_started = false;
+  /// Before the solve the current K was refactored in the calling thread
+  /// (AugmentedCutOptions::synchronous_refactorization; refactorization_swapped says whether it
+  /// succeeded); its time is part of cpu_seconds_update.
+  bool synchronous_refactorization = false;
   // Timings (seconds) of the whole frame. CPU = CLOCK_THREAD_CPUTIME_ID of the calling thread.
   double seconds_cut = 0;         ///< wall time of cut::Cutter::step (summed over the triangles)
   double seconds_update = 0;      ///< wall time of the column replacements (no solve)
@@ -220,6 +244,10 @@ class AugmentedCutSession {
   bool wait_for_refactorization();
   /// The automatic policy's state (AugmentedCutOptions::automatic_refactorization).
   const RefactorizationPolicy& refactorization_policy() const { return policy_; }
+  /// The synchronous choice's cost model (AugmentedCutOptions::synchronous_refactorization).
+  const SynchronousRefactorRule& synchronous_rule() const { return sync_rule_; }
+  /// Synchronous refactorizations made so far.
+  int synchronous_refactorizations() const { return sync_count_; }
 
   /// The cut mesh (reference and deformed positions, connectivity).
   const cut::CutMesh& mesh() const { return *mesh_; }
@@ -266,6 +294,9 @@ class AugmentedCutSession {
   AugmentedCutStepReport initial_;
   LastSolve last_;
   RefactorizationPolicy policy_;
+  SynchronousRefactorRule sync_rule_;
+  double sync_cpu_ = 0;  // measured CPU of the last synchronous refactorization (0: none yet)
+  int sync_count_ = 0;
 };
 
 }  // namespace incise::interactive

@@ -76,4 +76,44 @@ class RefactorizationPolicy {
   double excess_ = 0;
 };
 
+/// The synchronous choice of issue 17 (docs/augmented.md, "Synchronous refactorization"): before
+/// a solve, the frame thread compares the predicted CPU of the augmented solve at the current m
+/// with the measured CPU of one refactorization in the frame thread, and refactors now
+/// (AugmentedSystem::refactor_now) when the solve would cost more — m then drops to 0 and the
+/// next frames are small too. The prediction is a cost model on measured solves (CPU seconds):
+///
+///     c(m, k) = ⅔m³ / r + γ·k + ρ·m,
+///
+/// the fresh dense LU of the m × m capacitance matrix (Yeung et al. 2016 eq. 17 in capacitance
+/// form; the cost rule of CapacitanceFactor takes the update only when it is cheaper, so this
+/// is an upper bound) at the rate r (flop/s) of the last fresh LU observed with m ≥
+/// kMinRateM, the k new columns of G (restricted solves R⁻¹e, AugmentedSystem::
+/// columns_without_g) at the last cost per column γ observed with ≥ kMinColumns of them, and
+/// the rest of the solve (the product Φ + GΨ, steps 1 and 3) at the last solve's cost per
+/// column of 𝓛, ρ. Deterministic given what it is fed (tests feed it directly).
+class SynchronousRefactorRule {
+ public:
+  /// Fresh LUs of smaller m do not set the rate (their BLAS rate is far below the large ones').
+  static constexpr int kMinRateM = 256;
+  /// Fewer new columns of G than this do not set γ.
+  static constexpr int kMinColumns = 16;
+  /// Records a solve at m (m > 0) that made k new columns of G and took `cpu_total` seconds,
+  /// of which `cpu_capacitance` the capacitance factorization (`fresh`: a fresh LU) and
+  /// `cpu_columns` the new columns.
+  void observe(int m, int k, double cpu_total, double cpu_capacitance, bool fresh,
+               double cpu_columns);
+  /// c(m, k) of the class comment; NaN until r, γ and ρ are known.
+  double predict(int m, int k) const;
+  /// predict(m, k) > refactor_cpu > 0 (false while predict is NaN).
+  bool should_refactor(int m, int k, double refactor_cpu) const;
+  double lu_rate() const { return lu_rate_; }       ///< r (flop/s; NaN: none observed)
+  double column_cost() const { return column_; }    ///< γ (seconds; NaN: none observed)
+  double rest_per_column() const { return rest_; }  ///< ρ (seconds; NaN: none observed)
+
+ private:
+  double lu_rate_ = std::numeric_limits<double>::quiet_NaN();
+  double column_ = std::numeric_limits<double>::quiet_NaN();
+  double rest_ = std::numeric_limits<double>::quiet_NaN();
+};
+
 }  // namespace incise::interactive

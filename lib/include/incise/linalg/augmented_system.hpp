@@ -72,6 +72,16 @@ enum class SchurSolver {
   kDirectCached
 };
 
+/// Elimination order of a synchronous refactorization (AugmentedSystem::refactor_now(
+/// RefactorOrdering, bool)).
+enum class RefactorOrdering {
+  kOptions,  ///< AugmentedOptions::cholmod's ordering (METIS in the sessions): computed afresh
+  kAmd,      ///< CHOLMOD's AMD: computed afresh, cheaper than METIS, more fill
+  /// No ordering computed: the factor in use's, each DOF added since placed right after the
+  /// latest-eliminated of its neighbours (CholmodFactor::analyze with a given permutation)
+  kExtendCurrent
+};
+
 /// Options of an AugmentedSystem.
 struct AugmentedOptions {
   /// Factorization of K⁰ (and of background refactorizations). METIS nested dissection by
@@ -213,6 +223,12 @@ struct [[nodiscard]] AugmentedReport
   double seconds_step3 = 0;
   double seconds_total = 0;
   double seconds_swap = 0;  ///< §3.6: swapping a finished background factor in (incl. in total)
+  /// CLOCK_THREAD_CPUTIME_ID of the calling thread over the whole solve (seconds_total's CPU)
+  double cpu_seconds_total = 0;
+  /// kDirectCached: thread CPU of the capacitance factorization (seconds_capacitance_factor's)
+  double cpu_seconds_capacitance_factor = 0;
+  /// kDirectCached: thread CPU of the new columns of G (seconds_new_columns's)
+  double cpu_seconds_new_columns = 0;
   // Of seconds_step2 with kDirectCached: the restricted solves R⁻¹e for new columns of G, the
   // product Φ + GΨ, and the capacitance factorization (fresh or updated).
   double seconds_new_columns = 0;
@@ -340,6 +356,10 @@ class AugmentedSystem {
   std::vector<int> replaced_columns() const;
   /// Number of replaced columns m = |𝓛|.
   int num_replaced() const;
+  /// SchurSolver::kDirectCached: the columns of 𝓛 on the factored DOFs whose column of G is not
+  /// cached for the factor in use, i.e. the restricted solves the next solve() would make
+  /// (AugmentedReport::schur_solves) if no background factor is swapped in first.
+  int columns_without_g() const;
   /// SchurSolver::kDirectCached: the capacitance matrix Φ + GΨ = H R⁻¹ J (up to round-off) of
   /// the last solve, rows and columns in the order of 𝓛 at that solve (empty before the first).
   const Eigen::MatrixXd& last_capacitance_matrix() const { return product_; }
@@ -377,6 +397,17 @@ class AugmentedSystem {
   /// factor was swapped in (false: the factorization failed, the old factor stays;
   /// last_refactorization_status() says why).
   bool refactor_now();
+  /// refactor_now() with the elimination order of `ordering` (RefactorOrdering; cheaper than a
+  /// METIS analysis on the liver: docs/augmented.md, "Synchronous refactorization (issue 17)"),
+  /// and with `abandon_pending` the pending background jobs
+  /// dropped instead of waited for (their snapshots are older than the current K; their threads
+  /// run to their end unobserved: refactorizations_abandoned() counts them).
+  bool refactor_now(RefactorOrdering ordering, bool abandon_pending);
+  /// RefactorOrdering::kExtendCurrent's elimination order for `k` (the current K, or any matrix
+  /// of order ≥ factored_dofs() with the pattern of its new DOFs): the factor in use's
+  /// permutation, each DOF ≥ factored_dofs() placed right after the latest-eliminated of its
+  /// neighbours < factored_dofs() (at the end without one); perm[k] = the DOF eliminated k-th.
+  std::vector<int> extended_ordering(const SparseMatrix& k) const;
   /// Status of the last finished background factorization.
   FactorStatus last_refactorization_status() const { return last_refactor_status_; }
 
@@ -390,9 +421,11 @@ class AugmentedSystem {
   struct SchurLu;
   // `eliminated`: sorted DOFs whose rows and columns are replaced by their diagonal entry in
   // the factored matrix (eliminate_constrained; those with a positive diagonal).
+  // `ordering`: the permutation to analyze with (CholmodFactor::analyze; empty: the options').
   static std::unique_ptr<Base> make_base(SparseMatrix matrix, std::unique_ptr<CholmodFactor> factor,
                                          const AugmentedOptions& options,
-                                         const std::vector<int>& eliminated = {});
+                                         const std::vector<int>& eliminated = {},
+                                         const std::vector<int>& ordering = {});
   // The DOFs a refactorization of the current K eliminates (𝓓 when eliminate_constrained).
   std::vector<int> constrained_to_eliminate() const;
   // Whether DOF j is eliminated in the factored matrix and still constrained (not in 𝓛).

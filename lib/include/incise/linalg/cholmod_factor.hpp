@@ -124,6 +124,12 @@ class CholmodFactor {
   /// Reuses the previous analysis when `pattern_version` equals the previous one and the size
   /// and nonzero count agree. Pass a fresh version whenever the pattern changes.
   [[nodiscard]] FactorStatus analyze(const SparseMatrix& a, std::uint64_t pattern_version);
+  /// The same with the fill-reducing ordering given instead of computed (CHOLMOD_GIVEN,
+  /// postordered): `permutation[k]` is the row eliminated k-th (LdlFactorData::perm's
+  /// convention); empty: the options' ordering. kInvalidInput when it is not a permutation of
+  /// the rows.
+  [[nodiscard]] FactorStatus analyze(const SparseMatrix& a, std::uint64_t pattern_version,
+                                     const std::vector<int>& permutation);
 
   /// Numerical factorization of `a` (same pattern as analyzed). kNotPositiveDefinite when a
   /// pivot is not positive (minor() is then the failing column, in the permuted order) or the
