@@ -438,7 +438,7 @@ class AugmentedSystem {
   // swap, in a background job; false when there is nothing to prepare (swap now).
   bool start_preparing(std::unique_ptr<Base>& base);
   int prune_unchanged_columns();
-  // The steps of solve(), in order (defined in augmented_system.cpp with their equations).
+  // The steps of solve(), in order (defined in augmented_solve.cpp with their equations).
   bool augment(Augmentation& aug, AugmentedReport& report);
   void find_closures(Augmentation& aug, AugmentedReport& report);
   Eigen::MatrixXd hsj_matrix(const Augmentation& aug) const;
