@@ -528,7 +528,10 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
                  5 * static_cast<std::size_t>(p.size()) * sizeof(double) +
                      (o.lanczos.assembled ? scene.lanczos_assembled_bytes : 0),
                  static_cast<std::int64_t>(est.flops));
-    if (est.status != solver::StopReason::kConverged) {
+    // kMaxIterations with θ_max settled: usable bounds (θ₁ ≥ λ₁ over-damps), used and named
+    // in the origins below.
+    const bool bounds = est.status == solver::StopReason::kMaxIterations && est.time_step > 0;
+    if (est.status != solver::StopReason::kConverged && !bounds) {
       dp.status = est.status;
       std::ostringstream os;
       os << (s.time_step <= 0 ? "time step" : "damping")
@@ -541,11 +544,14 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
       return dp;
     }
   }
+  // Lanczos stopped at its step limit with usable bounds (estimate_dynamic_parameters).
+  const std::string unconverged =
+      need_lanczos && !est.ok() ? "; not converged: " + est.message : std::string();
   if (s.time_step <= 0) {
     dp.time_step = est.time_step;
     dp.time_step_origin =
         "0.9 x critical 2/sqrt(lambda_max), lambda_max = " + std::to_string(est.lambda_max) +
-        " (Lanczos, " + std::to_string(est.products) + " products)";
+        " (Lanczos, " + std::to_string(est.products) + " products" + unconverged + ")";
   }
   dp.damping = s.damping;
   dp.damping_origin = "given";
@@ -585,7 +591,11 @@ DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,
   dp.damping_origin =
       "2 zeta sqrt(lambda_1), zeta = " + std::to_string(est.damping_ratio) +
       " (first overshoot = tolerance / 2), lambda_1 = " + std::to_string(est.lambda_min) +
-      " (Lanczos)";
+      " (Lanczos" +
+      (est.ok()           ? std::string()
+       : s.time_step <= 0 ? ", an upper bound: not converged"
+                          : ", an upper bound" + unconverged) +
+      ")";
   return dp;
 }
 

@@ -82,9 +82,10 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   VecX u_best = u;         // displacement of lowest total energy: where a restart resumes (at rest)
   bool best_is_u = false;  // this step's u is the new u_best: the update pass swaps it there
   double energy = 0.0, last_energy = 0.0, rnorm = 0.0, threshold = 0.0;
-  double e_start = 0.0, e_min = 0.0;  // E at the run's first step, lowest E since the last (re)start
-  bool have_e = false;                // e_min is set (false at the start and after a restart)
-  bool have_start = false;            // e_start is set (once per run)
+  double e_start = 0.0,
+         e_min = 0.0;       // E at the run's first step, lowest E since the last (re)start
+  bool have_e = false;      // e_min is set (false at the start and after a restart)
+  bool have_start = false;  // e_start is set (once per run)
   long k = 0;
   double t = 0.0;  // simulated time of u: Σ Δt over the steps taken (IterationInfo::time)
   StopReason reason = StopReason::kConverged;
@@ -331,9 +332,23 @@ DynamicParameterEstimate estimate_dynamic_parameters(Problem& problem, const Vec
   out.message = sp.message;
   out.products = sp.steps;
   out.flops = meter.flops();
-  if (!sp.ok() || !(sp.smallest > 0.0) || !(sp.largest > 0.0)) {
+  // Steps used up with θ_max settled (the top of the spectrum converges first, θ₁ slowly: κ ≈
+  // 1e6 on a slender beam): the bounds are usable, Δt from θ_max ≤ λ_n (a too large Δt restarts,
+  // DynamicRelaxationOptions::max_restarts) and η from θ₁ ≥ λ₁ (over-damps by √(θ₁/λ₁) at most);
+  // the status stays kMaxIterations and the message says so (docs/solvers.md, "Restarts").
+  const bool bounds = sp.status == StopReason::kMaxIterations && sp.largest_settled;
+  if (!(sp.ok() || bounds) || !(sp.smallest > 0.0) || !(sp.largest > 0.0)) {
     if (out.ok()) out.status = StopReason::kIndefinite;
     return out;
+  }
+  if (bounds) {
+    std::ostringstream os;
+    os << "lambda_1 not converged in " << sp.steps << " Lanczos steps";
+    if (std::isfinite(sp.smallest_residual))
+      os << " (Ritz residual " << sp.smallest_residual << " x theta_1)";
+    os << "; dt from the settled lambda_max, eta from theta_1 = " << sp.smallest
+       << " >= lambda_1, an upper bound: eta over-damps by sqrt(theta_1/lambda_1)";
+    out.message = os.str();
   }
   out.lambda_min = sp.smallest;
   out.lambda_max = sp.largest;

@@ -292,6 +292,7 @@ SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& s
   double lo_prev = 0.0, hi_prev = 0.0, lo_step = 0.0, hi_step = 0.0;
   double tnorm = 0.0, max_sub2 = 0.0;  // Gershgorin bound of ‖T_k‖; largest β²
   long calm = 0;                       // consecutive steps with both changes ≤ tolerance
+  long calm_top = 0;                   // consecutive steps with θ_k's change ≤ tolerance
   // K(u) assembled once when the problem offers it (an empty function otherwise, or when an
   // element is inverted at u: then the matrix-free product reports it on the first step).
   const std::function<EvalStatus(const VecX&, VecX&)> product =
@@ -336,6 +337,8 @@ SpectrumEstimate lanczos_spectrum(Problem& problem, const VecX& u, const VecX& s
       const bool still =
           est.smallest_change <= options.tolerance && est.largest_change <= options.tolerance;
       calm = still ? calm + 1 : 0;
+      calm_top = est.largest_change <= options.tolerance ? calm_top + 1 : 0;
+      est.largest_settled = calm_top >= options.window;
       lo_step = std::abs(lo - lo_prev);
       hi_step = std::abs(hi - hi_prev);
     }

@@ -6,7 +6,8 @@
 /// "nonlinear-cg" → nonlinear_cg (§2.4.2, secant line search, Polak–Ribière); "newton" →
 /// truncated_newton (§2.4.3); "dynamic-ss22" → dynamic_relaxation (§2.5) with Δt and η given
 /// or estimated (§4.1: Δt = 0.9·2/√λ_max, η = 2√λ₁, or η from the FFT of an undamped run when
-/// spectral_tuning is set; dynamic_parameters(), never from an unconverged estimate);
+/// spectral_tuning is set; dynamic_parameters(): from a Lanczos run that stopped at its step
+/// limit only when θ_max settled, named "not converged");
 /// "augmented" → CHOLMOD factorization of the assembled K (fixed DOFs
 /// as identity rows) and one direct solve, the initial system of the augmented method
 /// (Yeung et al. 2016 §3). "augmented" with tools → an interactive cutting run
@@ -189,10 +190,12 @@ struct [[nodiscard]] DynamicParameters : Outcome<solver::StopReason, solver::Sto
 /// are; otherwise estimated from K(u) and the lumped M (§4.1) by one Lanczos run
 /// (solver::estimate_dynamic_parameters with `lanczos`, target_reduction = the scene tolerance):
 /// Δt = 0.9·2/√θ_max, η = 2ζ√θ₁ (ζ = solver::damping_ratio_for(tolerance / 2)) or, with
-/// spectral_tuning, η = 4πf from the FFT of 8192 undamped steps at Δt. An estimate that did
-/// not converge is never used: a Lanczos run with any status but kConverged (steps exhausted,
-/// indefinite or non-finite K), an undamped run that did not complete (its status: unstable,
-/// inverted, non-finite) or found no oscillation (kStagnated). Each estimate is recorded in
+/// spectral_tuning, η = 4πf from the FFT of 8192 undamped steps at Δt. A Lanczos run that used
+/// up its steps with θ_max settled gives bounds that are used (θ₁ ≥ λ₁: η over-damps; the
+/// origins say "not converged"); any other estimate that did not converge is not: a Lanczos run
+/// with steps exhausted before θ_max settled, indefinite or non-finite K, an undamped run that
+/// did not complete (its status: unstable, inverted, non-finite) or found no oscillation
+/// (kStagnated). Each estimate is recorded in
 /// scene.steps. Throws UsageError for a scene whose problem was not built or has no lumped
 /// mass (not dynamic).
 DynamicParameters dynamic_parameters(BuiltScene& scene, const VecX& u,

@@ -105,7 +105,10 @@ struct [[nodiscard]] DynamicParameterEstimate
 /// θ_max ≤ λ_n, and λ_n may grow as a stiffening material deforms):
 /// run dynamic_relaxation() with max_restarts > 0 so that a too large Δt restarts instead of
 /// diverging. Status: the Lanczos run's, or the failed gradient's; Δt, η and the θ are set
-/// only when it is kConverged (with kMaxIterations they stay 0). The result depends only on the
+/// when it is kConverged, and with kMaxIterations when θ_max has settled
+/// (SpectrumEstimate::largest_settled) — then θ₁ ≥ λ₁ is an uncertified upper bound (η
+/// over-damps), the message says so, and a caller may use them or raise the step limit
+/// (otherwise they stay 0). The result depends only on the
 /// problem and u, so a caller relaxing the same mesh again (the same material, fixed set and
 /// masses) may reuse it.
 DynamicParameterEstimate estimate_dynamic_parameters(Problem& problem, const VecX& u,

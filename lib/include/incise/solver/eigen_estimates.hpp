@@ -102,6 +102,9 @@ struct [[nodiscard]] SpectrumEstimate
   double largest_change = 0.0;   ///< relative change of θ_k over the last step
   /// Ritz residual of θ₁ relative to θ₁ at the last convergence check (∞ before any)
   double smallest_residual = std::numeric_limits<double>::infinity();
+  /// θ_k moved ≤ tolerance over each of the last `window` steps (the top of the spectrum
+  /// converges first: set also when θ₁ has not converged and the status is kMaxIterations)
+  bool largest_settled = false;
 };
 
 /// Both extreme eigenvalues of the generalized problem K(u) w = λ M w on the free DOFs (M
