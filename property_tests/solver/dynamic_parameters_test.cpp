@@ -132,8 +132,8 @@ TEST(DynamicRelaxationRestarts, ExhaustedRestartsAreReportedNotSilent_Sec4_4_1) 
 // Δt just above the stability limit (docs/solvers.md, "Restarts"): 1.15× the automatic Δt on
 // the Kuhn Veronda–Westmann cube of EstimateOnKuhnCube is 1.035·2/√θ_max(0). Without restarts
 // the run fails; with them one restart (Δt × 0.7, stable) suffices. Before the energy check was
-// measured against the whole run's dissipation, the resumed run restarted again on E's O(Δt²)
-// wiggle from rest (3 restarts, Δt × 0.7³, twice the steps); issue of the eighth pass.
+// measured against the whole run's dissipation, the resumed run restarted again on E's wiggle
+// from rest (3 restarts, Δt × 0.7³, twice the steps); issue of the eighth pass.
 TEST(DynamicRelaxationRestarts, OneRestartJustAboveTheCriticalStep_Sec4_4_1) {
   const mesh::MeshData m = mesh::make_kuhn_cube(6, 0.1);
   fem::ElasticProblem p(m, material::Material("veronda-westmann", table_4_1("veronda-westmann")));

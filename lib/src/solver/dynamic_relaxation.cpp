@@ -169,9 +169,10 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
       if (!have_e) {
         // The run's first E is the scale of the check for good; after a restart E is measured
         // afresh from the resumed state (e_min), against the energy dissipated since the start of
-        // the run: from rest at u_best, E − e_min is not monotone to O(Δt²) (high modes near the
-        // stability limit) and one step's wiggle exceeded half of the little dissipated since the
-        // restart, a false restart every few steps (docs/solvers.md, "Restarts").
+        // the run: from rest at u_best, E is not monotone (a wiggle of order Δtω times the energy
+        // of a mode ω: O(1) for high modes near the stability limit) and one step's wiggle exceeded
+        // half of the little dissipated since the restart, a false restart every few steps
+        // (docs/solvers.md, "Restarts").
         if (!have_start) e_start = e;
         have_start = true;
         e_min = e;

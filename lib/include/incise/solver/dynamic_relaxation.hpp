@@ -24,7 +24,7 @@ struct DynamicRelaxationOptions : RelaxationOptions {
   /// non-finite evaluation ends the run). With max_restarts > 0 an unstable step is also one
   /// whose total energy E = Π(ū) + ½u̇ᵀMu̇ regained more than half of what damping has
   /// dissipated over the run (E > E_min + ½(E₀ − E_min), E₀ the run's first E, E_min the lowest
-  /// since the last (re)start; a stable damped run loses energy up to E's O(Δt²) wiggle, so
+  /// since the last (re)start; a stable damped run loses energy up to a wiggle of E, so
   /// this needs damping > 0); the integration then restarts at rest from the displacement of
   /// lowest E with Δt ← restart_reduction·Δt. SolverReport::restarts and
   /// SolverReport::time_step say so.
