@@ -81,31 +81,37 @@ void expect_equivalent(linalg::AugmentedSystem& aug, const CutModel& m, Eigen::V
   EXPECT_LE((r - ref.r).norm(), kRefactorRelTol * (ref.r.norm() + f.norm()));
 }
 
-/// The start of the §3.6 tests below: `plane` ← the nodes with DOFs on the beam's mid-plane
-/// x = 0.2 (at least `need` of them), the first three cut (§4.3.2), u₀ = 0.01 imposed, and the
-/// solve checked against a fresh factorization. Call through ASSERT_NO_FATAL_FAILURE.
-void cut_three_mid_plane_nodes(CutModel& m, linalg::AugmentedSystem& aug, Eigen::VectorXd& f,
-                               std::map<int, double>& dir, std::vector<int>& plane,
-                               std::size_t need) {
-  plane.clear();
-  for (int v = 0; v < static_cast<int>(m.points.cols()); ++v)
-    if (std::abs(m.points(0, v) - 0.2) < 1e-9 && m.node_dof[v] >= 0) plane.push_back(v);
-  ASSERT_GE(plane.size(), need);
-  for (int k = 0; k < 3; ++k) ASSERT_TRUE(cut_node(m, aug, plane[k]));
-  aug.impose_dirichlet(0, 0.01);
-  dir[0] = 0.01;
-  expect_equivalent(aug, m, f, dir);
-}
+/// The beam of the §3.6 tests below: make_beam(8, 0.1), an AugmentedSystem with `options` and
+/// f = 0.25. start(): K⁰ factored; `plane` ← the nodes with DOFs on the mid-plane x = 0.2 (at
+/// least `need` of them), the first three cut (§4.3.2), u₀ = 0.01 imposed, and the solve checked
+/// against a fresh factorization. Call start() through ASSERT_NO_FATAL_FAILURE; the tests bind
+/// the members by `auto& [m, aug, f, dir, plane] = beam`.
+struct MidPlaneBeam {
+  CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
+  linalg::AugmentedSystem aug;
+  Eigen::VectorXd f;
+  std::map<int, double> dir;
+  std::vector<int> plane;
+
+  explicit MidPlaneBeam(const linalg::AugmentedOptions& options = {})
+      : aug(options), f(Eigen::VectorXd::Constant(m.num_dofs, 0.25)) {}
+  void start(std::size_t need) {
+    ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
+    for (int v = 0; v < static_cast<int>(m.points.cols()); ++v)
+      if (std::abs(m.points(0, v) - 0.2) < 1e-9 && m.node_dof[v] >= 0) plane.push_back(v);
+    ASSERT_GE(plane.size(), need);
+    for (int k = 0; k < 3; ++k) ASSERT_TRUE(cut_node(m, aug, plane[k]));
+    aug.impose_dirichlet(0, 0.01);
+    dir[0] = 0.01;
+    expect_equivalent(aug, m, f, dir);
+  }
+};
 
 // §3.6, Fig. 1: m + m′ drops to m′ when the fresh factor replaces the old one.
 TEST(AugmentedRefactor, SwapDropsMToChangesSinceStartSec3_6) {
-  CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
-  linalg::AugmentedSystem aug;
-  ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
-  Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
-  std::map<int, double> dir;
-  std::vector<int> plane;
-  ASSERT_NO_FATAL_FAILURE(cut_three_mid_plane_nodes(m, aug, f, dir, plane, 6));
+  MidPlaneBeam beam;
+  ASSERT_NO_FATAL_FAILURE(beam.start(6));
+  auto& [m, aug, f, dir, plane] = beam;
   const int m_before = aug.num_replaced();
   ASSERT_TRUE(aug.start_refactorization());
   EXPECT_FALSE(aug.start_refactorization());  // one job at a time
@@ -146,16 +152,12 @@ TEST(AugmentedRefactor, RefactorizationEliminatesTheConstrainedDofsSec3_6) {
     for (const bool eliminate : {true, false}) {
       SCOPED_TRACE(::testing::Message()
                    << "interactive " << interactive << " eliminate " << eliminate);
-      CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
       linalg::AugmentedOptions options =
           interactive ? linalg::interactive_options() : linalg::AugmentedOptions{};
       options.eliminate_constrained = eliminate;
-      linalg::AugmentedSystem aug(options);
-      ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
-      Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
-      std::map<int, double> dir;
-      std::vector<int> plane;
-      ASSERT_NO_FATAL_FAILURE(cut_three_mid_plane_nodes(m, aug, f, dir, plane, 6));
+      MidPlaneBeam beam(options);
+      ASSERT_NO_FATAL_FAILURE(beam.start(6));
+      auto& [m, aug, f, dir, plane] = beam;
       for (const auto& [d, v] : {std::pair<int, double>{4, -0.005}, {7, 0.002}}) {
         aug.impose_dirichlet(d, v);
         dir[d] = v;
@@ -224,15 +226,11 @@ TEST(AugmentedRefactor, SynchronousRefactorizationAbandonsThePendingJobForEveryO
     for (const bool eliminate : {true, false}) {
       SCOPED_TRACE(::testing::Message()
                    << "ordering " << static_cast<int>(ordering) << " eliminate " << eliminate);
-      CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
       linalg::AugmentedOptions options = linalg::interactive_options();
       options.eliminate_constrained = eliminate;
-      linalg::AugmentedSystem aug(options);
-      ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
-      Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
-      std::map<int, double> dir;
-      std::vector<int> plane;
-      ASSERT_NO_FATAL_FAILURE(cut_three_mid_plane_nodes(m, aug, f, dir, plane, 6));
+      MidPlaneBeam beam(options);
+      ASSERT_NO_FATAL_FAILURE(beam.start(6));
+      auto& [m, aug, f, dir, plane] = beam;
       aug.impose_dirichlet(4, -0.005);
       dir[4] = -0.005;
       expect_equivalent(aug, m, f, dir);
@@ -272,16 +270,12 @@ TEST(AugmentedRefactor, SynchronousRefactorizationAbandonsThePendingJobForEveryO
 // new column of G; without it, that solve makes one per kept column of the factored DOFs.
 TEST(AugmentedRefactor, PreparedSwapBringsGOfTheKeptColumnsSec3_6) {
   for (const bool prepare : {true, false}) {
-    CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
     linalg::AugmentedOptions options;
     options.schur_solver = linalg::SchurSolver::kDirectCached;
     options.prepare_swap = prepare;
-    linalg::AugmentedSystem aug(options);
-    ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
-    Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
-    std::map<int, double> dir;
-    std::vector<int> plane;
-    ASSERT_NO_FATAL_FAILURE(cut_three_mid_plane_nodes(m, aug, f, dir, plane, 5));
+    MidPlaneBeam beam(options);
+    ASSERT_NO_FATAL_FAILURE(beam.start(5));
+    auto& [m, aug, f, dir, plane] = beam;
     ASSERT_TRUE(aug.start_refactorization());
     ASSERT_TRUE(cut_node(m, aug, plane[3]));  // changed while the job runs
     ASSERT_TRUE(cut_node(m, aug, plane[4]));
@@ -312,17 +306,13 @@ TEST(AugmentedRefactor, PreparedSwapBringsGOfTheKeptColumnsSec3_6) {
 // factorization.
 TEST(AugmentedRefactor, JobPreparesGOfThePublishedColumnsWithoutAPollSec3_6) {
   for (const bool in_job : {true, false}) {
-    CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
     linalg::AugmentedOptions options;
     options.schur_solver = linalg::SchurSolver::kDirectCached;
     options.prepare_swap = true;
     options.prepare_in_job = in_job;
-    linalg::AugmentedSystem aug(options);
-    ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
-    Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
-    std::map<int, double> dir;
-    std::vector<int> plane;
-    ASSERT_NO_FATAL_FAILURE(cut_three_mid_plane_nodes(m, aug, f, dir, plane, 6));
+    MidPlaneBeam beam(options);
+    ASSERT_NO_FATAL_FAILURE(beam.start(6));
+    auto& [m, aug, f, dir, plane] = beam;
     // Part 1.
     ASSERT_TRUE(aug.start_refactorization());
     int polls = 0;
@@ -372,18 +362,14 @@ TEST(AugmentedRefactor, JobPreparesGOfThePublishedColumnsWithoutAPollSec3_6) {
 TEST(AugmentedRefactor, OverlappingJobOnAStaleSnapshotLeavesOnlyTheNewerChangesSec3_6) {
   for (const int variant : {0, 1, 2}) {  // prepared swap, prepared in the job, not prepared
     const bool prepare = variant < 2;
-    CutModel m = CutModel::from_mesh(mesh::make_beam(8, 0.1));
     linalg::AugmentedOptions options;
     options.schur_solver = linalg::SchurSolver::kDirectCached;
     options.prepare_swap = prepare;
     options.prepare_in_job = variant == 1;
     options.overlap_stale_columns = 1;
-    linalg::AugmentedSystem aug(options);
-    ASSERT_EQ(aug.initialize(m.assemble()), linalg::FactorStatus::kOk);
-    Eigen::VectorXd f = Eigen::VectorXd::Constant(m.num_dofs, 0.25);
-    std::map<int, double> dir;
-    std::vector<int> plane;
-    ASSERT_NO_FATAL_FAILURE(cut_three_mid_plane_nodes(m, aug, f, dir, plane, 6));
+    MidPlaneBeam beam(options);
+    ASSERT_NO_FATAL_FAILURE(beam.start(6));
+    auto& [m, aug, f, dir, plane] = beam;
     ASSERT_TRUE(aug.start_refactorization());
     EXPECT_FALSE(aug.may_start_refactorization());  // nothing changed since its snapshot
     EXPECT_FALSE(aug.start_refactorization());
