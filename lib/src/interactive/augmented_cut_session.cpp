@@ -361,7 +361,7 @@ void AugmentedCutSession::solve_into(AugmentedCutStepReport& r) {
         const linalg::FactorizationCpu c = system_->factorization_cpu();
         refactor = c.analyze + c.factorize + c.extract;
       }
-      if (m > 0 && refactor > 0 && predicted > refactor) {
+      if (m > 0 && SynchronousRefactorRule::worth_refactoring(predicted, refactor)) {
         r.synchronous_refactorization = true;
         ++sync_count_;
         if (system_->refactor_now(options_.synchronous_ordering, /*abandon_pending=*/true)) {

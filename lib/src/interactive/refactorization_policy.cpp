@@ -44,8 +44,7 @@ double SynchronousRefactorRule::predict(int m, int k) const {
 }
 
 bool SynchronousRefactorRule::should_refactor(int m, int k, double refactor_cpu) const {
-  const double c = predict(m, k);
-  return refactor_cpu > 0 && c > refactor_cpu;  // false for NaN
+  return worth_refactoring(predict(m, k), refactor_cpu);
 }
 
 }  // namespace incise::interactive

@@ -104,8 +104,13 @@ class SynchronousRefactorRule {
                double cpu_columns);
   /// c(m, k) of the class comment; NaN until r, γ and ρ are known.
   double predict(int m, int k) const;
-  /// predict(m, k) > refactor_cpu > 0 (false while predict is NaN).
+  /// worth_refactoring(predict(m, k), refactor_cpu).
   bool should_refactor(int m, int k, double refactor_cpu) const;
+  /// The decision on any prediction (the session's injected models too): predicted >
+  /// refactor_cpu > 0, false for a NaN prediction.
+  static bool worth_refactoring(double predicted, double refactor_cpu) {
+    return refactor_cpu > 0 && predicted > refactor_cpu;
+  }
   double lu_rate() const { return lu_rate_; }       ///< r (flop/s; NaN: none observed)
   double column_cost() const { return column_; }    ///< γ (seconds; NaN: none observed)
   double rest_per_column() const { return rest_; }  ///< ρ (seconds; NaN: none observed)
