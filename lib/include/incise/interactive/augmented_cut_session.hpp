@@ -102,8 +102,8 @@ struct AugmentedCutOptions {
   /// On by default; measured: docs/augmented.md, "Synchronous refactorization (issue 17)".
   bool synchronous_refactorization = true;
   /// Elimination order of a synchronous refactorization: by default the factor in use's,
-  /// extended to the DOFs added since (no ordering computed; on the liver ≈ 5 ms of symbolic
-  /// analysis against METIS's ≈ 27 ms, for ≈ 13% more flops; docs/augmented.md). Background
+  /// extended to the DOFs added since (no ordering computed: a cheaper symbolic analysis than
+  /// METIS's for somewhat more fill; measured in docs/augmented.md). Background
   /// jobs keep AugmentedOptions::cholmod's (METIS).
   linalg::RefactorOrdering synchronous_ordering = linalg::RefactorOrdering::kExtendCurrent;
   /// Predicted CPU of the next augmented solve at m with k new columns of G (AugmentedSystem::
