@@ -35,8 +35,7 @@ EvalStatus ElasticProblem::energy(const VecX& u, double& energy) {
   return std::isfinite(energy) ? EvalStatus::kOk : EvalStatus::kNonFinite;
 }
 
-EvalStatus ElasticProblem::internal_forces(const VecX& u, VecX& f_int) {
-  INCISE_CHECK(u.size() == size(), "internal_forces: u has the wrong size");
+bool ElasticProblem::force_sweep(const VecX& u, VecX& f_int) {
   const material::Lame p = material_.lame();
   f_int.setZero(size());
   double* out = f_int.data();
@@ -51,18 +50,23 @@ EvalStatus ElasticProblem::internal_forces(const VecX& u, VecX& f_int) {
     });
   });
   flops_ += (element_flops_.force + 12) * static_cast<std::uint64_t>(num_elements());
-  if (!ok) {
-    f_int.setZero();
-    return EvalStatus::kInverted;
-  }
-  return f_int.allFinite() ? EvalStatus::kOk : EvalStatus::kNonFinite;
+  if (!ok) f_int.setZero();
+  return ok;
+}
+
+EvalStatus ElasticProblem::internal_forces(const VecX& u, VecX& f_int) {
+  INCISE_CHECK(u.size() == size(), "internal_forces: u has the wrong size");
+  if (!force_sweep(u, f_int)) return EvalStatus::kInverted;
+  return detail::all_finite(f_int.data(), f_int.size()) ? EvalStatus::kOk : EvalStatus::kNonFinite;
 }
 
 EvalStatus ElasticProblem::gradient(const VecX& u, VecX& g, double* energy_out) {
   if (!energy_out) {
-    const EvalStatus s = internal_forces(u, g);
-    if (s != EvalStatus::kInverted) g -= f_ext_;
-    return s;
+    // The forces, then g −= f_ext and the finiteness test in one pass over g (issue 19: the
+    // vector passes of an SS22 step without Π).
+    INCISE_CHECK(u.size() == size(), "gradient: u has the wrong size");
+    if (!force_sweep(u, g)) return EvalStatus::kInverted;
+    return detail::subtract_all_finite(g, f_ext_) ? EvalStatus::kOk : EvalStatus::kNonFinite;
   }
   // Gradient and energy in one sweep from the same kinematics (the sums, and so the results,
   // are those of internal_forces() and energy(): same kernels, same element order).

@@ -11,25 +11,28 @@ namespace incise::solver {
 
 namespace {
 
-/// acc = −g, and whether every entry of g is finite, in one pass over g (issue 19: the SS22
-/// step's vector passes). x − x is 0 for finite x and NaN otherwise; four partial sums.
-bool negate_if_finite(const VecX& g, VecX& acc) {
+/// ‖Pg‖² (P: the fixed DOFs projected out, `free` holding 1 at free DOFs and 0 at fixed ones)
+/// and whether every entry of g is finite, in one pass over g (issue 19: the SS22 step's vector
+/// passes; x − x is 0 for finite x and NaN otherwise; four partial sums of each).
+bool free_norm2_if_finite(const VecX& g, const VecX& free, double& norm2) {
   const Eigen::Index n = g.size();
-  acc.resize(n);
   const double* gi = g.data();
-  double* ai = acc.data();
-  double s[4] = {0.0, 0.0, 0.0, 0.0};
+  const double* fi = free.data();
+  double s[4] = {0.0, 0.0, 0.0, 0.0}, f[4] = {0.0, 0.0, 0.0, 0.0};
   Eigen::Index i = 0;
   for (; i + 4 <= n; i += 4)
     for (int l = 0; l < 4; ++l) {
-      ai[i + l] = -gi[i + l];
-      s[l] += gi[i + l] - gi[i + l];
+      const double r = fi[i + l] * gi[i + l];
+      s[l] += r * r;
+      f[l] += gi[i + l] - gi[i + l];
     }
   for (; i < n; ++i) {
-    ai[i] = -gi[i];
-    s[0] += gi[i] - gi[i];
+    const double r = fi[i] * gi[i];
+    s[0] += r * r;
+    f[0] += gi[i] - gi[i];
   }
-  return ((s[0] + s[1]) + (s[2] + s[3])) == 0.0;
+  norm2 = (s[0] + s[1]) + (s[2] + s[3]);
+  return ((f[0] + f[1]) + (f[2] + f[3])) == 0.0;
 }
 
 }  // namespace
@@ -61,8 +64,16 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
                      "dynamic_relaxation: restart_reduction must lie in (0, 1)");
   INCISE_CHECK_PARAM(options.energy_every >= 1, "dynamic_relaxation: energy_every must be >= 1");
   double dt = options.time_step;
-  // 1/((1 + ½Δtη) m_i): the diagonal of (M + θ₁Δt C)⁻¹ of (2.58) with θ₁ = ½, θ₂ = 0.
-  VecX inv_mass = (m * (1.0 + 0.5 * dt * eta)).cwiseInverse();
+  // 1 at free DOFs, 0 at fixed ones (Problem::project: P zeroes the fixed components).
+  VecX free = VecX::Ones(n);
+  problem.project(free);
+  // 1/((1 + ½Δtη) m_i) at free DOFs: the diagonal of (M + θ₁Δt C)⁻¹ of (2.58) with θ₁ = ½,
+  // θ₂ = 0, times P — so ü = −P(∇Π(ū) + ηMu̇)/((1 + ½Δtη)M) takes the projection on the way.
+  VecX inv_mass;
+  const auto set_inv_mass = [&] {
+    inv_mass = (m * (1.0 + 0.5 * dt * eta)).cwiseInverse().cwiseProduct(free);
+  };
+  set_inv_mass();
   const bool restartable = options.max_restarts > 0;
   const bool check_energy = restartable && eta > 0.0;
 
@@ -78,7 +89,8 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   bool have_previous = false;  // last_good, g and energy hold the previous step's ū, ∇Π, Π
   VecX delta, k_delta;
 
-  VecX v = VecX::Zero(n), ubar = u, g, acc(n), last_good = u;
+  VecX v = VecX::Zero(n), ubar = u, g, last_good = u;
+  double mv2 = 0.0;  // u̇ᵀMu̇ of the current u̇ (summed by the update pass; 0 at rest)
   VecX u_best = u;         // displacement of lowest total energy: where a restart resumes (at rest)
   bool best_is_u = false;  // this step's u is the new u_best: the update pass swaps it there
   double energy = 0.0, last_energy = 0.0, rnorm = 0.0, threshold = 0.0;
@@ -105,13 +117,14 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
     if (rep.restarts >= options.max_restarts) return false;
     ++rep.restarts;
     dt *= options.restart_reduction;
-    inv_mass = (m * (1.0 + 0.5 * dt * eta)).cwiseInverse();
+    set_inv_mass();
     // Resume at rest from the lowest-energy state: from rest the total energy of a stable damped
     // run only decreases, as at the start (with the old velocity, Π at ū = u + ½Δt·u̇ and the
     // kinetic energy at u̇ can move E up by O(Δt) and fake energy growth).
     u = u_best;
     best_is_u = false;
     v.setZero();
+    mv2 = 0.0;
     have_e = false;
     have_previous = false;  // E at the new Δt is measured afresh from the resumed state
     ubar_ready = false;
@@ -153,8 +166,9 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
       ++since_evaluated;
     }
     since_energy = has_energy ? 0 : since_energy + 1;
-    // acc = −g on the way (the residual's first pass; g is not changed before it is used).
-    if (st != EvalStatus::kOk || !negate_if_finite(g, acc) ||
+    // ‖P∇Π(ū)‖² and the finiteness of ∇Π(ū) in one pass (g is not changed before its use).
+    double rnorm2 = 0.0;
+    if (st != EvalStatus::kOk || !free_norm2_if_finite(g, free, rnorm2) ||
         (has_energy && !std::isfinite(energy))) {
       const StopReason why =
           st == EvalStatus::kInverted ? StopReason::kInverted : StopReason::kNonFinite;
@@ -163,9 +177,8 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
       break;
     }
     if (restartable && has_energy) {
-      // Total energy at ū (kinetic from u̇ of this step), 3n flops.
-      const double e = energy + 0.5 * v.dot(m.cwiseProduct(v));
-      meter.add(3 * nn);
+      // Total energy at ū (kinetic from u̇ of this step, u̇ᵀMu̇ summed by the last update pass).
+      const double e = energy + 0.5 * mv2;
       if (!have_e) {
         // The run's first E is the scale of the check for good; after a restart E is measured
         // afresh from the resumed state (e_min), against the energy dissipated since the start of
@@ -189,8 +202,8 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
         meter.add(nn);
       }
     }
-    problem.project(acc);  // r = −P∇Π(ū) (acc = −g above)
-    rnorm = acc.norm();
+    meter.add(5 * nn);  // the residual pass
+    rnorm = std::sqrt(rnorm2);  // ‖r‖, r = −P∇Π(ū)
     threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
     if (recurrence && rnorm <= threshold) {
       // Certify on an evaluated gradient at the same ū (the recurrence's may have drifted).
@@ -200,9 +213,9 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
         reason = failure_reason(se == EvalStatus::kOk ? EvalStatus::kNonFinite : se);
         break;
       }
-      acc = -g;
-      problem.project(acc);
-      rnorm = acc.norm();
+      (void)free_norm2_if_finite(g, free, rnorm2);  // finite: tested above
+      meter.add(5 * nn);
+      rnorm = std::sqrt(rnorm2);
       threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
     }
     if (!has_energy && rnorm <= threshold) {  // the converged point carries Π
@@ -225,16 +238,17 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
     }
     reason = meter.exhausted(options.budget, k);
     if (reason != StopReason::kConverged) break;
-    // a = (r − ηMv) ⊙ (M + ½ΔtηM)⁻¹ (v is projected already: P(r − ηMv) = r − ηMv), then
-    // u += Δt v + ½Δt² a (2.59) and v += Δt a (2.60), in one pass; each entry is computed with
-    // the operations, in the order, of the former separate vector expressions (same bits). The
-    // same pass forms the next step's ū = u + ½Δt u̇ (2.56), with (2.56)'s operations.
+    // a = (−∇Π(ū) − ηMv) ⊙ P(M + ½ΔtηM)⁻¹ (the projection is in inv_mass: 0 at fixed DOFs, and
+    // v stays 0 there), then u += Δt v + ½Δt² a (2.59) and v += Δt a (2.60), in one pass; each
+    // entry is computed with the operations, in the order, of the former separate vector
+    // expressions (same bits). The same pass forms the next step's ū = u + ½Δt u̇ (2.56), with
+    // (2.56)'s operations, ‖u‖² (the blow-up test) and u̇ᵀMu̇ (the next step's kinetic energy).
     {
       const double h2 = 0.5 * dt * dt;
       const double half_dt = 0.5 * dt;
       const double* mi = m.data();
       const double* wi = inv_mass.data();
-      const double* ai = acc.data();
+      const double* gi = g.data();
       // u_best = u without a copy: u's buffer becomes u_best and the update reads it from there
       // and writes the new u into u_best's former buffer (the same operations, the same bits).
       const double* u0 = u.data();
@@ -247,25 +261,27 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
       double* vi = v.data();
       ubar.resize(n);
       double* bi = ubar.data();
-      // ‖u‖² for the blow-up test on the way (four partial sums: the loop stays vectorizable).
-      double s2[4] = {0.0, 0.0, 0.0, 0.0};
+      // Four partial sums of each (the loop stays vectorizable).
+      double s2[4] = {0.0, 0.0, 0.0, 0.0}, k2[4] = {0.0, 0.0, 0.0, 0.0};
       const auto update = [&](Eigen::Index i, int l) {
-        const double a = (ai[i] - eta * (mi[i] * vi[i])) * wi[i];
+        const double a = (-gi[i] - eta * (mi[i] * vi[i])) * wi[i];
         const double un = u0[i] + (dt * vi[i] + h2 * a);
         const double vn = vi[i] + dt * a;
         ui[i] = un;
         vi[i] = vn;
         bi[i] = un + half_dt * vn;
         s2[l] += un * un;
+        k2[l] += mi[i] * (vn * vn);
       };
       Eigen::Index i = 0;
       for (; i + 4 <= n; i += 4)
         for (int l = 0; l < 4; ++l) update(i + l, l);
       for (; i < n; ++i) update(i, 0);
       unorm = std::sqrt((s2[0] + s2[1]) + (s2[2] + s2[3]));
+      mv2 = (k2[0] + k2[1]) + (k2[2] + k2[3]);
     }
     ubar_ready = true;
-    meter.add(16 * nn);
+    meter.add(20 * nn);
     ++k;
     t += dt;
     if (!std::isfinite(unorm) || unorm > options.blowup_norm) {

@@ -258,6 +258,9 @@ class ElasticProblem : public Problem {
   /// order. Returns false when a double visit fails.
   template <class Visit>
   bool sweep(bool scatters, double& total, Visit&& visit) const;
+  /// f_int = Σ q_τ(u), the force sweep of internal_forces() and of gradient() without Π (on
+  /// inversion f_int is zeroed and the result is false; finiteness is the caller's test).
+  bool force_sweep(const VecX& u, VecX& f_int);
   void build_schedule();
   /// The element tangents at u (TetKernel::tangent), each handed to `sink(el, k)` (el: the
   /// element view, k: its 12×12 tangent) — the sweep of assemble_tangent() and
