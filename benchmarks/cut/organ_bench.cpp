@@ -45,7 +45,6 @@
 #include <incise/core/timer.hpp>
 #include <incise/fixtures/organ_path.hpp>
 #include <incise/interactive/augmented_cut_session.hpp>
-#include <incise/material/material.hpp>
 #include <incise_bench/context.hpp>
 
 #include <algorithm>
@@ -96,12 +95,7 @@ struct SolveTimes {
 };
 
 void BM_LiverScalpelPath(benchmark::State& state) {
-  const bool refined = state.range(0) != 0;
-  const double advance = 1e-4 * static_cast<double>(state.range(1));  // m per frame
-  const int frames = static_cast<int>(state.range(2));
-  const incise::mesh::MeshData& body = liver(refined);
-  const incise::fixtures::OrganPath path = incise::fixtures::organ_path(body);
-  const incise::material::Material material = incise::fixtures::organ_material();
+  const auto& [refined, advance, frames, body, path, material] = LiverPath(state);
   incise::interactive::AugmentedCutOptions opt;
   opt.refactor_at_m = static_cast<int>(state.range(3));
   opt.augmented.update_capacitance = state.range(4) != 0;
@@ -115,9 +109,7 @@ void BM_LiverScalpelPath(benchmark::State& state) {
   opt.synchronous_refactorization = state.range(13) != 0;
   if (state.range(13) == 2) opt.synchronous_ordering = incise::linalg::RefactorOrdering::kAmd;
   if (state.range(13) == 3) opt.synchronous_ordering = incise::linalg::RefactorOrdering::kOptions;
-  opt.refactorization_mode = state.range(5) == 0
-                                 ? incise::interactive::RefactorizationMode::kContinuous
-                                 : incise::interactive::RefactorizationMode::kBreakEven;
+  opt.refactorization_mode = refactorization_mode(state.range(5));
   for (auto _ : state) {
     incise::interactive::AugmentedCutSession session(body, material, path.fixed, path.forces, opt);
     if (!session.initial_report().ok()) {
@@ -344,10 +336,7 @@ BENCHMARK(BM_LiverScalpelPath)
 // 4×) from the mesh-size cost of the deformed-configuration loop (BM_LiverScalpelPath). Args:
 // refined (0/1), blade advance per frame (0.1 mm units), frames.
 void BM_LiverCutOnly(benchmark::State& state) {
-  const incise::mesh::MeshData& body = liver(state.range(0) != 0);
-  const double advance = 1e-4 * static_cast<double>(state.range(1));
-  const int frames = static_cast<int>(state.range(2));
-  const incise::fixtures::OrganPath path = incise::fixtures::organ_path(body);
+  const auto& [refined, advance, frames, body, path, material] = LiverPath(state);
   for (auto _ : state) {
     incise::cut::CutMesh mesh(body);
     for (Index v : path.fixed) mesh.set_fixed(v, true);

@@ -10,7 +10,6 @@
 #include <incise/fixtures/organ_path.hpp>
 #include <incise/interactive/augmented_cut_session.hpp>
 #include <incise/linalg/cholmod_factor.hpp>
-#include <incise/material/material.hpp>
 #include <incise/solver/linear_cg.hpp>
 
 #include <algorithm>
@@ -165,16 +164,9 @@ double max_relative(const Eigen::VectorXd& x, const Eigen::VectorXd& ref) {
 void BM_LiverStrategies(benchmark::State& state) {
   using incise::linalg::CholmodFactor;
   using incise::linalg::FactorStatus;
-  const bool refined = state.range(0) != 0;
-  const double advance = 1e-4 * static_cast<double>(state.range(1));
-  const int frames = static_cast<int>(state.range(2));
-  const incise::mesh::MeshData& body = liver(refined);
-  const incise::fixtures::OrganPath path = incise::fixtures::organ_path(body);
-  const incise::material::Material material = incise::fixtures::organ_material();
+  const auto& [refined, advance, frames, body, path, material] = LiverPath(state);
   incise::interactive::AugmentedCutOptions aug_options;
-  aug_options.refactorization_mode = state.range(3) == 0
-                                         ? incise::interactive::RefactorizationMode::kContinuous
-                                         : incise::interactive::RefactorizationMode::kBreakEven;
+  aug_options.refactorization_mode = refactorization_mode(state.range(3));
   for (auto _ : state) {
     incise::interactive::AugmentedCutSession session(body, material, path.fixed, path.forces,
                                                      aug_options);
