@@ -31,8 +31,9 @@
 /// on with METIS; 0 off; docs/augmented.md "Synchronous refactorization"). chg_* counters: frames
 /// that solved (the others reuse the last solution and cost the cut); bg_cpu_*: CPU of the
 /// background factorizations that were swapped in (their own thread). With INCISE_ORGAN_TRACE=<dir>
-/// the per-frame numbers go to <dir>/<benchmark args>.csv, with the cost rule's inputs of the
-/// capacitance factorization and, on swap frames, the thread CPU split of the swapped-in job.
+/// the per-frame numbers go to <dir>/scalpel_<the 14 args joined by _>.csv, with the cost rule's
+/// inputs of the capacitance factorization and, on swap frames, the thread CPU split of the
+/// swapped-in job.
 ///
 /// The executable's other benchmarks, each documented beside it: organ_kernels_bench.cpp (the
 /// new columns of G and the capacitance LU), organ_strategies_bench.cpp (BM_LiverStrategies:
