@@ -321,4 +321,43 @@ TEST(SceneLanczos, AssembledKOnlyWithinTheMemoryBudget) {
   EXPECT_NEAR(a.damping, m.damping, 1e-6 * m.damping);
 }
 
+// Scene key `energy_every` (issue 19, docs/solvers.md "Ninth pass"): by default SS22 evaluates
+// Π on every 4th step (the trace's other rows carry NaN, a blank CSV cell), `"energy_every": 1`
+// on every step; the steps themselves do not depend on it (no restart here: same count, same
+// u bitwise), the reported Π is evaluated either way, and 0 or a static method is refused.
+TEST(SceneEnergyEvery, DefaultEveryFourthStepKeyOneEveryStepSameRun) {
+  Json j = dynamic_beam();
+  j["material"] = {
+      {"model", "veronda-westmann"}, {"E", 1e4}, {"nu", 0.3}, {"rho", 1000}, {"gamma", 8.0}};
+  j["solver"]["tolerance"] = 1e-4;
+  scene::BuiltScene b4 = build(j);
+  const scene::SceneRunResult every4 = scene::run_scene(b4);
+  j["solver"]["energy_every"] = 1;
+  scene::BuiltScene b1 = build(j);
+  const scene::SceneRunResult every1 = scene::run_scene(b1);
+  ASSERT_TRUE(every4.report.ok() && every1.report.ok()) << every4.report.brief();
+  ASSERT_EQ(every4.report.restarts, 0);
+  EXPECT_EQ(every4.report.iterations, every1.report.iterations);
+  EXPECT_EQ(every4.u, every1.u);
+  EXPECT_EQ(every4.report.energy, every1.report.energy);
+  ASSERT_EQ(every4.trace.size(), every1.trace.size());
+  ASSERT_GT(every4.trace.size(), 40U);
+  long with4 = 0;
+  for (std::size_t i = 0; i < every4.trace.size(); ++i) {
+    EXPECT_TRUE(std::isfinite(every1.trace[i].energy)) << "row " << i;
+    if (std::isfinite(every4.trace[i].energy)) {
+      ++with4;
+      EXPECT_EQ(every4.trace[i].energy, every1.trace[i].energy) << "row " << i;
+    }
+  }
+  // Steps 4, 8, ... (the trace starts at step 1) and the converged last one.
+  const long rows = static_cast<long>(every4.trace.size());
+  EXPECT_GE(with4, rows / 4);
+  EXPECT_LE(with4, rows / 4 + 1);
+  j["solver"]["energy_every"] = 0;
+  EXPECT_THROW((void)build(j), ParseError);
+  j["solver"] = {{"method", "cg"}, {"energy_every", 2}};
+  EXPECT_THROW((void)build(j), ParseError);
+}
+
 }  // namespace

@@ -324,11 +324,13 @@ SolverSpec parse_solver(JsonObject o, bool slab, bool needle3d) {
     s.time_step = o.number("time_step", detail::non_negative(), 0.0);
     s.damping = o.number("damping", detail::non_negative(), -1.0);
     s.spectral_tuning = o.boolean("spectral_tuning", false);
+    s.energy_every = o.integer("energy_every", 1, std::numeric_limits<int>::max(), s.energy_every);
   } else {
     const std::string why = "only the \"dynamic-ss22\" method integrates in time";
     o.forbid("time_step", why);
     o.forbid("damping", why);
     o.forbid("spectral_tuning", why);
+    o.forbid("energy_every", why);
   }
   if (s.method == SolverSpec::Method::kAugmented) {
     s.cut_configuration = o.choice("cut_configuration", kCutConfigurationNames,

@@ -722,6 +722,7 @@ SceneRunResult run_scene(BuiltScene& scene, const RunObserver& observer,
       o.time_step = dp.time_step;
       o.damping = dp.damping;
       o.max_restarts = kMaxRestarts;
+      o.energy_every = s.energy_every;
       // With the assembled K a product costs about half a gradient sweep (docs/solvers.md,
       // "Fourth pass"): the quadratic Π's gradient by recurrence, one K·d per step.
       o.gradient_recurrence = p.assembled_product();

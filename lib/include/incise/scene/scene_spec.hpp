@@ -19,6 +19,7 @@
 #include <incise/mesh/generators.hpp>
 #include <incise/needle/friction.hpp>
 #include <incise/scene/line_index.hpp>
+#include <incise/solver/dynamic_relaxation.hpp>
 #include <incise/solver/linear_cg.hpp>
 #include <incise/solver/nonlinear_cg.hpp>
 
@@ -184,9 +185,12 @@ struct SolverSpec {
   /// CG and Newton's inner CG (scene key `preconditioner`).
   solver::Preconditioner preconditioner = solver::Preconditioner::kNone;
   double time_step = 0.0;  ///< dynamic: Δt (s); 0 → 0.9 × critical step 2/√λ_max (§4.1)
-  double damping = -1.0;  ///< dynamic: damping η (1/s), ≥ 0; −1 → automatic: critical damping
-                          ///< 2√λ₁ (§4.1) or, with spectral_tuning, from the FFT
+  double damping = -1.0;  ///< dynamic: damping η (1/s), ≥ 0; −1 → automatic: 2ζ√θ₁ (§4.1,
+                          ///< solver::estimate_dynamic_parameters) or, with spectral_tuning,
+                          ///< from the FFT
   bool spectral_tuning = false;  ///< dynamic: estimate damping from an FFT of the trace
+  /// dynamic: Π on every energy_every-th step (solver::DynamicRelaxationOptions::energy_every)
+  int energy_every = solver::DynamicRelaxationOptions{}.energy_every;
   /// Nonlinear CG only: the β rule (2.48)/(2.49) (scene key `beta`, solver::kBetaRuleNames).
   solver::BetaRule beta = solver::BetaRule::kPolakRibiere;
   /// Nonlinear CG only: the §4.4.2 line search (scene key `line_search`,
