@@ -170,6 +170,21 @@ TEST(NonlinearCgBracket, IdenticalWhereTheThesisSearchProgresses_Sec4_4_2) {
   }
 }
 
+// At 10,000 g the search direction meets (d, K d) ≤ 0 at α = 0 after some 900 iterations (with
+// the bracket safeguard; 59 without). Along a conjugate direction that restarts NCG with
+// d = r, as a d that is not a descent direction does; the run then reaches Newton's Π (the
+// same 1e-4 |Π| window as above). Without the restart it ended kIndefinite.
+TEST(NonlinearCgBracket, NegativeCurvatureAlongAConjugateDirectionRestarts_Sec2_4_2) {
+  const Mesh m = kMeshes[0];
+  SCOPED_TRACE(describe(m, 10000.0));
+  Cylinder c = cylinder(m, 10000.0);
+  const double e_min = newton_energy(*c.problem);
+  VecX u = VecX::Zero(c.problem->size());
+  const SolverReport rep = nonlinear_cg(*c.problem, u, ncg_options(LineSearchKind::kSecant, 5000));
+  ASSERT_TRUE(rep.ok()) << rep.brief() << " after " << rep.iterations;
+  EXPECT_NEAR(rep.energy, e_min, 1e-4 * std::abs(e_min));
+}
+
 TEST(NonlinearCgBracket, SigmaOutsideZeroOneIsRejected) {
   Cylinder c = cylinder(kMeshes[1], 1.0);
   VecX u = VecX::Zero(c.problem->size());

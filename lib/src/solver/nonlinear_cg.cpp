@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
+#include <string>
 
 namespace incise::solver {
 
@@ -21,6 +23,7 @@ struct LineSearchResult {
   double alpha = 0.0;
   int evaluations = 0;
   bool recurrence = false;  // g_out, e_out from the quadratic recurrence, not evaluated
+  double curvature = 0.0;   // kIndefinite / kNonFinite at α = 0: the slope estimate c there
 };
 
 /// Work vectors of the line search, kept across iterations (no allocation per iteration).
@@ -67,6 +70,7 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
     const double c = d.dot(s);
     if (!std::isfinite(c) || c <= 0.0) {
       res.status = std::isfinite(c) ? StopReason::kIndefinite : StopReason::kNonFinite;
+      res.curvature = c;
       return res;
     }
     const double a1 = gamma0 / c;
@@ -142,6 +146,7 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
     if (!std::isfinite(c) || c <= 0.0) {
       if (j == 0) {
         res.status = std::isfinite(c) ? StopReason::kIndefinite : StopReason::kNonFinite;
+        res.curvature = c;
         return res;
       }
       break;  // keep α_j: the secant lost curvature information
@@ -219,6 +224,29 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
   return res;
 }
 
+// SolverReport::message for a run the line search ended (iteration k, 1-based; `steepest`: d
+// was r, a restart).
+std::string line_search_message(const LineSearchResult& ls, long k, bool steepest,
+                                const NonlinearCgOptions& opt) {
+  std::ostringstream os;
+  os << "iteration " << k << ", line search along "
+     << (steepest ? "d = r (steepest descent)" : "the conjugate direction d") << ": ";
+  if (ls.status == StopReason::kIndefinite) {
+    os << "curvature along d at alpha = 0 is " << ls.curvature
+       << " <= 0: the energy is not convex along d at u; truncated Newton "
+          "(scene method \"newton\") handles negative curvature, or apply the load in smaller "
+          "steps";
+  } else if (ls.status == StopReason::kInverted) {
+    os << "every trial step, halved " << opt.max_backtracks
+       << " times, inverts an element (energy +inf): u is at the edge of the admissible set";
+  } else if (ls.status == StopReason::kStagnated) {
+    os << "no step length alpha > 0 was accepted (alpha = 0); u is the last iterate";
+  } else {
+    os << "a non-finite curvature, gradient or energy";
+  }
+  return os.str();
+}
+
 }  // namespace
 
 SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& options) {
@@ -266,11 +294,22 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
       since_restart = 0;
     }
     double e_new = energy;
-    const LineSearchResult ls =
+    LineSearchResult ls =
         line_search(problem, u, d, g, energy, gamma0, options, meter, work, g_new, e_new);
     rep.inner_iterations += ls.evaluations;
+    if (ls.status == StopReason::kIndefinite && since_restart != 0) {
+      // (d, K d) ≤ 0 along a conjugate direction: restart with steepest descent, as for a d that
+      // is not a descent direction; only negative curvature along d = r ends the run.
+      d = r;
+      gamma0 = rr;
+      since_restart = 0;
+      e_new = energy;
+      ls = line_search(problem, u, d, g, energy, gamma0, options, meter, work, g_new, e_new);
+      rep.inner_iterations += ls.evaluations;
+    }
     if (ls.status != StopReason::kConverged) {
       reason = ls.status;
+      rep.message = line_search_message(ls, k + 1, since_restart == 0, options);
       break;
     }
     u += ls.alpha * d;

@@ -71,18 +71,20 @@ struct NonlinearCgOptions : RelaxationOptions {
 };
 
 /// Minimizes Π from the given u (updated in place). Each outer iteration: choose d (restart to
-/// d = r when d is not a descent direction, every restart_every steps, or when PR gives β = 0),
+/// d = r when d is not a descent direction, every restart_every steps, when PR gives β = 0, or
+/// when the curvature along a conjugate d is not positive at α = 0),
 /// run the line search (the gradient at the accepted α is reused as the next residual, as the
 /// thesis does), update β. A trial step into Π = +∞ is halved towards the last admissible α
 /// (never accepted); a search that would stop without reducing the directional derivative
 /// while the root is bracketed bisects the bracket (bracket_sigma). Reports kIndefinite when the
-/// curvature along d is not positive at α = 0, kLineSearchFailed when no admissible α > 0 was
-/// found, kStagnated when α = 0. For a quadratic Π (Problem::energy_is_quadratic()) with the secant
-/// or Newton search, each iteration takes one K·d: α = γ₀/(d, Kd) (the step both searches accept)
-/// and the gradient and energy at x + αd by the recurrence g + αKd, evaluated instead every 50
-/// iterations and whenever the recurrence residual meets the stopping rule (so convergence is
-/// certified on an evaluated gradient). Iterates differ from the evaluating search by round-off
-/// only (test NonlinearCgQuadratic.RecurrenceMatchesEvaluatedSearch_Sec2_4_2).
+/// curvature along d = r is not positive at α = 0, kInverted when no admissible α > 0 was found
+/// (every trial inverted), kStagnated when α = 0; each with a message naming the iteration, the
+/// direction and (kIndefinite) the curvature. For a quadratic Π (Problem::energy_is_quadratic())
+/// with the secant or Newton search, each iteration takes one K·d: α = γ₀/(d, Kd) (the step both
+/// searches accept) and the gradient and energy at x + αd by the recurrence g + αKd, evaluated
+/// instead every 50 iterations and whenever the recurrence residual meets the stopping rule (so
+/// convergence is certified on an evaluated gradient). Iterates differ from the evaluating search
+/// by round-off only (test NonlinearCgQuadratic.RecurrenceMatchesEvaluatedSearch_Sec2_4_2).
 SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& options);
 
 }  // namespace incise::solver
