@@ -181,6 +181,11 @@ TEST(NonlinearCg, IndefiniteProblemReportsStatus) {
     o.line_search = ls;
     const SolverReport rep = nonlinear_cg(p, u, o);
     EXPECT_EQ(rep.status, StopReason::kIndefinite) << to_string(ls);
+    // The message names the direction (negative curvature along a conjugate d restarts with
+    // d = r, so only d = r ends the run), the curvature and the alternative.
+    EXPECT_NE(rep.message.find("d = r (steepest descent): curvature along d"), std::string::npos)
+        << rep.message;
+    EXPECT_NE(rep.message.find("newton"), std::string::npos) << rep.message;
     EXPECT_TRUE(u.allFinite());
   }
   VecX u = VecX::Zero(15);

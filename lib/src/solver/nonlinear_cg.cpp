@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
 
 namespace incise::solver {
 
@@ -20,6 +23,7 @@ struct LineSearchResult {
   double alpha = 0.0;
   int evaluations = 0;
   bool recurrence = false;  // g_out, e_out from the quadratic recurrence, not evaluated
+  double curvature = 0.0;   // kIndefinite / kNonFinite at α = 0: the slope estimate c there
 };
 
 /// Work vectors of the line search, kept across iterations (no allocation per iteration).
@@ -66,6 +70,7 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
     const double c = d.dot(s);
     if (!std::isfinite(c) || c <= 0.0) {
       res.status = std::isfinite(c) ? StopReason::kIndefinite : StopReason::kNonFinite;
+      res.curvature = c;
       return res;
     }
     const double a1 = gamma0 / c;
@@ -86,6 +91,10 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
   bool have_product = false;
   bool warm_start_guessed = false;  // the first trial step was the warm-start guess
   const bool warm = opt.line_search == LineSearchKind::kSecantWarmStart;
+  // Bracket of the root of g(α): lo = the largest admissible α with γ > 0 (α₀ = 0, γ₀ > 0);
+  // hi = the smallest α > lo known to lie beyond it (an admissible trial with γ ≤ 0, or a
+  // trial with Π = +∞); +∞ while none is known.
+  double lo = 0.0, hi = std::numeric_limits<double>::infinity();
   for (int j = 0; j < opt.j_max; ++j) {
     double c = 0.0;  // estimate of g′(α_j) = (d, K(x + α_j d) d)
     // Warm start (Nocedal & Wright (3.60)): the first trial α = α_prev·γ₀,prev/γ₀ (the same
@@ -137,11 +146,13 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
     if (!std::isfinite(c) || c <= 0.0) {
       if (j == 0) {
         res.status = std::isfinite(c) ? StopReason::kIndefinite : StopReason::kNonFinite;
+        res.curvature = c;
         return res;
       }
       break;  // keep α_j: the secant lost curvature information
     }
     const double step = gamma / c;  // −δ_j
+    bool small_step = false;        // the ε_newton test below fired
     if (j == 0) {
       delta0 = std::abs(step);
     } else if (j == 1 && warm_start_guessed) {
@@ -150,9 +161,22 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
       delta0 = std::abs(alpha + step);
       if (std::abs(step) < opt.epsilon_warm_start * delta0) break;
     } else if (std::abs(step) < opt.epsilon_newton * delta0) {
-      break;  // |δ_j| < ε_newton |δ_0|: δ_j is not added, r_j is reused
+      small_step = true;  // |δ_j| < ε_newton |δ_0|: δ_j is not added, r_j is reused
     }
     double alpha_new = alpha + step;
+    if (small_step) {
+      // Bracket safeguard (not in the thesis): a small δ_j only says the secant converged
+      // when its slope describes g near α_j. A trial beyond the root, deep in a stiffening
+      // region or halved back from Π = +∞, makes the chord slope (4.9) orders of magnitude
+      // steeper than g′(α_j), so δ_j is tiny while γ_j ≈ γ₀ (the Veronda–Westmann cylinder
+      // at 1000 g took α ≈ 1e-6 for 20,000 iterations, docs/solvers.md). When the directional
+      // derivative has not dropped below bracket_sigma·γ₀ and a point beyond the root is
+      // known, bisect the bracket instead of stopping.
+      if (!(opt.bracket_sigma > 0.0 && std::abs(gamma) > opt.bracket_sigma * gamma0 &&
+            std::isfinite(hi)))
+        break;
+      alpha_new = 0.5 * (lo + hi);
+    }
     bool admissible = false;
     double et = 0.0;
     for (int b = 0; b <= opt.max_backtracks; ++b) {
@@ -167,7 +191,8 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
         have_product = newton;  // st covers K·d too (a non-finite one backtracks)
         break;
       }
-      alpha_new = alpha + 0.5 * (alpha_new - alpha);  // backtrack towards the admissible α_j
+      if (alpha_new > lo) hi = std::min(hi, alpha_new);  // Π = +∞ here: beyond the root
+      alpha_new = alpha + 0.5 * (alpha_new - alpha);     // backtrack towards the admissible α_j
     }
     if (!admissible) {
       if (j == 0) {
@@ -183,6 +208,12 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
     accepted = true;
     e_out = et;
     gamma = -g_out.dot(d);
+    if (alpha > lo && alpha < hi) {
+      if (gamma > 0.0)
+        lo = alpha;
+      else
+        hi = std::min(hi, alpha);
+    }
     meter.add(2 * nn);
   }
   if (!accepted) g_out = g0;
@@ -193,6 +224,29 @@ LineSearchResult line_search(Problem& problem, const VecX& x, const VecX& d, con
   return res;
 }
 
+// SolverReport::message for a run the line search ended (iteration k, 1-based; `steepest`: d
+// was r, a restart).
+std::string line_search_message(const LineSearchResult& ls, long k, bool steepest,
+                                const NonlinearCgOptions& opt) {
+  std::ostringstream os;
+  os << "iteration " << k << ", line search along "
+     << (steepest ? "d = r (steepest descent)" : "the conjugate direction d") << ": ";
+  if (ls.status == StopReason::kIndefinite) {
+    os << "curvature along d at alpha = 0 is " << ls.curvature
+       << " <= 0: the energy is not convex along d at u; truncated Newton "
+          "(scene method \"newton\") handles negative curvature, or apply the load in smaller "
+          "steps";
+  } else if (ls.status == StopReason::kInverted) {
+    os << "every trial step, halved " << opt.max_backtracks
+       << " times, inverts an element (energy +inf): u is at the edge of the admissible set";
+  } else if (ls.status == StopReason::kStagnated) {
+    os << "no step length alpha > 0 was accepted (alpha = 0); u is the last iterate";
+  } else {
+    os << "a non-finite curvature, gradient or energy";
+  }
+  return os.str();
+}
+
 }  // namespace
 
 SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& options) {
@@ -200,6 +254,8 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
   INCISE_CHECK_PARAM(options.j_max >= 1, "nonlinear_cg: j_max must be at least 1");
   INCISE_CHECK_PARAM(options.epsilon_newton >= 0.0, "nonlinear_cg: epsilon_newton < 0");
   INCISE_CHECK_PARAM(options.epsilon_warm_start >= 0.0, "nonlinear_cg: epsilon_warm_start < 0");
+  INCISE_CHECK_PARAM(options.bracket_sigma >= 0.0 && options.bracket_sigma < 1.0,
+                     "nonlinear_cg: bracket_sigma must be in [0, 1)");
   INCISE_CHECK_PARAM(options.alpha_minus1 != 0.0, "nonlinear_cg: alpha_minus1 must be non-zero");
   SolverReport rep;
   CostMeter meter(problem);
@@ -238,11 +294,22 @@ SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& o
       since_restart = 0;
     }
     double e_new = energy;
-    const LineSearchResult ls =
+    LineSearchResult ls =
         line_search(problem, u, d, g, energy, gamma0, options, meter, work, g_new, e_new);
     rep.inner_iterations += ls.evaluations;
+    if (ls.status == StopReason::kIndefinite && since_restart != 0) {
+      // (d, K d) ≤ 0 along a conjugate direction: restart with steepest descent, as for a d that
+      // is not a descent direction; only negative curvature along d = r ends the run.
+      d = r;
+      gamma0 = rr;
+      since_restart = 0;
+      e_new = energy;
+      ls = line_search(problem, u, d, g, energy, gamma0, options, meter, work, g_new, e_new);
+      rep.inner_iterations += ls.evaluations;
+    }
     if (ls.status != StopReason::kConverged) {
       reason = ls.status;
+      rep.message = line_search_message(ls, k + 1, since_restart == 0, options);
       break;
     }
     u += ls.alpha * d;

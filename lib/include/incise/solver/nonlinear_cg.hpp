@@ -57,22 +57,34 @@ struct NonlinearCgOptions : RelaxationOptions {
   /// α₋₁ of the scale-dependent secant (units of α: metres per unit of d; the thesis used
   /// −0.001 for its cylinder, §4.5.1). Scale-dependent by nature.
   double alpha_minus1 = -1e-3;
+  /// Bracket safeguard of the ε_newton test (not in the thesis): when that test would end the
+  /// search at α_j with |γ_j| > bracket_sigma·γ₀ (the directional derivative reduced by less
+  /// than 1 − bracket_sigma) and a trial beyond the root is known (γ ≤ 0, or Π = +∞), the next
+  /// trial is the bisection of that bracket instead; the search goes on up to j_max. 0.9: the
+  /// curvature constant of the weak Wolfe condition for Newton-like steps (Nocedal & Wright
+  /// §3.1); it only catches a search that made no progress (docs/solvers.md). 0 disables it
+  /// (the thesis' search; then the cylinder at 100–1000 g stalls, test
+  /// NonlinearCgBracket.ThesisSearchStallsOnTheCylinder_Sec4_4_2).
+  double bracket_sigma = 0.9;
   long restart_every = 0;   ///< restart d = r every this many steps; 0: every n steps
   int max_backtracks = 30;  ///< halvings of a trial step that lands on Π = +∞ (inverted)
 };
 
 /// Minimizes Π from the given u (updated in place). Each outer iteration: choose d (restart to
-/// d = r when d is not a descent direction, every restart_every steps, or when PR gives β = 0),
+/// d = r when d is not a descent direction, every restart_every steps, when PR gives β = 0, or
+/// when the curvature along a conjugate d is not positive at α = 0),
 /// run the line search (the gradient at the accepted α is reused as the next residual, as the
 /// thesis does), update β. A trial step into Π = +∞ is halved towards the last admissible α
-/// (never accepted). Reports kIndefinite when the curvature along d is not positive at α = 0,
-/// kLineSearchFailed when no admissible α > 0 was found, kStagnated when α = 0.
-/// For a quadratic Π (Problem::energy_is_quadratic()) with the secant or Newton search, each
-/// iteration takes one K·d: α = γ₀/(d, Kd) (the step both searches accept) and the gradient
-/// and energy at x + αd by the recurrence g + αKd, evaluated instead every 50 iterations and
-/// whenever the recurrence residual meets the stopping rule (so convergence is certified on an
-/// evaluated gradient). Iterates differ from the evaluating search by round-off only (test
-/// NonlinearCgQuadratic.RecurrenceMatchesEvaluatedSearch_Sec2_4_2).
+/// (never accepted); a search that would stop without reducing the directional derivative
+/// while the root is bracketed bisects the bracket (bracket_sigma). Reports kIndefinite when the
+/// curvature along d = r is not positive at α = 0, kInverted when no admissible α > 0 was found
+/// (every trial inverted), kStagnated when α = 0; each with a message naming the iteration, the
+/// direction and (kIndefinite) the curvature. For a quadratic Π (Problem::energy_is_quadratic())
+/// with the secant or Newton search, each iteration takes one K·d: α = γ₀/(d, Kd) (the step both
+/// searches accept) and the gradient and energy at x + αd by the recurrence g + αKd, evaluated
+/// instead every 50 iterations and whenever the recurrence residual meets the stopping rule (so
+/// convergence is certified on an evaluated gradient). Iterates differ from the evaluating search
+/// by round-off only (test NonlinearCgQuadratic.RecurrenceMatchesEvaluatedSearch_Sec2_4_2).
 SolverReport nonlinear_cg(Problem& problem, VecX& u, const NonlinearCgOptions& options);
 
 }  // namespace incise::solver
