@@ -322,6 +322,33 @@ TEST(DynamicRelaxation, UnstableStepRestartsWithSmallerTimeStep_Sec4_4_1) {
   EXPECT_THROW((void)dynamic_relaxation(s.p, u, o), ParameterError);
 }
 
+// The automatic Δt's safety factor lies in (0, 1) (§4.1): at Δt = 2/√λ_n the top mode of
+// (2.58) with θ₂ = 0 has the amplification root −1 for every η (z² + (1 + β)z + β = 0 with
+// β = (1 − ½ηΔt)/(1 + ½ηΔt)), so it never decays: SS22 at that step does not converge where 0.99
+// of it does, and a safety of 1 (or 0, or above 1) is refused.
+TEST(DynamicRelaxation, CriticalStepItselfNeverConvergesSoSafetyOneIsRefused_Sec4_1) {
+  INCISE_SEEDED_RNG(rng, 69);
+  DynamicsSetup s = make_setup(rng);
+  const double dt_crit = 2.0 / std::sqrt(s.lam[s.lam.size() - 1]);
+  const double eta = critical_damping(s.lam[0]);
+  DynamicRelaxationOptions o = dr_options(dt_crit, eta);
+  o.budget.max_iterations = 20000;
+  VecX u = VecX::Zero(24);
+  const SolverReport at = dynamic_relaxation(s.p, u, o);
+  EXPECT_FALSE(at.ok()) << at.brief();
+  o.time_step = 0.99 * dt_crit;
+  u.setZero();
+  const SolverReport below = dynamic_relaxation(s.p, u, o);
+  EXPECT_TRUE(below.ok()) << below.brief();
+  EXPECT_LT(below.iterations, 20000);
+  for (double safety : {1.0, 0.0, 1.5}) {
+    DynamicParameterOptions po;
+    po.time_step_safety = safety;
+    EXPECT_THROW((void)estimate_dynamic_parameters(s.p, VecX::Zero(24), po), ParameterError)
+        << safety;
+  }
+}
+
 // A stable damped run never restarts: the energy check does not change its trajectory.
 TEST(DynamicRelaxation, StableRunIsUnchangedByTheRestartCheck) {
   INCISE_SEEDED_RNG(rng, 67);

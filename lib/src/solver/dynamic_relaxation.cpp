@@ -90,7 +90,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   VecX delta, k_delta;
 
   VecX v = VecX::Zero(n), ubar = u, g, last_good = u;
-  double mv2 = 0.0;  // u̇ᵀMu̇ of the current u̇ (summed by the update pass; 0 at rest)
+  double mv2 = 0.0;        // u̇ᵀMu̇ of the current u̇ (summed by the update pass; 0 at rest)
   VecX u_best = u;         // displacement of lowest total energy: where a restart resumes (at rest)
   bool best_is_u = false;  // this step's u is the new u_best: the update pass swaps it there
   double energy = 0.0, last_energy = 0.0, rnorm = 0.0, threshold = 0.0;
@@ -202,7 +202,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
         meter.add(nn);
       }
     }
-    meter.add(5 * nn);  // the residual pass
+    meter.add(5 * nn);          // the residual pass
     rnorm = std::sqrt(rnorm2);  // ‖r‖, r = −P∇Π(ū)
     threshold = residual_threshold(options.stop, fex, fixed_dofs.norm(g), n);
     if (recurrence && rnorm <= threshold) {
@@ -324,8 +324,11 @@ double damping_ratio_for(double overshoot) {
 
 DynamicParameterEstimate estimate_dynamic_parameters(Problem& problem, const VecX& u,
                                                      const DynamicParameterOptions& options) {
-  INCISE_CHECK_PARAM(options.time_step_safety > 0.0 && options.time_step_safety <= 1.0,
-                     "estimate_dynamic_parameters: time_step_safety must lie in (0, 1]");
+  // Below 1: at Δt = 2/√θ_max the scheme's top mode is undamped for every η ((2.58) with
+  // θ₂ = 0 is stable only for Δt < 2/√λ_n), and θ_max ≤ λ_n puts that Δt at or above λ_n's.
+  INCISE_CHECK_PARAM(options.time_step_safety > 0.0 && options.time_step_safety < 1.0,
+                     "estimate_dynamic_parameters: time_step_safety must lie in (0, 1): at 1 the "
+                     "step is at or above the critical step 2/sqrt(lambda_n) (sec. 4.1)");
   DynamicParameterEstimate out;
   INCISE_CHECK_PARAM(options.target_reduction >= 0.0 && options.target_reduction < 1.0,
                      "estimate_dynamic_parameters: target_reduction must lie in [0, 1)");

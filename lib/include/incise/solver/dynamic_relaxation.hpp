@@ -69,8 +69,10 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u, const DynamicRelaxati
 
 /// Options of estimate_dynamic_parameters().
 struct DynamicParameterOptions {
-  LanczosOptions lanczos;         ///< the one Lanczos run (its max_steps caps the cost)
-  double time_step_safety = 0.9;  ///< Δt = safety·2/√θ_max: θ_max ≤ λ_n underestimates λ_n
+  LanczosOptions lanczos;  ///< the one Lanczos run (its max_steps caps the cost)
+  /// Δt = safety·2/√θ_max, safety in (0, 1) (ParameterError otherwise): θ_max ≤ λ_n
+  /// underestimates λ_n, and at the critical step itself the top mode is undamped.
+  double time_step_safety = 0.9;
   /// ε, the error reduction the run is to reach (the relative energy-norm error, or the relative
   /// residual of the stopping rule), in (0, 1); 0 asks for critical damping (§4.1). η = 2ζ√θ₁
   /// with ζ = damping_ratio_for(ε/2): the slowest mode's first overshoot takes half the band, the
