@@ -35,6 +35,41 @@ bool free_norm2_if_finite(const VecX& g, const VecX& free, double& norm2) {
   return ((f[0] + f[1]) + (f[2] + f[3])) == 0.0;
 }
 
+/// ‖u‖² of the new u and u̇ᵀMu̇ of the new u̇ (SS22's update pass, below).
+struct UpdateSums {
+  double u2 = 0.0;
+  double mv2 = 0.0;
+};
+
+/// The SS22 update pass over n entries (every array a distinct buffer, so the loop vectorizes
+/// without run-time alias checks): a = (−g − η m v)·w, u_new = u + (Δt v + ½Δt² a),
+/// v ← v + Δt a, ū_next = u_new + ½Δt v, with four partial sums (one per lane of i mod 4) of
+/// u_new² and m v².
+UpdateSums ss22_update(Eigen::Index n, const double* __restrict g, const double* __restrict m,
+                       const double* __restrict w, const double* __restrict u,
+                       double* __restrict u_new, double* __restrict v, double* __restrict ubar,
+                       double eta, double dt) {
+  const double h2 = 0.5 * dt * dt;
+  const double half_dt = 0.5 * dt;
+  double s2[4] = {0.0, 0.0, 0.0, 0.0}, k2[4] = {0.0, 0.0, 0.0, 0.0};
+  const Eigen::Index n4 = n - n % 4;
+  for (Eigen::Index i = 0; i < n; i += 4) {
+    const int lanes = i < n4 ? 4 : static_cast<int>(n - n4);
+    for (int l = 0; l < lanes; ++l) {
+      const Eigen::Index j = i + l;
+      const double a = (-g[j] - eta * (m[j] * v[j])) * w[j];
+      const double un = u[j] + (dt * v[j] + h2 * a);
+      const double vn = v[j] + dt * a;
+      u_new[j] = un;
+      v[j] = vn;
+      ubar[j] = un + half_dt * vn;
+      s2[l] += un * un;
+      k2[l] += m[j] * (vn * vn);
+    }
+  }
+  return {(s2[0] + s2[1]) + (s2[2] + s2[3]), (k2[0] + k2[1]) + (k2[2] + k2[3])};
+}
+
 }  // namespace
 
 SolverReport dynamic_relaxation(Problem& problem, VecX& u,
@@ -92,6 +127,7 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   VecX v = VecX::Zero(n), ubar = u, g, last_good = u;
   double mv2 = 0.0;        // u̇ᵀMu̇ of the current u̇ (summed by the update pass; 0 at rest)
   VecX u_best = u;         // displacement of lowest total energy: where a restart resumes (at rest)
+  VecX u_next;             // the update pass' output buffer (then swapped into u)
   bool best_is_u = false;  // this step's u is the new u_best: the update pass swaps it there
   double energy = 0.0, last_energy = 0.0, rnorm = 0.0, threshold = 0.0;
   double e_start = 0.0,
@@ -244,41 +280,19 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
     // expressions (same bits). The same pass forms the next step's ū = u + ½Δt u̇ (2.56), with
     // (2.56)'s operations, ‖u‖² (the blow-up test) and u̇ᵀMu̇ (the next step's kinetic energy).
     {
-      const double h2 = 0.5 * dt * dt;
-      const double half_dt = 0.5 * dt;
-      const double* mi = m.data();
-      const double* wi = inv_mass.data();
-      const double* gi = g.data();
-      // u_best = u without a copy: u's buffer becomes u_best and the update reads it from there
-      // and writes the new u into u_best's former buffer (the same operations, the same bits).
-      const double* u0 = u.data();
+      u_next.resize(n);
+      ubar.resize(n);
+      const UpdateSums sums = ss22_update(n, g.data(), m.data(), inv_mass.data(), u.data(),
+                                          u_next.data(), v.data(), ubar.data(), eta, dt);
+      unorm = std::sqrt(sums.u2);
+      mv2 = sums.mv2;
+      // u_best = u without a copy when this step's u is the new best: its buffer becomes
+      // u_best's; then the new u takes over (u_next keeps a spare buffer).
       if (best_is_u) {
         u.swap(u_best);
-        u0 = u_best.data();
         best_is_u = false;
       }
-      double* ui = u.data();
-      double* vi = v.data();
-      ubar.resize(n);
-      double* bi = ubar.data();
-      // Four partial sums of each (the loop stays vectorizable).
-      double s2[4] = {0.0, 0.0, 0.0, 0.0}, k2[4] = {0.0, 0.0, 0.0, 0.0};
-      const auto update = [&](Eigen::Index i, int l) {
-        const double a = (-gi[i] - eta * (mi[i] * vi[i])) * wi[i];
-        const double un = u0[i] + (dt * vi[i] + h2 * a);
-        const double vn = vi[i] + dt * a;
-        ui[i] = un;
-        vi[i] = vn;
-        bi[i] = un + half_dt * vn;
-        s2[l] += un * un;
-        k2[l] += mi[i] * (vn * vn);
-      };
-      Eigen::Index i = 0;
-      for (; i + 4 <= n; i += 4)
-        for (int l = 0; l < 4; ++l) update(i + l, l);
-      for (; i < n; ++i) update(i, 0);
-      unorm = std::sqrt((s2[0] + s2[1]) + (s2[2] + s2[3]));
-      mv2 = (k2[0] + k2[1]) + (k2[2] + k2[3]);
+      u.swap(u_next);
     }
     ubar_ready = true;
     meter.add(20 * nn);
