@@ -15,11 +15,24 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <random>
 #include <utility>
 #include <vector>
 
 namespace incise::bench::organ {
 namespace {
+
+/// A rows × cols matrix of uniform entries in [−1, 1] from std::mt19937 with the given seed: the
+/// same matrix whatever ran before in the process (Eigen's Random draws from std::rand's shared
+/// state).
+Eigen::MatrixXd seeded_uniform(Eigen::Index rows, Eigen::Index cols, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::MatrixXd a(rows, cols);
+  for (Eigen::Index j = 0; j < cols; ++j)
+    for (Eigen::Index i = 0; i < rows; ++i) a(i, j) = u(rng);
+  return a;
+}
 
 // The k new columns R⁻¹e of G = H R⁻¹ Hᵀ for DOFs joining 𝓛, one restricted solve each (0), one
 // blocked pass entry by entry (1) or with its supernode blocks through dgemm/dtrsm (2; both
@@ -107,9 +120,8 @@ BENCHMARK(BM_NewColumnsOfG)
 void BM_CapacitanceLu(benchmark::State& state) {
   const auto m = static_cast<Eigen::Index>(state.range(0));
   const Eigen::MatrixXd a =
-      Eigen::MatrixXd::Identity(m, m) +
-      Eigen::MatrixXd::Random(m, m) * (0.5 / static_cast<double>(m));  // Eigen's fixed seed
-  const Eigen::MatrixXd b = Eigen::MatrixXd::Random(m, 100);
+      Eigen::MatrixXd::Identity(m, m) + seeded_uniform(m, m, 1) * (0.5 / static_cast<double>(m));
+  const Eigen::MatrixXd b = seeded_uniform(m, 100, 2);
   incise::linalg::DenseLu lu(state.range(1) != 0);
   double checksum = 0;
   for (auto _ : state) {
@@ -127,8 +139,7 @@ void BM_CapacitanceLu(benchmark::State& state) {
 void BM_CapacitanceFresh(benchmark::State& state) {
   const auto m = static_cast<Eigen::Index>(state.range(0));
   const Eigen::MatrixXd a =
-      Eigen::MatrixXd::Identity(m, m) +
-      Eigen::MatrixXd::Random(m, m) * (0.5 / static_cast<double>(m));  // Eigen's fixed seed
+      Eigen::MatrixXd::Identity(m, m) + seeded_uniform(m, m, 1) * (0.5 / static_cast<double>(m));
   std::vector<int> labels(static_cast<std::size_t>(m));
   for (std::size_t i = 0; i < labels.size(); ++i) labels[i] = static_cast<int>(i);
   incise::linalg::CapacitanceFactor factor(1.0, state.range(1) != 0);
