@@ -360,11 +360,8 @@ void BM_LiverCutOnly(benchmark::State& state) {
       dissected.push_back(static_cast<double>(fd));
       if (te > 0) cpu_per_tested.push_back(c / static_cast<double>(te));
     }
-    const auto sc = summarize(cpu), st = summarize(tested), sd = summarize(dissected),
-               sp = summarize(cpu_per_tested);
-    state.counters["cpu_cut_med_ms"] = 1e3 * sc.median;
-    state.counters["cpu_cut_p95_ms"] = 1e3 * sc.p95;
-    state.counters["cpu_cut_max_ms"] = 1e3 * sc.max;
+    const auto st = summarize(tested), sd = summarize(dissected), sp = summarize(cpu_per_tested);
+    put_ms_summary(state, "cpu_cut", cpu);
     state.counters["tested_med"] = st.median;
     state.counters["dissected_med"] = sd.median;
     state.counters["us_per_tested_med"] = 1e6 * sp.median;
