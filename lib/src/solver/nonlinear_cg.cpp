@@ -238,7 +238,8 @@ std::string line_search_message(const LineSearchResult& ls, long k, bool steepes
           "steps";
   } else if (ls.status == StopReason::kInverted) {
     os << "every trial step, halved " << opt.max_backtracks
-       << " times, inverts an element (energy +inf): u is at the edge of the admissible set";
+       << " times, inverts an element (its energy is not finite): u is at the edge of the "
+          "admissible set";
   } else if (ls.status == StopReason::kStagnated) {
     os << "no step length alpha > 0 was accepted (alpha = 0); u is the last iterate";
   } else {
