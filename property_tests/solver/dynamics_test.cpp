@@ -349,6 +349,29 @@ TEST(DynamicRelaxation, CriticalStepItselfNeverConvergesSoSafetyOneIsRefused_Sec
   }
 }
 
+// A run that restarted on the way and then stopped for another reason (here its step budget)
+// reports that reason, and its message says the restarts happened on the way, not that they ran
+// out (before: "energy growth after 1 restart(s) (the allowed 3)" under max_iterations).
+TEST(DynamicRelaxation, BudgetAfterARestartSaysSoNotRestartsUsedUp_Sec4_4_1) {
+  INCISE_SEEDED_RNG(rng, 66);
+  DynamicsSetup s = make_setup(rng);
+  const double dt_crit = 2.0 / std::sqrt(s.lam[s.lam.size() - 1]);
+  DynamicRelaxationOptions o = dr_options(1.3 * dt_crit, critical_damping(s.lam[0]));
+  o.max_restarts = 3;
+  VecX u = VecX::Zero(24);
+  const SolverReport full = dynamic_relaxation(s.p, u, o);
+  ASSERT_TRUE(full.ok()) << full.brief();
+  ASSERT_EQ(full.restarts, 1);
+  o.budget.max_iterations = full.iterations - 1;  // the restart happens well before the end
+  u.setZero();
+  const SolverReport cut = dynamic_relaxation(s.p, u, o);
+  EXPECT_EQ(cut.status, StopReason::kMaxIterations) << cut.brief();
+  EXPECT_EQ(cut.restarts, 1);
+  EXPECT_NE(cut.message.find("1 restart(s) on the way (the last after "), std::string::npos)
+      << cut.message;
+  EXPECT_EQ(cut.message.find("the allowed"), std::string::npos) << cut.message;
+}
+
 // A stable damped run never restarts: the energy check does not change its trajectory.
 TEST(DynamicRelaxation, StableRunIsUnchangedByTheRestartCheck) {
   INCISE_SEEDED_RNG(rng, 67);

@@ -147,10 +147,14 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   long since_energy = 0;              // steps since the last one that evaluated Π
   bool last_good_has_energy = false;  // `energy` belongs to last_good
   // An unstable step: restart from the lowest-energy state with a smaller Δt when allowed.
+  bool restarts_used_up = false;  // the run ended because an unstable step found none left
   auto restart = [&](StopReason why, const std::string& what) {
     reason = why;
     event = what;
-    if (rep.restarts >= options.max_restarts) return false;
+    if (rep.restarts >= options.max_restarts) {
+      restarts_used_up = true;
+      return false;
+    }
     ++rep.restarts;
     dt *= options.restart_reduction;
     set_inv_mass();
@@ -313,9 +317,15 @@ SolverReport dynamic_relaxation(Problem& problem, VecX& u,
   rep.status = reason;
   rep.time_step = dt;
   if (!rep.ok() && restartable && !event.empty()) {
+    // Either the restarts ran out (the status is the last event's), or the run stopped for
+    // another reason (a budget) after restarts on the way.
     std::ostringstream os;
-    os << event << " after " << rep.restarts << " restart(s) (the allowed " << options.max_restarts
-       << "), dt lowered from " << options.time_step << " s to " << dt << " s";
+    if (restarts_used_up)
+      os << event << " after " << rep.restarts << " restart(s) (the allowed "
+         << options.max_restarts << ")";
+    else
+      os << rep.restarts << " restart(s) on the way (the last after " << event << ")";
+    os << ", dt lowered from " << options.time_step << " s to " << dt << " s";
     rep.message = os.str();
   }
   rep.iterations = k;
