@@ -75,6 +75,24 @@ double newton_energy(fem::ElasticProblem& p) {
   return rep.energy;
 }
 
+/// The thesis' secant search (bracket_sigma = 0) and the safeguarded default, each from u = 0
+/// on c with the same budget: the two runs the comparisons below are about.
+struct BothSearches {
+  VecX u_thesis, u_safe;
+  SolverReport thesis, safe;
+};
+
+BothSearches both_searches(Cylinder& c, long max_iterations) {
+  BothSearches r;
+  NonlinearCgOptions thesis = ncg_options(LineSearchKind::kSecant, max_iterations);
+  thesis.bracket_sigma = 0.0;
+  r.u_thesis = VecX::Zero(c.problem->size());
+  r.thesis = nonlinear_cg(*c.problem, r.u_thesis, thesis);
+  r.u_safe = VecX::Zero(c.problem->size());
+  r.safe = nonlinear_cg(*c.problem, r.u_safe, ncg_options(LineSearchKind::kSecant, max_iterations));
+  return r;
+}
+
 std::string describe(const Mesh& m, double load_factor) {
   return "cylinder rings=" + std::to_string(m.rings) + " layers=" + std::to_string(m.layers) +
          " at " + std::to_string(int(load_factor)) + " g";
@@ -132,15 +150,11 @@ TEST(NonlinearCgBracket, ThesisSearchStallsOnTheCylinder_Sec4_4_2) {
     for (double factor : {100.0, 300.0, 1000.0}) {
       SCOPED_TRACE(describe(m, factor));
       Cylinder c = cylinder(m, factor);
-      NonlinearCgOptions thesis = ncg_options(LineSearchKind::kSecant, 2000);
-      thesis.bracket_sigma = 0.0;
-      VecX u = VecX::Zero(c.problem->size());
-      const SolverReport stalled = nonlinear_cg(*c.problem, u, thesis);
+      const BothSearches runs = both_searches(c, 2000);
+      const SolverReport& stalled = runs.thesis;
+      const SolverReport& safe = runs.safe;
       EXPECT_EQ(stalled.status, StopReason::kMaxIterations) << stalled.brief();
       EXPECT_GT(stalled.residual_norm, 0.5 * c.problem->external_force_norm());
-      u.setZero();
-      const SolverReport safe =
-          nonlinear_cg(*c.problem, u, ncg_options(LineSearchKind::kSecant, 2000));
       EXPECT_TRUE(safe.ok()) << safe.brief() << " after " << safe.iterations;
       EXPECT_LT(safe.energy, 10.0 * stalled.energy);  // both negative: far below the stall
     }
@@ -154,18 +168,14 @@ TEST(NonlinearCgBracket, IdenticalWhereTheThesisSearchProgresses_Sec4_4_2) {
     for (double factor : {1.0, 10.0}) {
       SCOPED_TRACE(describe(m, factor));
       Cylinder c = cylinder(m, factor);
-      NonlinearCgOptions thesis = ncg_options(LineSearchKind::kSecant, 5000);
-      thesis.bracket_sigma = 0.0;
-      VecX u0 = VecX::Zero(c.problem->size());
-      const SolverReport a = nonlinear_cg(*c.problem, u0, thesis);
-      VecX u1 = VecX::Zero(c.problem->size());
-      const SolverReport b =
-          nonlinear_cg(*c.problem, u1, ncg_options(LineSearchKind::kSecant, 5000));
+      const BothSearches runs = both_searches(c, 5000);
+      const SolverReport& a = runs.thesis;
+      const SolverReport& b = runs.safe;
       ASSERT_TRUE(a.ok()) << a.brief();
       EXPECT_EQ(a.iterations, b.iterations);
       EXPECT_EQ(a.inner_iterations, b.inner_iterations);
       EXPECT_EQ(a.energy, b.energy);
-      EXPECT_EQ((u0 - u1).cwiseAbs().maxCoeff(), 0.0);
+      EXPECT_EQ((runs.u_thesis - runs.u_safe).cwiseAbs().maxCoeff(), 0.0);
     }
   }
 }
